@@ -22,7 +22,9 @@ pub enum LaminateError {
         value: f64,
     },
     /// A Poisson ratio violates |ν_ij| < √(E_i/E_j), so the compliance is indefinite.
-    #[error("Poisson ratio {name} = {value} makes the compliance indefinite: |{name}| must be below {limit}")]
+    #[error(
+        "Poisson ratio {name} = {value} makes the compliance indefinite: |{name}| must be below {limit}"
+    )]
     PoissonTooLarge {
         /// Name of the constant.
         name: &'static str,
@@ -33,7 +35,9 @@ pub enum LaminateError {
     },
     /// The three Poisson ratios together make the normal-compliance block indefinite:
     /// 1 − ν12ν21 − ν23ν32 − ν13ν31 − 2ν21ν32ν13 ≤ 0.
-    #[error("Poisson ratios nu12, nu23, nu13 together make the compliance indefinite (determinant factor {determinant} ≤ 0)")]
+    #[error(
+        "Poisson ratios nu12, nu23, nu13 together make the compliance indefinite (determinant factor {determinant} ≤ 0)"
+    )]
     PoissonDeterminant {
         /// The determinant factor 1 − ν12ν21 − ν23ν32 − ν13ν31 − 2ν21ν32ν13.
         determinant: f64,

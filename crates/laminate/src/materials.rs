@@ -49,7 +49,12 @@ pub fn aluminium() -> Orthotropic {
 mod tests {
     #[test]
     fn table_one_materials_are_valid() {
-        for m in [super::generic_graphite_epoxy(), super::im7_8551_7(), super::steel(), super::aluminium()] {
+        for m in [
+            super::generic_graphite_epoxy(),
+            super::im7_8551_7(),
+            super::steel(),
+            super::aluminium(),
+        ] {
             assert!(m.stiffness().is_ok(), "{m:?}");
         }
     }

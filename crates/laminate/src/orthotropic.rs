@@ -33,7 +33,17 @@ impl Orthotropic {
     /// An isotropic material from Young's modulus and Poisson ratio (G = E/(2(1+ν))).
     pub fn isotropic(e: f64, nu: f64) -> Self {
         let g = e / (2.0 * (1.0 + nu));
-        Self { e11: e, e22: e, e33: e, nu12: nu, nu23: nu, nu13: nu, g12: g, g23: g, g13: g }
+        Self {
+            e11: e,
+            e22: e,
+            e33: e,
+            nu12: nu,
+            nu23: nu,
+            nu13: nu,
+            g12: g,
+            g23: g,
+            g13: g,
+        }
     }
 
     /// Checks the constants: moduli positive and finite, Poisson ratios finite with
@@ -160,19 +170,34 @@ mod tests {
     fn invalid_constants_are_named() {
         let mut m = crate::materials::generic_graphite_epoxy();
         m.e22 = -1.0;
-        assert!(matches!(m.validate(), Err(LaminateError::InvalidModulus { name: "E22", .. })));
+        assert!(matches!(
+            m.validate(),
+            Err(LaminateError::InvalidModulus { name: "E22", .. })
+        ));
         let mut m = crate::materials::generic_graphite_epoxy();
         m.g13 = f64::NAN;
-        assert!(matches!(m.validate(), Err(LaminateError::InvalidModulus { name: "G13", .. })));
+        assert!(matches!(
+            m.validate(),
+            Err(LaminateError::InvalidModulus { name: "G13", .. })
+        ));
         let mut m = crate::materials::generic_graphite_epoxy();
         m.nu23 = 1.0; // limit is √(E22/E33) = 1
-        assert!(matches!(m.validate(), Err(LaminateError::PoissonTooLarge { name: "nu23", .. })));
+        assert!(matches!(
+            m.validate(),
+            Err(LaminateError::PoissonTooLarge { name: "nu23", .. })
+        ));
         let mut m = crate::materials::generic_graphite_epoxy();
         m.nu12 = f64::INFINITY;
-        assert!(matches!(m.validate(), Err(LaminateError::NonFinitePoisson { name: "nu12", .. })));
+        assert!(matches!(
+            m.validate(),
+            Err(LaminateError::NonFinitePoisson { name: "nu12", .. })
+        ));
         // Each ratio within its pair bound but jointly indefinite (isotropic ν > 0.5).
         let m = Orthotropic::isotropic(1e9, 0.6);
-        assert!(matches!(m.validate(), Err(LaminateError::PoissonDeterminant { .. })));
+        assert!(matches!(
+            m.validate(),
+            Err(LaminateError::PoissonDeterminant { .. })
+        ));
         assert!(m.stiffness().is_err());
     }
 }

@@ -17,7 +17,9 @@ pub struct Ply {
 impl Ply {
     /// The ply's stiffness in the global axes.
     pub fn stiffness(&self, coupling: ShearCoupling) -> Result<Stiffness, LaminateError> {
-        self.material.stiffness()?.rotated_about_z(self.angle_deg.to_radians(), coupling)
+        self.material
+            .stiffness()?
+            .rotated_about_z(self.angle_deg.to_radians(), coupling)
     }
 }
 
@@ -72,13 +74,20 @@ impl PlyStack {
         Self::new(
             angles
                 .into_iter()
-                .map(|angle_deg| Ply { material, angle_deg, thickness: ply_thickness })
+                .map(|angle_deg| Ply {
+                    material,
+                    angle_deg,
+                    thickness: ply_thickness,
+                })
                 .collect(),
         )
     }
 
     /// The 8-ply quasi-isotropic laminate (±45/0/90)s of eq. 2.9.1.
-    pub fn quasi_isotropic(material: Orthotropic, ply_thickness: f64) -> Result<Self, LaminateError> {
+    pub fn quasi_isotropic(
+        material: Orthotropic,
+        ply_thickness: f64,
+    ) -> Result<Self, LaminateError> {
         Self::from_angles(material, &[45.0, -45.0, 0.0, 90.0], ply_thickness, true)
     }
 
@@ -141,12 +150,12 @@ impl PlyStack {
             let c_ii = block(IN_PLANE, IN_PLANE);
             let c_io = block(IN_PLANE, OUT_OF_PLANE);
             let c_oi = block(OUT_OF_PLANE, IN_PLANE);
-            let c_oo_inv = block(OUT_OF_PLANE, OUT_OF_PLANE).try_inverse().ok_or_else(|| {
-                LaminateError::InvalidPly {
+            let c_oo_inv = block(OUT_OF_PLANE, OUT_OF_PLANE)
+                .try_inverse()
+                .ok_or_else(|| LaminateError::InvalidPly {
                     index,
                     reason: "singular out-of-plane stiffness block".into(),
-                }
-            })?;
+                })?;
             let w = p.thickness / total;
             a_ii += w * (c_ii - c_io * c_oo_inv * c_oi);
             a_io += w * (c_io * c_oo_inv);
@@ -260,11 +269,25 @@ mod tests {
     #[test]
     fn invalid_plies_are_named() {
         let m = generic_graphite_epoxy();
-        assert!(matches!(PlyStack::new(vec![]), Err(LaminateError::EmptyStack)));
+        assert!(matches!(
+            PlyStack::new(vec![]),
+            Err(LaminateError::EmptyStack)
+        ));
         let bad = vec![
-            Ply { material: m, angle_deg: 0.0, thickness: 1e-4 },
-            Ply { material: m, angle_deg: 0.0, thickness: 0.0 },
+            Ply {
+                material: m,
+                angle_deg: 0.0,
+                thickness: 1e-4,
+            },
+            Ply {
+                material: m,
+                angle_deg: 0.0,
+                thickness: 0.0,
+            },
         ];
-        assert!(matches!(PlyStack::new(bad), Err(LaminateError::InvalidPly { index: 1, .. })));
+        assert!(matches!(
+            PlyStack::new(bad),
+            Err(LaminateError::InvalidPly { index: 1, .. })
+        ));
     }
 }

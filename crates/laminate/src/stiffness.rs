@@ -53,7 +53,12 @@ impl Stiffness {
             for col in row + 1..6 {
                 let (upper, lower) = (c[row][col], c[col][row]);
                 if (upper - lower).abs() > 1e-12 * scale {
-                    return Err(LaminateError::NotSymmetric { row, col, upper, lower });
+                    return Err(LaminateError::NotSymmetric {
+                        row,
+                        col,
+                        upper,
+                        lower,
+                    });
                 }
                 let mean = 0.5 * (upper + lower);
                 sym[row][col] = mean;
@@ -94,7 +99,11 @@ impl Stiffness {
     ///
     /// A rotation keeps C symmetric positive definite, so an error here means the rotated
     /// matrix lost definiteness to round-off (a nearly singular C) or `theta` is not finite.
-    pub fn rotated_about_z(&self, theta: f64, coupling: ShearCoupling) -> Result<Self, LaminateError> {
+    pub fn rotated_about_z(
+        &self,
+        theta: f64,
+        coupling: ShearCoupling,
+    ) -> Result<Self, LaminateError> {
         let rotated = self.rotated(&rotation_about_z(theta))?;
         match coupling {
             ShearCoupling::Exact => Ok(rotated),
@@ -203,11 +212,20 @@ mod tests {
         ));
         c[2][2] = 1.0;
         c[0][3] = 2.0;
-        assert!(matches!(Stiffness::new(c), Err(LaminateError::NotSymmetric { row: 0, col: 3, .. })));
+        assert!(matches!(
+            Stiffness::new(c),
+            Err(LaminateError::NotSymmetric { row: 0, col: 3, .. })
+        ));
         c[3][0] = 2.0;
-        assert!(matches!(Stiffness::new(c), Err(LaminateError::NotPositiveDefinite { index: 3, .. })));
+        assert!(matches!(
+            Stiffness::new(c),
+            Err(LaminateError::NotPositiveDefinite { index: 3, .. })
+        ));
         c[3][0] = f64::NAN;
-        assert!(matches!(Stiffness::new(c), Err(LaminateError::NonFiniteEntry { row: 3, col: 0, .. })));
+        assert!(matches!(
+            Stiffness::new(c),
+            Err(LaminateError::NonFiniteEntry { row: 3, col: 0, .. })
+        ));
     }
 
     #[test]

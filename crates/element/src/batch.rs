@@ -1,0 +1,163 @@
+//! Batched kernels over many elements of one kind and rule: the modern form of thesis §2.4.
+//!
+//! The shape data are tabulated once ([`ShapeTable`]); each element's work runs over all its
+//! stations at once (T stacked over NSTR·NG rows, eq. 2.4.2.3) in SIMD code; chunks of elements
+//! run on the rayon pool of the caller, each chunk with its own [`Workspace`]. The per-element
+//! arithmetic is the single-element kernel's, so results are bitwise identical to
+//! [`evaluate`](crate::evaluate) and independent of the number of threads.
+
+use crate::kernel::{OutView, check_finite, check_material, run};
+use crate::{ElementError, Kinematics, ShapeTable, Workspace};
+use nonlin3d_laminate::Stiffness;
+use rayon::prelude::*;
+
+/// Elements per rayon task: large enough to amortise task overhead (~1 µs) against
+/// ~10 µs per Hex20, small enough to balance 2–64 threads on meshes of a few thousand cells.
+const CHUNK: usize = 32;
+
+/// Inputs of a batch: all elements share the table; each has a material index.
+#[derive(Debug, Clone, Copy)]
+pub struct BatchInput<'a> {
+    /// Node coordinates, `nodes()` triples per element, element after element.
+    pub coords: &'a [[f64; 3]],
+    /// Nodal displacements, same layout as `coords`.
+    pub disp: &'a [[f64; 3]],
+    /// The materials (already rotated to each cell's ply angle).
+    pub materials: &'a [Stiffness],
+    /// Index into `materials` for each element.
+    pub material_of: &'a [usize],
+}
+
+/// Results of a batch, element after element.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct BatchOutput {
+    /// Internal forces, `dofs()` per element.
+    pub forces: Vec<f64>,
+    /// Tangents, `dofs()²` per element (empty unless requested).
+    pub tangents: Vec<f64>,
+    /// Strains, one per station per element.
+    pub strains: Vec<[f64; 6]>,
+    /// Stresses, one per station per element.
+    pub stresses: Vec<[f64; 6]>,
+    /// Strain energy per element.
+    pub energy: Vec<f64>,
+}
+
+impl BatchOutput {
+    /// Output buffers for `elements` elements of `table` (tangent storage only if asked).
+    pub fn new(table: &ShapeTable, elements: usize, tangent: bool) -> Self {
+        let nd = table.dofs();
+        let ns = table.stations().len();
+        Self {
+            forces: vec![0.0; elements * nd],
+            tangents: if tangent {
+                vec![0.0; elements * nd * nd]
+            } else {
+                Vec::new()
+            },
+            strains: vec![[0.0; 6]; elements * ns],
+            stresses: vec![[0.0; 6]; elements * ns],
+            energy: vec![0.0; elements],
+        }
+    }
+}
+
+/// Evaluates every element of the batch into `out` (sized by [`BatchOutput::new`]), in
+/// parallel on the current rayon pool. The tangents are computed when `out.tangents` is
+/// non-empty. The first failing element (lowest index) is reported.
+pub fn evaluate_batch(
+    table: &ShapeTable,
+    input: &BatchInput<'_>,
+    kinematics: Kinematics,
+    out: &mut BatchOutput,
+) -> Result<(), ElementError> {
+    let nn = table.nodes();
+    let nd = table.dofs();
+    let ns = table.stations().len();
+    let n = input.material_of.len();
+    let tangent = !out.tangents.is_empty();
+    let lengths = [
+        ("batch coordinates", n * nn, input.coords.len()),
+        ("batch displacements", n * nn, input.disp.len()),
+        ("batch forces", n * nd, out.forces.len()),
+        ("batch strains", n * ns, out.strains.len()),
+        ("batch stresses", n * ns, out.stresses.len()),
+        ("batch energy", n, out.energy.len()),
+        (
+            "batch tangents",
+            if tangent { n * nd * nd } else { 0 },
+            out.tangents.len(),
+        ),
+    ];
+    for (what, expected, got) in lengths {
+        if expected != got {
+            return Err(ElementError::LengthMismatch {
+                what,
+                expected,
+                got,
+            });
+        }
+    }
+    for (element, &material) in input.material_of.iter().enumerate() {
+        if material >= input.materials.len() {
+            return Err(ElementError::MaterialIndex {
+                element,
+                material,
+                count: input.materials.len(),
+            });
+        }
+    }
+    for (i, m) in input.materials.iter().enumerate() {
+        check_material(table, m, i)?;
+    }
+    let kd = if tangent { nd * nd } else { 0 };
+    let nonlinear = kinematics == Kinematics::Nonlinear;
+    // Split the outputs into per-chunk pieces up front (sequential and cheap), then run the
+    // chunks in parallel; `collect` keeps chunk order, so the first error is the lowest index.
+    let mut tangent_chunks: Vec<&mut [f64]> = if tangent {
+        out.tangents.chunks_mut(CHUNK * kd).collect()
+    } else {
+        Vec::new()
+    };
+    tangent_chunks.resize_with(n.div_ceil(CHUNK), Default::default);
+    let chunks: Vec<_> = out
+        .forces
+        .chunks_mut(CHUNK * nd)
+        .zip(out.strains.chunks_mut(CHUNK * ns))
+        .zip(out.stresses.chunks_mut(CHUNK * ns))
+        .zip(out.energy.chunks_mut(CHUNK))
+        .zip(tangent_chunks)
+        .collect();
+    let results: Vec<Result<(), ElementError>> = chunks
+        .into_par_iter()
+        .enumerate()
+        .map(
+            |(chunk, ((((forces, strains), stresses), energy), tangents))| {
+                let mut ws = Workspace::new(table);
+                for (i, e_energy) in energy.iter_mut().enumerate() {
+                    let e = chunk * CHUNK + i;
+                    let x = &input.coords[e * nn..(e + 1) * nn];
+                    let u = &input.disp[e * nn..(e + 1) * nn];
+                    let view = OutView {
+                        strains: &mut strains[i * ns..(i + 1) * ns],
+                        stresses: &mut stresses[i * ns..(i + 1) * ns],
+                        forces: &mut forces[i * nd..(i + 1) * nd],
+                        energy: e_energy,
+                        tangent: if tangent {
+                            &mut tangents[i * kd..(i + 1) * kd]
+                        } else {
+                            &mut []
+                        },
+                    };
+                    let material = &input.materials[input.material_of[e]];
+                    check_finite(x, "coordinates")
+                        .and_then(|_| check_finite(u, "displacements"))
+                        .and_then(|_| run(table, x, u, material, nonlinear, tangent, &mut ws, view))
+                        .map_err(|err| err.at_element(e))?;
+                }
+                Ok(())
+            },
+        )
+        .collect();
+    results.into_iter().collect()
+}

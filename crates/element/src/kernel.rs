@@ -1,0 +1,573 @@
+//! The two NONLIN3D kernels: B0BL3D (strains, stresses, internal forces, eq. 2.1.4, 2.3.1) and
+//! ESTIF3D (tangent K = Σ TᵀT + geometric stiffness, eq. 2.3.2–2.3.4, 2.4.2.6–2.4.2.7), with
+//! their linear (small-strain) variants, in one pass over the stations of a [`ShapeTable`].
+//!
+//! Total Lagrangian: strains are Green–Lagrange (eq. 2.1.4), stresses second Piola–Kirchhoff,
+//! σ = C ε, both referred to the undeformed configuration.
+
+use crate::syrk::{fmadd, syrk_lower};
+use crate::{ElementError, ElementKind, ShapeTable};
+use nonlin3d_laminate::Stiffness;
+
+/// Strain–displacement relations.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum Kinematics {
+    /// Green–Lagrange strains (eq. 2.1.4), B of eq. 2.2.3, geometric stiffness (eq. 2.2.5).
+    #[default]
+    Nonlinear,
+    /// Small strains ε = sym ∇u, constant B, no geometric stiffness: linear substructures and
+    /// the VCCT forces of a linear region (§2.6, §2.8).
+    Linear,
+}
+
+/// What the kernels produce for one element. Allocate once with [`ElementOutput::new`] and
+/// reuse: [`evaluate`] writes every field it is asked for without allocating.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ElementOutput {
+    /// Strains at each station, thesis order (xx, yy, zz, γxy, γyz, γxz).
+    pub strains: Vec<[f64; 6]>,
+    /// Stresses σ = C ε at each station on the components integrated there (the others are
+    /// zero: at the selective-reduced rule's 2×2×2 stations σ5 = σ6 = 0, at its centroid
+    /// σ1…σ4 = 0).
+    pub stresses: Vec<[f64; 6]>,
+    /// Internal nodal forces R^α = Σ_θ (σ_i ∂ε_i/∂q^α |J| W)^θ (eq. 2.3.1 without F^α),
+    /// node-major (u, v, w per node).
+    pub forces: Vec<f64>,
+    /// Strain energy ½ Σ_θ (σ_i ε_i |J| W)^θ (eq. 2.1.1).
+    pub energy: f64,
+    /// Tangent stiffness, row-major (3·NS)², symmetric; written only when asked for.
+    pub tangent: Vec<f64>,
+}
+
+impl ElementOutput {
+    /// Buffers sized for `table`.
+    pub fn new(table: &ShapeTable) -> Self {
+        let ns = table.stations().len();
+        let nd = table.dofs();
+        Self {
+            strains: vec![[0.0; 6]; ns],
+            stresses: vec![[0.0; 6]; ns],
+            forces: vec![0.0; nd],
+            energy: 0.0,
+            tangent: vec![0.0; nd * nd],
+        }
+    }
+}
+
+/// Borrowed output buffers of one element: what the kernel writes into, so a batch can hand
+/// it slices of its own arrays without copying.
+pub(crate) struct OutView<'a> {
+    pub(crate) strains: &'a mut [[f64; 6]],
+    pub(crate) stresses: &'a mut [[f64; 6]],
+    pub(crate) forces: &'a mut [f64],
+    pub(crate) energy: &'a mut f64,
+    pub(crate) tangent: &'a mut [f64],
+}
+
+impl ElementOutput {
+    fn view(&mut self) -> OutView<'_> {
+        OutView {
+            strains: &mut self.strains,
+            stresses: &mut self.stresses,
+            forces: &mut self.forces,
+            energy: &mut self.energy,
+            tangent: &mut self.tangent,
+        }
+    }
+}
+
+/// Scratch space of the kernels for one table: the stacked T matrix (eq. 2.4.2.3), the
+/// geometric stiffness k^{mn} and the global shape gradients.
+#[derive(Debug, Clone)]
+pub struct Workspace {
+    t: Vec<f64>,
+    kg: Vec<f64>,
+    grad: Vec<[f64; 3]>,
+}
+
+impl Workspace {
+    /// Scratch sized for `table`.
+    pub fn new(table: &ShapeTable) -> Self {
+        let nn = table.nodes();
+        Self {
+            t: vec![0.0; table.t_rows() * table.t_stride()],
+            kg: vec![0.0; nn * nn],
+            grad: vec![[0.0; 3]; nn],
+        }
+    }
+
+    fn fits(&self, table: &ShapeTable) -> bool {
+        self.t.len() == table.t_rows() * table.t_stride() && self.grad.len() == table.nodes()
+    }
+}
+
+/// Evaluates one element: strains, stresses, internal forces and energy, and the tangent when
+/// `tangent` is true. `coords` and `disp` hold one triple per node in Abaqus order.
+///
+/// Errors: wrong lengths, non-finite input, det J ≤ 0 at a station (named), or a material
+/// that couples the transverse shears under the selective-reduced rule.
+pub fn evaluate(
+    table: &ShapeTable,
+    coords: &[[f64; 3]],
+    disp: &[[f64; 3]],
+    material: &Stiffness,
+    kinematics: Kinematics,
+    tangent: bool,
+    workspace: &mut Workspace,
+    out: &mut ElementOutput,
+) -> Result<(), ElementError> {
+    check_lengths(table, coords, disp, workspace, out)?;
+    check_finite(coords, "coordinates")?;
+    check_finite(disp, "displacements")?;
+    check_material(table, material, 0)?;
+    let nonlinear = kinematics == Kinematics::Nonlinear;
+    run(
+        table,
+        coords,
+        disp,
+        material,
+        nonlinear,
+        tangent,
+        workspace,
+        out.view(),
+    )
+}
+
+/// Monomorphised dispatch on the element kind (node count as a const generic).
+pub(crate) fn run(
+    table: &ShapeTable,
+    coords: &[[f64; 3]],
+    disp: &[[f64; 3]],
+    material: &Stiffness,
+    nonlinear: bool,
+    tangent: bool,
+    ws: &mut Workspace,
+    out: OutView<'_>,
+) -> Result<(), ElementError> {
+    match table.kind() {
+        ElementKind::Hex8 => {
+            dispatch::<8>(table, coords, disp, material, nonlinear, tangent, ws, out)
+        }
+        ElementKind::Hex20 => {
+            dispatch::<20>(table, coords, disp, material, nonlinear, tangent, ws, out)
+        }
+    }
+}
+
+/// B0BL3D: strains, stresses, internal forces and energy of one element (allocating wrapper).
+pub fn b0bl3d(
+    table: &ShapeTable,
+    coords: &[[f64; 3]],
+    disp: &[[f64; 3]],
+    material: &Stiffness,
+) -> Result<ElementOutput, ElementError> {
+    let mut out = ElementOutput::new(table);
+    let mut ws = Workspace::new(table);
+    evaluate(
+        table,
+        coords,
+        disp,
+        material,
+        Kinematics::Nonlinear,
+        false,
+        &mut ws,
+        &mut out,
+    )?;
+    Ok(out)
+}
+
+/// ESTIF3D: the tangent stiffness of one element at displacements `disp`, row-major
+/// (allocating wrapper).
+pub fn estif3d(
+    table: &ShapeTable,
+    coords: &[[f64; 3]],
+    disp: &[[f64; 3]],
+    material: &Stiffness,
+) -> Result<Vec<f64>, ElementError> {
+    let mut out = ElementOutput::new(table);
+    let mut ws = Workspace::new(table);
+    evaluate(
+        table,
+        coords,
+        disp,
+        material,
+        Kinematics::Nonlinear,
+        true,
+        &mut ws,
+        &mut out,
+    )?;
+    Ok(out.tangent)
+}
+
+/// The linear (small-strain) stiffness K = Σ B₀ᵀ C B₀ |J| W = Σ TᵀT of one element.
+pub fn linear_stiffness(
+    table: &ShapeTable,
+    coords: &[[f64; 3]],
+    material: &Stiffness,
+) -> Result<Vec<f64>, ElementError> {
+    let mut out = ElementOutput::new(table);
+    let mut ws = Workspace::new(table);
+    let zero = vec![[0.0; 3]; table.nodes()];
+    evaluate(
+        table,
+        coords,
+        &zero,
+        material,
+        Kinematics::Linear,
+        true,
+        &mut ws,
+        &mut out,
+    )?;
+    Ok(out.tangent)
+}
+
+fn check_lengths(
+    table: &ShapeTable,
+    coords: &[[f64; 3]],
+    disp: &[[f64; 3]],
+    ws: &Workspace,
+    out: &ElementOutput,
+) -> Result<(), ElementError> {
+    let nn = table.nodes();
+    let nd = table.dofs();
+    let ns = table.stations().len();
+    let checks = [
+        ("coordinates", nn, coords.len()),
+        ("displacements", nn, disp.len()),
+        ("output forces", nd, out.forces.len()),
+        ("output tangent", nd * nd, out.tangent.len()),
+        ("output strains", ns, out.strains.len()),
+        ("output stresses", ns, out.stresses.len()),
+    ];
+    for (what, expected, got) in checks {
+        if expected != got {
+            return Err(ElementError::LengthMismatch {
+                what,
+                expected,
+                got,
+            });
+        }
+    }
+    if !ws.fits(table) {
+        return Err(ElementError::LengthMismatch {
+            what: "workspace (built for another table)",
+            expected: table.t_rows() * table.t_stride(),
+            got: ws.t.len(),
+        });
+    }
+    Ok(())
+}
+
+pub(crate) fn check_finite(v: &[[f64; 3]], what: &'static str) -> Result<(), ElementError> {
+    match v.iter().position(|p| !p.iter().all(|x| x.is_finite())) {
+        Some(node) => Err(ElementError::NonFiniteInput {
+            element: None,
+            what,
+            node,
+            value: v[node],
+        }),
+        None => Ok(()),
+    }
+}
+
+/// The selective-reduced rule integrates ε1–ε4 and ε5–ε6 at different points; that splits the
+/// energy only if C couples neither group with the other. 1e-12 relative is round-off.
+pub(crate) fn check_material(
+    table: &ShapeTable,
+    material: &Stiffness,
+    index: usize,
+) -> Result<(), ElementError> {
+    if table.rule() == crate::IntegrationRule::SelectiveReduced {
+        let coupling = material.transverse_shear_coupling();
+        if coupling > 1e-12 {
+            return Err(ElementError::CoupledTransverseShear {
+                element: None,
+                material: index,
+                coupling,
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Runs the kernel compiled for AVX2 + FMA when the CPU has them, portable code otherwise.
+/// Both give results within round-off of each other; a given machine always takes the same
+/// path, so results are reproducible run to run and thread count to thread count.
+#[inline]
+fn dispatch<const NS: usize>(
+    table: &ShapeTable,
+    coords: &[[f64; 3]],
+    disp: &[[f64; 3]],
+    material: &Stiffness,
+    nonlinear: bool,
+    tangent: bool,
+    ws: &mut Workspace,
+    out: OutView<'_>,
+) -> Result<(), ElementError> {
+    let (Ok(x), Ok(u)) = (
+        <&[[f64; 3]; NS]>::try_from(coords),
+        <&[[f64; 3]; NS]>::try_from(disp),
+    ) else {
+        return Err(ElementError::LengthMismatch {
+            what: "coordinates",
+            expected: NS,
+            got: coords.len(),
+        });
+    };
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
+        {
+            // SAFETY: `kernel_avx2` only needs the AVX2 and FMA instruction sets, which were
+            // detected on this CPU just above.
+            return unsafe {
+                kernel_avx2::<NS>(table, x, u, material, nonlinear, tangent, ws, out)
+            };
+        }
+    }
+    kernel::<NS, false>(table, x, u, material, nonlinear, tangent, ws, out)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+fn kernel_avx2<const NS: usize>(
+    table: &ShapeTable,
+    x: &[[f64; 3]; NS],
+    u: &[[f64; 3]; NS],
+    material: &Stiffness,
+    nonlinear: bool,
+    tangent: bool,
+    ws: &mut Workspace,
+    out: OutView<'_>,
+) -> Result<(), ElementError> {
+    kernel::<NS, true>(table, x, u, material, nonlinear, tangent, ws, out)
+}
+
+/// Green–Lagrange strains from H = ∂u/∂x (eq. 2.1.4), or ε = sym H when `nonlinear` is false:
+/// ε1 = u_x + ½(u_x² + v_x² + w_x²), …, ε4 = u_y + v_x + (u_x u_y + v_x v_y + w_x w_y), …
+#[inline(always)]
+pub(crate) fn strains(h: &[[f64; 3]; 3], nonlinear: bool) -> [f64; 6] {
+    let lin = [
+        h[0][0],
+        h[1][1],
+        h[2][2],
+        h[0][1] + h[1][0],
+        h[1][2] + h[2][1],
+        h[0][2] + h[2][0],
+    ];
+    if !nonlinear {
+        return lin;
+    }
+    let col = |a: usize, b: usize| h[0][a] * h[0][b] + h[1][a] * h[1][b] + h[2][a] * h[2][b];
+    [
+        lin[0] + 0.5 * col(0, 0),
+        lin[1] + 0.5 * col(1, 1),
+        lin[2] + 0.5 * col(2, 2),
+        lin[3] + col(0, 1),
+        lin[4] + col(1, 2),
+        lin[5] + col(0, 2),
+    ]
+}
+
+/// Jacobian J_rc = Σ_m ∂N^m/∂ξ_r x^m_c (eq. 2.4.1.1, 2.4.1.9), its determinant and inverse.
+#[inline(always)]
+pub(crate) fn jacobian<const NS: usize>(
+    dn: &[[f64; 3]],
+    x: &[[f64; 3]; NS],
+) -> ([[f64; 3]; 3], f64) {
+    let mut j = [[0.0; 3]; 3];
+    for (d, xm) in dn.iter().zip(x.iter()) {
+        for r in 0..3 {
+            for c in 0..3 {
+                j[r][c] += d[r] * xm[c];
+            }
+        }
+    }
+    let cof = [
+        [
+            j[1][1] * j[2][2] - j[1][2] * j[2][1],
+            j[0][2] * j[2][1] - j[0][1] * j[2][2],
+            j[0][1] * j[1][2] - j[0][2] * j[1][1],
+        ],
+        [
+            j[1][2] * j[2][0] - j[1][0] * j[2][2],
+            j[0][0] * j[2][2] - j[0][2] * j[2][0],
+            j[0][2] * j[1][0] - j[0][0] * j[1][2],
+        ],
+        [
+            j[1][0] * j[2][1] - j[1][1] * j[2][0],
+            j[0][1] * j[2][0] - j[0][0] * j[2][1],
+            j[0][0] * j[1][1] - j[0][1] * j[1][0],
+        ],
+    ];
+    let det = j[0][0] * cof[0][0] + j[0][1] * cof[1][0] + j[0][2] * cof[2][0];
+    let inv_det = 1.0 / det;
+    let mut inv = [[0.0; 3]; 3];
+    for r in 0..3 {
+        for c in 0..3 {
+            inv[r][c] = cof[r][c] * inv_det;
+        }
+    }
+    (inv, det)
+}
+
+/// The per-element kernel: one pass over the stations (thesis Fig. 2.4.1.1 tasks 1–8 and
+/// §2.4.2), then K_L = TᵀT over all stations at once.
+#[inline(always)]
+fn kernel<const NS: usize, const FMA: bool>(
+    table: &ShapeTable,
+    x: &[[f64; 3]; NS],
+    u: &[[f64; 3]; NS],
+    material: &Stiffness,
+    nonlinear: bool,
+    want_tangent: bool,
+    ws: &mut Workspace,
+    out: OutView<'_>,
+) -> Result<(), ElementError> {
+    let c = material.c();
+    let q = material.q();
+    let nd = 3 * NS;
+    let p = table.t_stride();
+    out.forces.fill(0.0);
+    *out.energy = 0.0;
+    if want_tangent {
+        ws.kg.fill(0.0);
+    }
+    let mut row0 = 0;
+    for (g, st) in table.stations().iter().enumerate() {
+        // Tasks 1–3: Jacobian, determinant, inverse, global shape gradients (eq. 2.4.1.10).
+        let dn = table.gradients(g);
+        let (inv, det) = jacobian::<NS>(dn, x);
+        if !(det > 0.0 && det.is_finite()) {
+            return Err(ElementError::NonPositiveJacobian {
+                element: None,
+                point: g,
+                xi: st.xi,
+                det,
+            });
+        }
+        let grad = &mut ws.grad[..NS];
+        for (gm, d) in grad.iter_mut().zip(dn) {
+            for cc in 0..3 {
+                gm[cc] = inv[cc][0] * d[0] + inv[cc][1] * d[1] + inv[cc][2] * d[2];
+            }
+        }
+        // Task 4: displacement gradient H_ij = ∂u_i/∂x_j = Σ_m u^m_i ∂N^m/∂x_j (eq. 2.4.1.12).
+        let mut h = [[0.0; 3]; 3];
+        for (um, gm) in u.iter().zip(grad.iter()) {
+            for i in 0..3 {
+                for jj in 0..3 {
+                    h[i][jj] += um[i] * gm[jj];
+                }
+            }
+        }
+        // Task 5: strains (eq. 2.1.4); stresses on this station's components.
+        let e = strains(&h, nonlinear);
+        let (lo, hi) = (st.first, st.last);
+        let mut s = [0.0; 6];
+        for i in lo..hi {
+            for k in lo..hi {
+                s[i] += c[i][k] * e[k];
+            }
+        }
+        out.strains[g] = e;
+        out.stresses[g] = s;
+        let w = det * st.weight;
+        let mut se = 0.0;
+        for i in lo..hi {
+            se += s[i] * e[i];
+        }
+        *out.energy += 0.5 * w * se;
+        // Weighted stress σ̂ = σ |J| W as a symmetric tensor, and F = I + H (I when linear).
+        let sh = [
+            [w * s[0], w * s[3], w * s[5]],
+            [w * s[3], w * s[1], w * s[4]],
+            [w * s[5], w * s[4], w * s[2]],
+        ];
+        let mut f = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+        if nonlinear {
+            for i in 0..3 {
+                for jj in 0..3 {
+                    f[i][jj] += h[i][jj];
+                }
+            }
+        }
+        // Tasks 6–8: R^{mr} += Σ_i B_i^{mr} σ̂_i = Σ_jk F_rj σ̂_jk ∂N^m/∂x_k (eq. 2.3.1, 2.4.1.26).
+        let mut fs = [[0.0; 3]; 3];
+        for r in 0..3 {
+            for k in 0..3 {
+                fs[r][k] = f[r][0] * sh[0][k] + f[r][1] * sh[1][k] + f[r][2] * sh[2][k];
+            }
+        }
+        for (fm, gm) in out.forces.chunks_exact_mut(3).zip(grad.iter()) {
+            for r in 0..3 {
+                fm[r] += fs[r][0] * gm[0] + fs[r][1] * gm[1] + fs[r][2] * gm[2];
+            }
+        }
+        if !want_tangent {
+            continue;
+        }
+        // ESTIF3D: T^{sα} = Q_is B_i^α √(|J|W) (eq. 2.3.4, 2.4.2.2–2.4.2.4) with
+        // B^{mr} = [F_r1 N_x, F_r2 N_y, F_r3 N_z, F_r1 N_y + F_r2 N_x, F_r2 N_z + F_r3 N_y,
+        //           F_r1 N_z + F_r3 N_x] (eq. 2.2.3), rows of this station stacked at row0.
+        let sw = w.sqrt();
+        let t = &mut ws.t[row0 * p..(row0 + hi - lo) * p];
+        for (m, gm) in grad.iter().enumerate() {
+            for (r, fr) in f.iter().enumerate() {
+                let b = [
+                    fr[0] * gm[0],
+                    fr[1] * gm[1],
+                    fr[2] * gm[2],
+                    fr[0] * gm[1] + fr[1] * gm[0],
+                    fr[1] * gm[2] + fr[2] * gm[1],
+                    fr[0] * gm[2] + fr[2] * gm[0],
+                ];
+                let col = 3 * m + r;
+                for sc in lo..hi {
+                    let mut acc = 0.0;
+                    for i in sc..hi {
+                        acc = fmadd::<FMA>(q[i][sc], b[i], acc);
+                    }
+                    t[(sc - lo) * p + col] = sw * acc;
+                }
+            }
+        }
+        row0 += hi - lo;
+        if nonlinear {
+            // Geometric stiffness k^{mn} = Σ_i a_i^{mn} σ̂_i = (∇N^m)ᵀ σ̂ ∇N^n (eq. 2.2.5, 2.4.2.6).
+            for (m, gm) in grad.iter().enumerate() {
+                let hm = [
+                    sh[0][0] * gm[0] + sh[0][1] * gm[1] + sh[0][2] * gm[2],
+                    sh[1][0] * gm[0] + sh[1][1] * gm[1] + sh[1][2] * gm[2],
+                    sh[2][0] * gm[0] + sh[2][1] * gm[1] + sh[2][2] * gm[2],
+                ];
+                let row = &mut ws.kg[m * NS..m * NS + m + 1];
+                for (kmn, gn) in row.iter_mut().zip(grad.iter()) {
+                    *kmn += hm[0] * gn[0] + hm[1] * gn[1] + hm[2] * gn[2];
+                }
+            }
+        }
+    }
+    if want_tangent {
+        let k = out.tangent;
+        syrk_lower::<FMA>(&ws.t, row0, p, nd, k);
+        if nonlinear {
+            // k^{mn} on the diagonal of each 3×3 node block (eq. 2.4.2.7).
+            for m in 0..NS {
+                for n in 0..=m {
+                    let kmn = ws.kg[m * NS + n];
+                    // n ≤ m, so (3m + r, 3n + r) lies in the lower triangle.
+                    for r in 0..3 {
+                        k[(3 * m + r) * nd + 3 * n + r] += kmn;
+                    }
+                }
+            }
+        }
+        for a in 0..nd {
+            for b in a + 1..nd {
+                k[a * nd + b] = k[b * nd + a];
+            }
+        }
+    }
+    Ok(())
+}
