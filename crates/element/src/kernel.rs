@@ -5,7 +5,8 @@
 //! Total Lagrangian: strains are Green–Lagrange (eq. 2.1.4), stresses second Piola–Kirchhoff,
 //! σ = C ε, both referred to the undeformed configuration.
 
-use crate::syrk::{fmadd, syrk_lower};
+use crate::simd::{acc3, comb3, dot};
+use crate::syrk::syrk_lower;
 use crate::{ElementError, ElementKind, ShapeTable};
 use nonlin3d_laminate::Stiffness;
 
@@ -76,28 +77,22 @@ impl ElementOutput {
     }
 }
 
-/// Scratch space of the kernels for one table: the stacked T matrix (eq. 2.4.2.3), the
-/// geometric stiffness k^{mn} and the global shape gradients.
+/// Scratch space of the kernels for one table: the stacked T matrix (eq. 2.4.2.3).
 #[derive(Debug, Clone)]
 pub struct Workspace {
     t: Vec<f64>,
-    kg: Vec<f64>,
-    grad: Vec<[f64; 3]>,
 }
 
 impl Workspace {
     /// Scratch sized for `table`.
     pub fn new(table: &ShapeTable) -> Self {
-        let nn = table.nodes();
         Self {
             t: vec![0.0; table.t_rows() * table.t_stride()],
-            kg: vec![0.0; nn * nn],
-            grad: vec![[0.0; 3]; nn],
         }
     }
 
     fn fits(&self, table: &ShapeTable) -> bool {
-        self.t.len() == table.t_rows() * table.t_stride() && self.grad.len() == table.nodes()
+        self.t.len() == table.t_rows() * table.t_stride()
     }
 }
 
@@ -369,12 +364,8 @@ pub(crate) fn strains(h: &[[f64; 3]; 3], nonlinear: bool) -> [f64; 6] {
     ]
 }
 
-/// Jacobian J_rc = Σ_m ∂N^m/∂ξ_r x^m_c (eq. 2.4.1.1, 2.4.1.9), its determinant and inverse.
-#[inline(always)]
-pub(crate) fn jacobian<const NS: usize>(
-    dn: &[[f64; 3]],
-    x: &[[f64; 3]; NS],
-) -> ([[f64; 3]; 3], f64) {
+/// Jacobian J_rc = Σ_m ∂N^m/∂ξ_r x^m_c (eq. 2.4.1.1, 2.4.1.9), its inverse and determinant.
+pub(crate) fn jacobian(dn: &[[f64; 3]], x: &[[f64; 3]]) -> ([[f64; 3]; 3], f64) {
     let mut j = [[0.0; 3]; 3];
     for (d, xm) in dn.iter().zip(x.iter()) {
         for r in 0..3 {
@@ -383,6 +374,12 @@ pub(crate) fn jacobian<const NS: usize>(
             }
         }
     }
+    invert(&j)
+}
+
+/// Inverse (by cofactors) and determinant of a 3×3 matrix.
+#[inline(always)]
+pub(crate) fn invert(j: &[[f64; 3]; 3]) -> ([[f64; 3]; 3], f64) {
     let cof = [
         [
             j[1][1] * j[2][2] - j[1][2] * j[2][1],
@@ -411,8 +408,22 @@ pub(crate) fn jacobian<const NS: usize>(
     (inv, det)
 }
 
+/// The three runs of a structure-of-arrays slice of length 3·NS as arrays.
+#[inline(always)]
+fn runs<const NS: usize>(v: &[f64]) -> Option<[&[f64; NS]; 3]> {
+    let (a, rest) = v.split_first_chunk::<NS>()?;
+    let (b, rest) = rest.split_first_chunk::<NS>()?;
+    let (c, _) = rest.split_first_chunk::<NS>()?;
+    Some([a, b, c])
+}
+
 /// The per-element kernel: one pass over the stations (thesis Fig. 2.4.1.1 tasks 1–8 and
 /// §2.4.2), then K_L = TᵀT over all stations at once.
+///
+/// Everything runs along the nodes on structure-of-arrays data (the thesis's vectors of length
+/// NS, eq. 2.4.1.2–2.4.1.13): coordinates, displacements and gradients are three runs of NS
+/// values. Each T row is three AXPYs of gradient runs (one per direction), interleaved into
+/// node-major DOF order as it is written, so K comes out of TᵀT in node-major order.
 #[inline(always)]
 fn kernel<const NS: usize, const FMA: bool>(
     table: &ShapeTable,
@@ -428,16 +439,34 @@ fn kernel<const NS: usize, const FMA: bool>(
     let q = material.q();
     let nd = 3 * NS;
     let p = table.t_stride();
-    out.forces.fill(0.0);
-    *out.energy = 0.0;
-    if want_tangent {
-        ws.kg.fill(0.0);
+    let mut xs = [[0.0; NS]; 3];
+    let mut us = [[0.0; NS]; 3];
+    for m in 0..NS {
+        for r in 0..3 {
+            xs[r][m] = x[m][r];
+            us[r][m] = u[m][r];
+        }
     }
+    let mut fr = [[0.0; NS]; 3];
+    let mut kg = [[0.0; NS]; NS];
+    *out.energy = 0.0;
     let mut row0 = 0;
     for (g, st) in table.stations().iter().enumerate() {
-        // Tasks 1–3: Jacobian, determinant, inverse, global shape gradients (eq. 2.4.1.10).
-        let dn = table.gradients(g);
-        let (inv, det) = jacobian::<NS>(dn, x);
+        let Some(dl) = runs::<NS>(table.gradients_by_direction(g)) else {
+            return Err(ElementError::LengthMismatch {
+                what: "shape table",
+                expected: 3 * NS,
+                got: 0,
+            });
+        };
+        // Tasks 1–2: J_rc = Σ_m ∂N^m/∂ξ_r x^m_c (eq. 2.4.1.1, 2.4.1.9), det and inverse.
+        let mut j = [[0.0; 3]; 3];
+        for r in 0..3 {
+            for cc in 0..3 {
+                j[r][cc] = dot::<NS, FMA>(dl[r], &xs[cc]);
+            }
+        }
+        let (inv, det) = invert(&j);
         if !(det > 0.0 && det.is_finite()) {
             return Err(ElementError::NonPositiveJacobian {
                 element: None,
@@ -446,19 +475,17 @@ fn kernel<const NS: usize, const FMA: bool>(
                 det,
             });
         }
-        let grad = &mut ws.grad[..NS];
-        for (gm, d) in grad.iter_mut().zip(dn) {
-            for cc in 0..3 {
-                gm[cc] = inv[cc][0] * d[0] + inv[cc][1] * d[1] + inv[cc][2] * d[2];
-            }
+        // Task 3: global gradients ∂N^m/∂x_k = Σ_r IJ_kr ∂N^m/∂ξ_r (eq. 2.4.1.10–2.4.1.11).
+        let mut gr = [[0.0; NS]; 3];
+        let dlr = [*dl[0], *dl[1], *dl[2]];
+        for k in 0..3 {
+            comb3::<NS, FMA>(&mut gr[k], inv[k], &dlr);
         }
-        // Task 4: displacement gradient H_ij = ∂u_i/∂x_j = Σ_m u^m_i ∂N^m/∂x_j (eq. 2.4.1.12).
+        // Task 4: H_ij = ∂u_i/∂x_j = Σ_m u^m_i ∂N^m/∂x_j (eq. 2.4.1.12).
         let mut h = [[0.0; 3]; 3];
-        for (um, gm) in u.iter().zip(grad.iter()) {
-            for i in 0..3 {
-                for jj in 0..3 {
-                    h[i][jj] += um[i] * gm[jj];
-                }
+        for i in 0..3 {
+            for jj in 0..3 {
+                h[i][jj] = dot::<NS, FMA>(&us[i], &gr[jj]);
             }
         }
         // Task 5: strains (eq. 2.1.4); stresses on this station's components.
@@ -493,79 +520,89 @@ fn kernel<const NS: usize, const FMA: bool>(
             }
         }
         // Tasks 6–8: R^{mr} += Σ_i B_i^{mr} σ̂_i = Σ_jk F_rj σ̂_jk ∂N^m/∂x_k (eq. 2.3.1, 2.4.1.26).
-        let mut fs = [[0.0; 3]; 3];
         for r in 0..3 {
+            let mut fs = [0.0; 3];
             for k in 0..3 {
-                fs[r][k] = f[r][0] * sh[0][k] + f[r][1] * sh[1][k] + f[r][2] * sh[2][k];
+                fs[k] = f[r][0] * sh[0][k] + f[r][1] * sh[1][k] + f[r][2] * sh[2][k];
             }
-        }
-        for (fm, gm) in out.forces.chunks_exact_mut(3).zip(grad.iter()) {
-            for r in 0..3 {
-                fm[r] += fs[r][0] * gm[0] + fs[r][1] * gm[1] + fs[r][2] * gm[2];
-            }
+            acc3::<NS, FMA>(&mut fr[r], fs, &gr);
         }
         if !want_tangent {
             continue;
         }
-        // ESTIF3D: T^{sα} = Q_is B_i^α √(|J|W) (eq. 2.3.4, 2.4.2.2–2.4.2.4) with
-        // B^{mr} = [F_r1 N_x, F_r2 N_y, F_r3 N_z, F_r1 N_y + F_r2 N_x, F_r2 N_z + F_r3 N_y,
-        //           F_r1 N_z + F_r3 N_x] (eq. 2.2.3), rows of this station stacked at row0.
+        // ESTIF3D: T^{sα} = Q_is B_i^α √(|J|W) (eq. 2.3.4, 2.4.2.2–2.4.2.4). B of eq. 2.2.3 is
+        // B_i^{mr} = Σ_k β_irk ∂N^m/∂x_k with β_r = rows of F: β_0r = (F_r1, 0, 0), β_1r =
+        // (0, F_r2, 0), β_2r = (0, 0, F_r3), β_3r = (F_r2, F_r1, 0), β_4r = (0, F_r3, F_r2),
+        // β_5r = (F_r3, 0, F_r1). So T row s, direction r = Σ_k c_srk ∇_k N with
+        // c_srk = √w Σ_{i ≥ s} Q_is β_irk: three AXPYs along the nodes.
         let sw = w.sqrt();
         let t = &mut ws.t[row0 * p..(row0 + hi - lo) * p];
-        for (m, gm) in grad.iter().enumerate() {
-            for (r, fr) in f.iter().enumerate() {
-                let b = [
-                    fr[0] * gm[0],
-                    fr[1] * gm[1],
-                    fr[2] * gm[2],
-                    fr[0] * gm[1] + fr[1] * gm[0],
-                    fr[1] * gm[2] + fr[2] * gm[1],
-                    fr[0] * gm[2] + fr[2] * gm[0],
+        for (sc, trow) in (lo..hi).zip(t.chunks_exact_mut(p)) {
+            let mut runs_r = [[0.0; NS]; 3];
+            for (r, run) in runs_r.iter_mut().enumerate() {
+                let fr_ = &f[r];
+                let beta = [
+                    [fr_[0], 0.0, 0.0],
+                    [0.0, fr_[1], 0.0],
+                    [0.0, 0.0, fr_[2]],
+                    [fr_[1], fr_[0], 0.0],
+                    [0.0, fr_[2], fr_[1]],
+                    [fr_[2], 0.0, fr_[0]],
                 ];
-                let col = 3 * m + r;
-                for sc in lo..hi {
-                    let mut acc = 0.0;
-                    for i in sc..hi {
-                        acc = fmadd::<FMA>(q[i][sc], b[i], acc);
+                let mut cf = [0.0; 3];
+                for i in sc..hi {
+                    for k in 0..3 {
+                        cf[k] += q[i][sc] * beta[i][k];
                     }
-                    t[(sc - lo) * p + col] = sw * acc;
                 }
+                comb3::<NS, FMA>(run, [sw * cf[0], sw * cf[1], sw * cf[2]], &gr);
+            }
+            // Interleave the three direction runs into node-major DOF order 3m + r.
+            for (m, dst) in trow.chunks_exact_mut(3).take(NS).enumerate() {
+                dst[0] = runs_r[0][m];
+                dst[1] = runs_r[1][m];
+                dst[2] = runs_r[2][m];
             }
         }
         row0 += hi - lo;
         if nonlinear {
-            // Geometric stiffness k^{mn} = Σ_i a_i^{mn} σ̂_i = (∇N^m)ᵀ σ̂ ∇N^n (eq. 2.2.5, 2.4.2.6).
-            for (m, gm) in grad.iter().enumerate() {
+            // Geometric stiffness k^{mn} = Σ_i a_i^{mn} σ̂_i = (∇N^m)ᵀ σ̂ ∇N^n (eq. 2.2.5, 2.4.2.6),
+            // whole rows along n; only n ≤ m is used (so K stays exactly symmetric).
+            for m in 0..NS {
+                let gm = [gr[0][m], gr[1][m], gr[2][m]];
                 let hm = [
                     sh[0][0] * gm[0] + sh[0][1] * gm[1] + sh[0][2] * gm[2],
                     sh[1][0] * gm[0] + sh[1][1] * gm[1] + sh[1][2] * gm[2],
                     sh[2][0] * gm[0] + sh[2][1] * gm[1] + sh[2][2] * gm[2],
                 ];
-                let row = &mut ws.kg[m * NS..m * NS + m + 1];
-                for (kmn, gn) in row.iter_mut().zip(grad.iter()) {
-                    *kmn += hm[0] * gn[0] + hm[1] * gn[1] + hm[2] * gn[2];
-                }
+                acc3::<NS, FMA>(&mut kg[m], hm, &gr);
             }
+        }
+    }
+    for m in 0..NS {
+        for r in 0..3 {
+            out.forces[3 * m + r] = fr[r][m];
         }
     }
     if want_tangent {
         let k = out.tangent;
-        syrk_lower::<FMA>(&ws.t, row0, p, nd, k);
+        syrk_lower::<FMA>(&ws.t, row0, p, nd, |a, b, v| {
+            k[a * nd + b] = v;
+            k[b * nd + a] = v;
+        });
         if nonlinear {
-            // k^{mn} on the diagonal of each 3×3 node block (eq. 2.4.2.7).
+            // k^{mn} on the diagonal of each 3×3 node block (eq. 2.4.2.7), mirrored.
             for m in 0..NS {
-                for n in 0..=m {
-                    let kmn = ws.kg[m * NS + n];
-                    // n ≤ m, so (3m + r, 3n + r) lies in the lower triangle.
+                for n in 0..m {
+                    let kmn = kg[m][n];
                     for r in 0..3 {
                         k[(3 * m + r) * nd + 3 * n + r] += kmn;
+                        k[(3 * n + r) * nd + 3 * m + r] += kmn;
                     }
                 }
-            }
-        }
-        for a in 0..nd {
-            for b in a + 1..nd {
-                k[a * nd + b] = k[b * nd + a];
+                for r in 0..3 {
+                    k[(3 * m + r) * nd + 3 * m + r] += kg[m][m];
+                }
             }
         }
     }

@@ -45,6 +45,7 @@ mod kernel;
 mod quadrature;
 pub mod reference;
 mod shape;
+mod simd;
 #[cfg(feature = "proptest")]
 pub mod strategies;
 mod syrk;

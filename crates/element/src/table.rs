@@ -12,6 +12,7 @@ pub struct ShapeTable {
     stations: Vec<Station>,
     values: Vec<f64>,
     gradients: Vec<[f64; 3]>,
+    gradients_soa: Vec<f64>,
     t_rows: usize,
 }
 
@@ -29,6 +30,16 @@ impl ShapeTable {
             kind.shape_values(s.xi, &mut values[g * nn..(g + 1) * nn]);
             kind.shape_gradients(s.xi, &mut gradients[g * nn..(g + 1) * nn]);
         }
+        // Structure of arrays per station: ∂N/∂ξ for all nodes, then ∂N/∂η, then ∂N/∂ζ
+        // (the thesis's DL vector, eq. 2.4.1.2), so the kernels run along the nodes.
+        let mut gradients_soa = vec![0.0; stations.len() * 3 * nn];
+        for g in 0..stations.len() {
+            for m in 0..nn {
+                for r in 0..3 {
+                    gradients_soa[g * 3 * nn + r * nn + m] = gradients[g * nn + m][r];
+                }
+            }
+        }
         let t_rows = stations.iter().map(Station::components).sum();
         Ok(Self {
             kind,
@@ -36,6 +47,7 @@ impl ShapeTable {
             stations,
             values,
             gradients,
+            gradients_soa,
             t_rows,
         })
     }
@@ -77,10 +89,40 @@ impl ShapeTable {
         &self.gradients[g * nn..(g + 1) * nn]
     }
 
+    /// ∂N^m/∂ξ_r at station `g` as three contiguous runs over the nodes (r-major, length
+    /// 3·NS): the layout the kernels use.
+    pub fn gradients_by_direction(&self, g: usize) -> &[f64] {
+        let n3 = 3 * self.nodes();
+        &self.gradients_soa[g * n3..(g + 1) * n3]
+    }
+
     /// Rows of the stacked T matrix, Σ over stations of the components integrated there
     /// (48 for 2×2×2, 162 for 3×3×3, 34 for the selective-reduced Hex8).
     pub fn t_rows(&self) -> usize {
         self.t_rows
+    }
+
+    /// Floating-point operations (a fused multiply-add counts 2) of one [`evaluate`] call
+    /// with the tangent, counting only useful work: per station the Jacobian, its inverse,
+    /// the global gradients, ∇u, strains, stresses, forces (≈ 84·NS + 250), T = Qᵀ B √w
+    /// (57 per DOF for six components), the geometric stiffness (15·NS + 5·NS(NS+1)/2), and
+    /// once the lower triangle of TᵀT (rows·n(n+1)).
+    ///
+    /// [`evaluate`]: crate::evaluate
+    pub fn flops_with_tangent(&self) -> u64 {
+        let ns = self.nodes() as u64;
+        let nd = self.dofs() as u64;
+        let per_station: u64 = self
+            .stations
+            .iter()
+            .map(|s| {
+                let c = s.components() as u64;
+                // T: Σ_{s} (c − s) FMAs per DOF plus the √w scaling.
+                let t = nd * (c * (c + 1) + c);
+                84 * ns + 250 + t + 15 * ns + 5 * ns * (ns + 1) / 2
+            })
+            .sum();
+        per_station + self.t_rows as u64 * nd * (nd + 1)
     }
 
     /// Row stride of the stacked T matrix: the DOF count rounded up to a multiple of 8 so
