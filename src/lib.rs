@@ -1,13 +1,27 @@
 //! nonlin3d: geometrically nonlinear 3-D finite element analysis of delaminated composite
 //! laminates, after J. D. Whitcomb, NASA TM-100655 (1988).
 //!
-//! This facade re-exports the layers under `crates/`:
+//! This facade re-exports the layers under `crates/` and composes them:
 //!
 //! | module | crate | owns |
 //! |---|---|---|
 //! | [`laminate`] | `nonlin3d-laminate` | ply stiffness, rotation, stacks, Cholesky factor (§2.1, §2.9) |
 //! | [`element`] | `nonlin3d-element` | Hex8/Hex20, quadrature, B0BL3D / ESTIF3D kernels, eigen-analysis (§2.1–2.5) |
+//! | [`eigen_check`] | this crate | the element eigen-check the `nonlin3d` program runs (§2.5) |
+//!
+//! Mesh generation, solvers, Newton path following, substructuring, contact and VCCT come as
+//! their own crates in later releases.
 #![deny(missing_docs)]
+#![warn(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
+pub mod eigen_check;
+
+/// The README's code blocks, compiled and run as doc-tests.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;
+mod error;
+
+pub use error::Error;
 pub use nonlin3d_element as element;
 pub use nonlin3d_laminate as laminate;

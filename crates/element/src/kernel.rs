@@ -364,19 +364,6 @@ pub(crate) fn strains(h: &[[f64; 3]; 3], nonlinear: bool) -> [f64; 6] {
     ]
 }
 
-/// Jacobian J_rc = Σ_m ∂N^m/∂ξ_r x^m_c (eq. 2.4.1.1, 2.4.1.9), its inverse and determinant.
-pub(crate) fn jacobian(dn: &[[f64; 3]], x: &[[f64; 3]]) -> ([[f64; 3]; 3], f64) {
-    let mut j = [[0.0; 3]; 3];
-    for (d, xm) in dn.iter().zip(x.iter()) {
-        for r in 0..3 {
-            for c in 0..3 {
-                j[r][c] += d[r] * xm[c];
-            }
-        }
-    }
-    invert(&j)
-}
-
 /// Inverse (by cofactors) and determinant of a 3×3 matrix.
 #[inline(always)]
 pub(crate) fn invert(j: &[[f64; 3]; 3]) -> ([[f64; 3]; 3], f64) {

@@ -11,7 +11,7 @@
 //! | [`Kinematics::Linear`], [`linear_stiffness`] | small-strain variants | §2.6, §2.8 |
 //! | [`evaluate_batch`] | many elements of one kind, rayon across chunks | §2.4 |
 //! | [`eigen_analysis`] | eigenvalues and zero-energy modes of an element stiffness | §2.5 |
-//! | [`reference`] | a plain per-point nalgebra implementation (B explicit, Bᵀ C B): the oracle | — |
+//! | [`reference`](mod@reference) | a plain per-point nalgebra implementation (B explicit, Bᵀ C B): the oracle | — |
 //! | `strategies` (feature `proptest`) | random distorted elements, SPD materials, displacements | — |
 //!
 //! Conventions: strains and stresses in the thesis order xx, yy, zz, γxy, γyz, γxz (engineering
@@ -37,6 +37,10 @@
 //! assert_eq!(k.len(), 60 * 60);
 //! ```
 #![deny(missing_docs)]
+#![cfg_attr(
+    not(test),
+    warn(clippy::unwrap_used, clippy::expect_used, clippy::panic)
+)]
 
 mod batch;
 mod eigen;

@@ -63,6 +63,37 @@ impl ElementKind {
         }
     }
 
+    /// det J at reference point `xi` of the element with node coordinates `coords`, where
+    /// J_rc = Σ_m ∂N^m/∂ξ_r x^m_c (eq. 2.4.1.1, 2.4.1.9): positive for a valid element; mesh
+    /// quality metrics and validity checks build on it.
+    pub fn jacobian_determinant(
+        self,
+        xi: [f64; 3],
+        coords: &[[f64; 3]],
+    ) -> Result<f64, crate::ElementError> {
+        if coords.len() != self.nodes() {
+            return Err(crate::ElementError::LengthMismatch {
+                what: "coordinates",
+                expected: self.nodes(),
+                got: coords.len(),
+            });
+        }
+        let mut dn = [[0.0; 3]; 20];
+        let dn = &mut dn[..self.nodes()];
+        self.shape_gradients(xi, dn);
+        let mut j = [[0.0; 3]; 3];
+        for (d, xm) in dn.iter().zip(coords) {
+            for r in 0..3 {
+                for c in 0..3 {
+                    j[r][c] += d[r] * xm[c];
+                }
+            }
+        }
+        Ok(j[0][0] * (j[1][1] * j[2][2] - j[1][2] * j[2][1])
+            - j[0][1] * (j[1][0] * j[2][2] - j[1][2] * j[2][0])
+            + j[0][2] * (j[1][0] * j[2][1] - j[1][1] * j[2][0]))
+    }
+
     /// Reference gradients ∂N^m/∂ξ_r written into `dn` (length [`nodes`](Self::nodes)).
     pub fn shape_gradients(self, xi: [f64; 3], dn: &mut [[f64; 3]]) {
         let nodes = self.reference_nodes();

@@ -22,7 +22,7 @@ pub(crate) fn syrk_lower<const FMA: bool>(
     n: usize,
     mut store: impl FnMut(usize, usize, f64),
 ) {
-    debug_assert!(p % NR == 0 && p >= n && t.len() >= rows * p);
+    debug_assert!(p.is_multiple_of(NR) && p >= n && t.len() >= rows * p);
     let mut a0 = 0;
     while a0 < n {
         let mut b0 = 0;

@@ -59,9 +59,9 @@ pub enum LaminateError {
         row: usize,
         /// Zero-based column of the upper entry.
         col: usize,
-        /// C[row][col].
+        /// C\[row\]\[col\].
         upper: f64,
-        /// C[col][row].
+        /// C\[col\]\[row\].
         lower: f64,
     },
     /// The Cholesky factorisation C = Q·Qᵀ met a non-positive pivot: C is not positive definite.

@@ -26,6 +26,10 @@
 //! assert!(c45.c()[4][5].abs() > 1e8);
 //! ```
 #![deny(missing_docs)]
+#![cfg_attr(
+    not(test),
+    warn(clippy::unwrap_used, clippy::expect_used, clippy::panic)
+)]
 
 mod error;
 pub mod materials;

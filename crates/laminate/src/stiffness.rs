@@ -159,7 +159,8 @@ fn cholesky(c: &[[f64; 6]; 6]) -> Result<[[f64; 6]; 6], LaminateError> {
             d -= q[j][k] * q[j][k];
         }
         // Pivots below 1e-14 of the diagonal entry are round-off of a singular matrix.
-        if !(d > 1e-14 * c[j][j].abs()) || d <= 0.0 {
+        let tiny = 1e-14 * c[j][j].abs();
+        if d.is_nan() || d <= tiny || d <= 0.0 {
             return Err(LaminateError::NotPositiveDefinite { index: j, pivot: d });
         }
         let djj = d.sqrt();

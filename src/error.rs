@@ -1,0 +1,16 @@
+//! The facade's error type: every layer's error, wrapped.
+
+/// Anything the nonlin3d pipeline can fail with.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// Invalid material or laminate input.
+    #[error(transparent)]
+    Laminate(#[from] nonlin3d_laminate::LaminateError),
+    /// An element kernel failed (inverted element, bad input).
+    #[error(transparent)]
+    Element(#[from] nonlin3d_element::ElementError),
+    /// A numerical step produced no answer (named).
+    #[error("{0}")]
+    Numerical(String),
+}
