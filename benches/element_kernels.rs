@@ -9,7 +9,7 @@ use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_m
 use nonlin3d::element::reference::evaluate_reference;
 use nonlin3d::element::{
     BatchInput, BatchOutput, ElementKind, ElementOutput, IntegrationRule, Kinematics, ShapeTable,
-    Workspace, evaluate, evaluate_batch,
+    Workspace, evaluate, evaluate_batch, evaluate_batch_with,
 };
 use nonlin3d::laminate::{ShearCoupling, Stiffness, materials};
 use std::hint::black_box;
@@ -157,15 +157,39 @@ fn bench_batched(c: &mut Criterion) {
                 .num_threads(threads)
                 .build()
                 .unwrap_or_else(|e| panic!("{e}"));
-            group.bench_function(BenchmarkId::new(format!("{name}_threads"), threads), |b| {
-                b.iter(|| {
-                    pool.install(|| {
-                        evaluate_batch(&table, &input, Kinematics::Nonlinear, &mut out)
+            group.bench_function(
+                BenchmarkId::new(format!("{name}_stored_threads"), threads),
+                |b| {
+                    b.iter(|| {
+                        pool.install(|| {
+                            evaluate_batch(&table, &input, Kinematics::Nonlinear, &mut out)
+                        })
+                        .unwrap_or_else(|e| panic!("{e}"));
+                        black_box(&out.tangents);
                     })
-                    .unwrap_or_else(|e| panic!("{e}"));
-                    black_box(&out.tangents);
-                })
-            });
+                },
+            );
+            // Streamed: each element's output consumed while in cache (what assembly does).
+            group.bench_function(
+                BenchmarkId::new(format!("{name}_streamed_threads"), threads),
+                |b| {
+                    b.iter(|| {
+                        let sums = pool
+                            .install(|| {
+                                evaluate_batch_with(
+                                    &table,
+                                    &input,
+                                    Kinematics::Nonlinear,
+                                    true,
+                                    || 0.0,
+                                    |s, _, o| *s += o.tangent[0] + o.forces[0],
+                                )
+                            })
+                            .unwrap_or_else(|e| panic!("{e}"));
+                        black_box(sums);
+                    })
+                },
+            );
         }
     }
     group.finish();

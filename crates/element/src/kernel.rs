@@ -66,7 +66,7 @@ pub(crate) struct OutView<'a> {
 }
 
 impl ElementOutput {
-    fn view(&mut self) -> OutView<'_> {
+    pub(crate) fn view(&mut self) -> OutView<'_> {
         OutView {
             strains: &mut self.strains,
             stresses: &mut self.stresses,

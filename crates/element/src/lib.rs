@@ -9,7 +9,7 @@
 //! | [`ShapeTable`] | shape data tabulated once per kind and rule | §2.4.1 eq. 2.4.1.2 |
 //! | [`evaluate`], [`b0bl3d`], [`estif3d`] | one element: strains, stresses, forces, energy, tangent | eq. 2.1.4, 2.3.1–2.3.4, 2.4.2.6 |
 //! | [`Kinematics::Linear`], [`linear_stiffness`] | small-strain variants | §2.6, §2.8 |
-//! | [`evaluate_batch`] | many elements of one kind, rayon across chunks | §2.4 |
+//! | [`evaluate_batch`], [`evaluate_batch_with`] | many elements of one kind, rayon across chunks; stored, or streamed to a consumer | §2.4 |
 //! | [`eigen_analysis`] | eigenvalues and zero-energy modes of an element stiffness | §2.5 |
 //! | [`reference`](mod@reference) | a plain per-point nalgebra implementation (B explicit, Bᵀ C B): the oracle | — |
 //! | `strategies` (feature `proptest`) | random distorted elements, SPD materials, displacements | — |
@@ -55,7 +55,7 @@ pub mod strategies;
 mod syrk;
 mod table;
 
-pub use batch::{BatchInput, BatchOutput, evaluate_batch};
+pub use batch::{BatchInput, BatchOutput, evaluate_batch, evaluate_batch_with};
 pub use eigen::{EigenReport, ZERO_MODE_THRESHOLD, eigen_analysis};
 pub use error::ElementError;
 pub use kernel::{

@@ -6,7 +6,7 @@ use nonlin3d_element::reference::evaluate_reference;
 use nonlin3d_element::strategies::{apply, displacements, distorted_element, material, rotation};
 use nonlin3d_element::{
     BatchInput, BatchOutput, ElementKind, ElementOutput, IntegrationRule, Kinematics, ShapeTable,
-    Workspace, evaluate, evaluate_batch,
+    Workspace, evaluate, evaluate_batch, evaluate_batch_with,
 };
 use nonlin3d_laminate::Stiffness;
 use proptest::prelude::*;
@@ -225,6 +225,21 @@ proptest! {
         }
         prop_assert!(outs[0] == outs[1]);
         let nd = t.dofs();
+        // The streaming variant hands the same bits to the consumer, in element order within
+        // each chunk and chunks in order, whatever the thread count.
+        for threads in [1, 2] {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            let states = pool.install(|| evaluate_batch_with(&t, &input, Kinematics::Nonlinear, true, Vec::new, |seen: &mut Vec<(usize, f64, f64)>, e, out| {
+                seen.push((e, out.energy, out.tangent[7 * nd + 3]));
+            })).unwrap();
+            let seen: Vec<(usize, f64, f64)> = states.into_iter().flatten().collect();
+            prop_assert_eq!(seen.len(), elems.len());
+            for (i, &(e, energy, k73)) in seen.iter().enumerate() {
+                prop_assert_eq!(e, i);
+                prop_assert_eq!(energy, outs[0].energy[e]);
+                prop_assert_eq!(k73, outs[0].tangents[e * nd * nd + 7 * nd + 3]);
+            }
+        }
         for (e, (_, x, u, m)) in elems.iter().enumerate() {
             let one = run(&t, x, u, m, Kinematics::Nonlinear);
             prop_assert_eq!(&outs[0].forces[e * nd..(e + 1) * nd], &one.forces[..]);
