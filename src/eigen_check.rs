@@ -6,8 +6,8 @@
 
 use crate::Error;
 use nonlin3d_element::{
-    ElementKind, IntegrationRule, ShapeTable, ZERO_MODE_THRESHOLD, eigen_analysis, estif3d,
-    linear_stiffness,
+    ElementKind, HEX20_EDGES, IntegrationRule, ShapeTable, ZERO_MODE_THRESHOLD, eigen_analysis,
+    estif3d, linear_stiffness,
 };
 use nonlin3d_laminate::{PlyStack, ShearCoupling, Stiffness, materials};
 use std::fmt::Write;
@@ -51,21 +51,7 @@ pub fn distorted_element(kind: ElementKind) -> Vec<[f64; 3]> {
     };
     let mut x: Vec<[f64; 3]> = (0..8).map(corner).collect();
     if kind == ElementKind::Hex20 {
-        const EDGES: [(usize, usize); 12] = [
-            (0, 1),
-            (1, 2),
-            (2, 3),
-            (3, 0),
-            (4, 5),
-            (5, 6),
-            (6, 7),
-            (7, 4),
-            (0, 4),
-            (1, 5),
-            (2, 6),
-            (3, 7),
-        ];
-        for (e, &(a, b)) in EDGES.iter().enumerate() {
+        for (e, &(a, b)) in HEX20_EDGES.iter().enumerate() {
             let bow = if e % 2 == 0 { 0.01e-3 } else { -0.01e-3 };
             x.push([
                 0.5 * (x[a][0] + x[b][0]) + bow,

@@ -6,8 +6,8 @@
 //! arithmetic is the single-element kernel's, so results are bitwise identical to
 //! [`evaluate`](crate::evaluate) and independent of the number of threads.
 
-use crate::kernel::{OutView, check_finite, check_material, run};
-use crate::{ElementError, Kinematics, ShapeTable, Workspace};
+use crate::kernel::{Job, OutView, check_finite, check_material, run};
+use crate::{ElementError, ElementOutput, Kinematics, ShapeTable, Workspace};
 use nonlin3d_laminate::Stiffness;
 use rayon::prelude::*;
 
@@ -62,6 +62,72 @@ impl BatchOutput {
     }
 }
 
+impl BatchInput<'_> {
+    /// Checks the input lengths against `table`, the material indices, and each material
+    /// against the rule (see [`ElementError::CoupledTransverseShear`]).
+    fn validate(&self, table: &ShapeTable) -> Result<(), ElementError> {
+        let nn = table.nodes();
+        let n = self.material_of.len();
+        for (what, expected, got) in [
+            ("batch coordinates", n * nn, self.coords.len()),
+            ("batch displacements", n * nn, self.disp.len()),
+        ] {
+            if expected != got {
+                return Err(ElementError::LengthMismatch {
+                    what,
+                    expected,
+                    got,
+                });
+            }
+        }
+        let count = self.materials.len();
+        if let Some((element, &material)) = self
+            .material_of
+            .iter()
+            .enumerate()
+            .find(|(_, m)| **m >= count)
+        {
+            return Err(ElementError::MaterialIndex {
+                element,
+                material,
+                count,
+            });
+        }
+        for (i, m) in self.materials.iter().enumerate() {
+            check_material(table, m, i)?;
+        }
+        Ok(())
+    }
+
+    /// Evaluates element `e` into `out`; errors name the element.
+    fn run_element(
+        &self,
+        table: &ShapeTable,
+        e: usize,
+        nonlinear: bool,
+        tangent: bool,
+        ws: &mut Workspace,
+        out: OutView<'_>,
+    ) -> Result<(), ElementError> {
+        let nn = table.nodes();
+        let coords = &self.coords[e * nn..(e + 1) * nn];
+        let disp = &self.disp[e * nn..(e + 1) * nn];
+        let material = &self.materials[self.material_of[e]];
+        let job = Job {
+            table,
+            coords,
+            disp,
+            material,
+            nonlinear,
+            tangent,
+        };
+        check_finite(coords, "coordinates")
+            .and_then(|_| check_finite(disp, "displacements"))
+            .and_then(|_| run(job, ws, out))
+            .map_err(|err| err.at_element(e))
+    }
+}
+
 /// Evaluates every element of the batch into `out` (sized by [`BatchOutput::new`]), in
 /// parallel on the current rayon pool. The tangents are computed when `out.tangents` is
 /// non-empty. The first failing element (lowest index) is reported.
@@ -71,25 +137,19 @@ pub fn evaluate_batch(
     kinematics: Kinematics,
     out: &mut BatchOutput,
 ) -> Result<(), ElementError> {
-    let nn = table.nodes();
+    input.validate(table)?;
     let nd = table.dofs();
     let ns = table.stations().len();
     let n = input.material_of.len();
     let tangent = !out.tangents.is_empty();
-    let lengths = [
-        ("batch coordinates", n * nn, input.coords.len()),
-        ("batch displacements", n * nn, input.disp.len()),
+    let kd = if tangent { nd * nd } else { 0 };
+    for (what, expected, got) in [
         ("batch forces", n * nd, out.forces.len()),
         ("batch strains", n * ns, out.strains.len()),
         ("batch stresses", n * ns, out.stresses.len()),
         ("batch energy", n, out.energy.len()),
-        (
-            "batch tangents",
-            if tangent { n * nd * nd } else { 0 },
-            out.tangents.len(),
-        ),
-    ];
-    for (what, expected, got) in lengths {
+        ("batch tangents", n * kd, out.tangents.len()),
+    ] {
         if expected != got {
             return Err(ElementError::LengthMismatch {
                 what,
@@ -98,19 +158,6 @@ pub fn evaluate_batch(
             });
         }
     }
-    for (element, &material) in input.material_of.iter().enumerate() {
-        if material >= input.materials.len() {
-            return Err(ElementError::MaterialIndex {
-                element,
-                material,
-                count: input.materials.len(),
-            });
-        }
-    }
-    for (i, m) in input.materials.iter().enumerate() {
-        check_material(table, m, i)?;
-    }
-    let kd = if tangent { nd * nd } else { 0 };
     let nonlinear = kinematics == Kinematics::Nonlinear;
     // Split the outputs into per-chunk pieces up front (sequential and cheap), then run the
     // chunks in parallel; `collect` keeps chunk order, so the first error is the lowest index.
@@ -135,9 +182,6 @@ pub fn evaluate_batch(
             |(chunk, ((((forces, strains), stresses), energy), tangents))| {
                 let mut ws = Workspace::new(table);
                 for (i, e_energy) in energy.iter_mut().enumerate() {
-                    let e = chunk * CHUNK + i;
-                    let x = &input.coords[e * nn..(e + 1) * nn];
-                    let u = &input.disp[e * nn..(e + 1) * nn];
                     let view = OutView {
                         strains: &mut strains[i * ns..(i + 1) * ns],
                         stresses: &mut stresses[i * ns..(i + 1) * ns],
@@ -149,11 +193,14 @@ pub fn evaluate_batch(
                             &mut []
                         },
                     };
-                    let material = &input.materials[input.material_of[e]];
-                    check_finite(x, "coordinates")
-                        .and_then(|_| check_finite(u, "displacements"))
-                        .and_then(|_| run(table, x, u, material, nonlinear, tangent, &mut ws, view))
-                        .map_err(|err| err.at_element(e))?;
+                    input.run_element(
+                        table,
+                        chunk * CHUNK + i,
+                        nonlinear,
+                        tangent,
+                        &mut ws,
+                        view,
+                    )?;
                 }
                 Ok(())
             },
@@ -181,60 +228,19 @@ pub fn evaluate_batch_with<S, I, F>(
 where
     S: Send,
     I: Fn() -> S + Sync,
-    F: Fn(&mut S, usize, &crate::ElementOutput) + Sync,
+    F: Fn(&mut S, usize, &ElementOutput) + Sync,
 {
-    let nn = table.nodes();
+    input.validate(table)?;
     let n = input.material_of.len();
-    for (what, expected, got) in [
-        ("batch coordinates", n * nn, input.coords.len()),
-        ("batch displacements", n * nn, input.disp.len()),
-    ] {
-        if expected != got {
-            return Err(ElementError::LengthMismatch {
-                what,
-                expected,
-                got,
-            });
-        }
-    }
-    for (element, &material) in input.material_of.iter().enumerate() {
-        if material >= input.materials.len() {
-            return Err(ElementError::MaterialIndex {
-                element,
-                material,
-                count: input.materials.len(),
-            });
-        }
-    }
-    for (i, m) in input.materials.iter().enumerate() {
-        check_material(table, m, i)?;
-    }
     let nonlinear = kinematics == Kinematics::Nonlinear;
     (0..n.div_ceil(CHUNK))
         .into_par_iter()
         .map(|chunk| {
             let mut state = init();
             let mut ws = Workspace::new(table);
-            let mut one = crate::ElementOutput::new(table);
+            let mut one = ElementOutput::new(table);
             for e in chunk * CHUNK..((chunk + 1) * CHUNK).min(n) {
-                let x = &input.coords[e * nn..(e + 1) * nn];
-                let u = &input.disp[e * nn..(e + 1) * nn];
-                let material = &input.materials[input.material_of[e]];
-                check_finite(x, "coordinates")
-                    .and_then(|_| check_finite(u, "displacements"))
-                    .and_then(|_| {
-                        run(
-                            table,
-                            x,
-                            u,
-                            material,
-                            nonlinear,
-                            tangent,
-                            &mut ws,
-                            one.view(),
-                        )
-                    })
-                    .map_err(|err| err.at_element(e))?;
+                input.run_element(table, e, nonlinear, tangent, &mut ws, one.view())?;
                 consume(&mut state, e, &one);
             }
             Ok(state)

@@ -116,37 +116,51 @@ pub fn evaluate(
     check_finite(disp, "displacements")?;
     check_material(table, material, 0)?;
     let nonlinear = kinematics == Kinematics::Nonlinear;
-    run(
+    let job = Job {
         table,
         coords,
         disp,
         material,
         nonlinear,
         tangent,
-        workspace,
-        out.view(),
-    )
+    };
+    run(job, workspace, out.view())
+}
+
+/// One element's inputs as the internal dispatch passes them along.
+#[derive(Clone, Copy)]
+pub(crate) struct Job<'a> {
+    pub(crate) table: &'a ShapeTable,
+    pub(crate) coords: &'a [[f64; 3]],
+    pub(crate) disp: &'a [[f64; 3]],
+    pub(crate) material: &'a Stiffness,
+    pub(crate) nonlinear: bool,
+    pub(crate) tangent: bool,
 }
 
 /// Monomorphised dispatch on the element kind (node count as a const generic).
-pub(crate) fn run(
+pub(crate) fn run(job: Job<'_>, ws: &mut Workspace, out: OutView<'_>) -> Result<(), ElementError> {
+    match job.table.kind() {
+        ElementKind::Hex8 => dispatch::<8>(job, ws, out),
+        ElementKind::Hex20 => dispatch::<20>(job, ws, out),
+    }
+}
+
+/// Allocates buffers and evaluates one element (the convenience tier over [`evaluate`]).
+fn evaluate_owned(
     table: &ShapeTable,
     coords: &[[f64; 3]],
     disp: &[[f64; 3]],
     material: &Stiffness,
-    nonlinear: bool,
+    kinematics: Kinematics,
     tangent: bool,
-    ws: &mut Workspace,
-    out: OutView<'_>,
-) -> Result<(), ElementError> {
-    match table.kind() {
-        ElementKind::Hex8 => {
-            dispatch::<8>(table, coords, disp, material, nonlinear, tangent, ws, out)
-        }
-        ElementKind::Hex20 => {
-            dispatch::<20>(table, coords, disp, material, nonlinear, tangent, ws, out)
-        }
-    }
+) -> Result<ElementOutput, ElementError> {
+    let mut out = ElementOutput::new(table);
+    let mut ws = Workspace::new(table);
+    evaluate(
+        table, coords, disp, material, kinematics, tangent, &mut ws, &mut out,
+    )?;
+    Ok(out)
 }
 
 /// B0BL3D: strains, stresses, internal forces and energy of one element (allocating wrapper).
@@ -156,19 +170,7 @@ pub fn b0bl3d(
     disp: &[[f64; 3]],
     material: &Stiffness,
 ) -> Result<ElementOutput, ElementError> {
-    let mut out = ElementOutput::new(table);
-    let mut ws = Workspace::new(table);
-    evaluate(
-        table,
-        coords,
-        disp,
-        material,
-        Kinematics::Nonlinear,
-        false,
-        &mut ws,
-        &mut out,
-    )?;
-    Ok(out)
+    evaluate_owned(table, coords, disp, material, Kinematics::Nonlinear, false)
 }
 
 /// ESTIF3D: the tangent stiffness of one element at displacements `disp`, row-major
@@ -179,19 +181,7 @@ pub fn estif3d(
     disp: &[[f64; 3]],
     material: &Stiffness,
 ) -> Result<Vec<f64>, ElementError> {
-    let mut out = ElementOutput::new(table);
-    let mut ws = Workspace::new(table);
-    evaluate(
-        table,
-        coords,
-        disp,
-        material,
-        Kinematics::Nonlinear,
-        true,
-        &mut ws,
-        &mut out,
-    )?;
-    Ok(out.tangent)
+    Ok(evaluate_owned(table, coords, disp, material, Kinematics::Nonlinear, true)?.tangent)
 }
 
 /// The linear (small-strain) stiffness K = Σ B₀ᵀ C B₀ |J| W = Σ TᵀT of one element.
@@ -200,20 +190,8 @@ pub fn linear_stiffness(
     coords: &[[f64; 3]],
     material: &Stiffness,
 ) -> Result<Vec<f64>, ElementError> {
-    let mut out = ElementOutput::new(table);
-    let mut ws = Workspace::new(table);
     let zero = vec![[0.0; 3]; table.nodes()];
-    evaluate(
-        table,
-        coords,
-        &zero,
-        material,
-        Kinematics::Linear,
-        true,
-        &mut ws,
-        &mut out,
-    )?;
-    Ok(out.tangent)
+    Ok(evaluate_owned(table, coords, &zero, material, Kinematics::Linear, true)?.tangent)
 }
 
 fn check_lengths(
@@ -290,23 +268,18 @@ pub(crate) fn check_material(
 /// path, so results are reproducible run to run and thread count to thread count.
 #[inline]
 fn dispatch<const NS: usize>(
-    table: &ShapeTable,
-    coords: &[[f64; 3]],
-    disp: &[[f64; 3]],
-    material: &Stiffness,
-    nonlinear: bool,
-    tangent: bool,
+    job: Job<'_>,
     ws: &mut Workspace,
     out: OutView<'_>,
 ) -> Result<(), ElementError> {
     let (Ok(x), Ok(u)) = (
-        <&[[f64; 3]; NS]>::try_from(coords),
-        <&[[f64; 3]; NS]>::try_from(disp),
+        <&[[f64; 3]; NS]>::try_from(job.coords),
+        <&[[f64; 3]; NS]>::try_from(job.disp),
     ) else {
         return Err(ElementError::LengthMismatch {
             what: "coordinates",
             expected: NS,
-            got: coords.len(),
+            got: job.coords.len(),
         });
     };
     #[cfg(target_arch = "x86_64")]
@@ -315,27 +288,22 @@ fn dispatch<const NS: usize>(
         {
             // SAFETY: `kernel_avx2` only needs the AVX2 and FMA instruction sets, which were
             // detected on this CPU just above.
-            return unsafe {
-                kernel_avx2::<NS>(table, x, u, material, nonlinear, tangent, ws, out)
-            };
+            return unsafe { kernel_avx2::<NS>(job, x, u, ws, out) };
         }
     }
-    kernel::<NS, false>(table, x, u, material, nonlinear, tangent, ws, out)
+    kernel::<NS, false>(job, x, u, ws, out)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
 fn kernel_avx2<const NS: usize>(
-    table: &ShapeTable,
+    job: Job<'_>,
     x: &[[f64; 3]; NS],
     u: &[[f64; 3]; NS],
-    material: &Stiffness,
-    nonlinear: bool,
-    tangent: bool,
     ws: &mut Workspace,
     out: OutView<'_>,
 ) -> Result<(), ElementError> {
-    kernel::<NS, true>(table, x, u, material, nonlinear, tangent, ws, out)
+    kernel::<NS, true>(job, x, u, ws, out)
 }
 
 /// Green–Lagrange strains from H = ∂u/∂x (eq. 2.1.4), or ε = sym H when `nonlinear` is false:
@@ -413,15 +381,19 @@ fn runs<const NS: usize>(v: &[f64]) -> Option<[&[f64; NS]; 3]> {
 /// node-major DOF order as it is written, so K comes out of TᵀT in node-major order.
 #[inline(always)]
 fn kernel<const NS: usize, const FMA: bool>(
-    table: &ShapeTable,
+    job: Job<'_>,
     x: &[[f64; 3]; NS],
     u: &[[f64; 3]; NS],
-    material: &Stiffness,
-    nonlinear: bool,
-    want_tangent: bool,
     ws: &mut Workspace,
     out: OutView<'_>,
 ) -> Result<(), ElementError> {
+    let Job {
+        table,
+        material,
+        nonlinear,
+        tangent: want_tangent,
+        ..
+    } = job;
     let c = material.c();
     let q = material.q();
     let nd = 3 * NS;

@@ -130,6 +130,23 @@ pub const HEX20_NODES: [[f64; 3]; 20] = [
     [-1.0, 1.0, 0.0],
 ];
 
+/// Corner pairs (zero-based) of the Hex20 mid-edge nodes 9–20 in Abaqus/VTK order: node
+/// 8 + e sits on the edge between corners `HEX20_EDGES[e]`.
+pub const HEX20_EDGES: [(usize, usize); 12] = [
+    (0, 1),
+    (1, 2),
+    (2, 3),
+    (3, 0),
+    (4, 5),
+    (5, 6),
+    (6, 7),
+    (7, 4),
+    (0, 4),
+    (1, 5),
+    (2, 6),
+    (3, 7),
+];
+
 /// Thesis appendix number (1-based) of each Hex8 node in Abaqus order:
 /// `N_abaqus[i] = S_thesis(THESIS_NODE_HEX8[i])`. The thesis numbers the δ1 = +1 face first.
 pub const THESIS_NODE_HEX8: [usize; 8] = [5, 1, 2, 6, 8, 4, 3, 7];
@@ -267,6 +284,16 @@ mod tests {
             }
             for i in 0..20 {
                 assert!((n20[i] - thesis_hex20(THESIS_NODE_HEX20[i], x)).abs() < 1e-15);
+            }
+        }
+    }
+
+    #[test]
+    fn edge_table_matches_reference_nodes() {
+        for (e, &(a, b)) in HEX20_EDGES.iter().enumerate() {
+            for r in 0..3 {
+                let mid = 0.5 * (HEX20_NODES[a][r] + HEX20_NODES[b][r]);
+                assert_eq!(HEX20_NODES[8 + e][r], mid);
             }
         }
     }

@@ -3,9 +3,9 @@
 //! portable path otherwise. NS is 8 or 20, multiples of the 4-lane width; a remainder is
 //! handled in scalar code anyway.
 
-/// dst = c₀·g₀ + c₁·g₁ + c₂·g₂, elementwise along the nodes.
+/// dst = c₀·g₀ + c₁·g₁ + c₂·g₂ (or dst += … with `ACC`), elementwise along the nodes.
 #[inline(always)]
-pub(crate) fn comb3<const NS: usize, const FAST: bool>(
+fn lincomb<const NS: usize, const FAST: bool, const ACC: bool>(
     dst: &mut [f64; NS],
     c: [f64; 3],
     g: &[[f64; NS]; 3],
@@ -26,18 +26,35 @@ pub(crate) fn comb3<const NS: usize, const FAST: bool>(
                 let v = _mm256_mul_pd(c0, _mm256_loadu_pd(g[0].as_ptr().add(m)));
                 let v = _mm256_fmadd_pd(c1, _mm256_loadu_pd(g[1].as_ptr().add(m)), v);
                 let v = _mm256_fmadd_pd(c2, _mm256_loadu_pd(g[2].as_ptr().add(m)), v);
+                let v = if ACC {
+                    _mm256_add_pd(_mm256_loadu_pd(dst.as_ptr().add(m)), v)
+                } else {
+                    v
+                };
                 _mm256_storeu_pd(dst.as_mut_ptr().add(m), v);
                 m += 4;
             }
             for m in m..NS {
-                dst[m] = c[0] * g[0][m] + c[1] * g[1][m] + c[2] * g[2][m];
+                let v = c[0] * g[0][m] + c[1] * g[1][m] + c[2] * g[2][m];
+                dst[m] = if ACC { dst[m] + v } else { v };
             }
             return;
         }
     }
     for m in 0..NS {
-        dst[m] = c[0] * g[0][m] + c[1] * g[1][m] + c[2] * g[2][m];
+        let v = c[0] * g[0][m] + c[1] * g[1][m] + c[2] * g[2][m];
+        dst[m] = if ACC { dst[m] + v } else { v };
     }
+}
+
+/// dst = c₀·g₀ + c₁·g₁ + c₂·g₂, elementwise along the nodes.
+#[inline(always)]
+pub(crate) fn comb3<const NS: usize, const FAST: bool>(
+    dst: &mut [f64; NS],
+    c: [f64; 3],
+    g: &[[f64; NS]; 3],
+) {
+    lincomb::<NS, FAST, false>(dst, c, g)
 }
 
 /// dst += c₀·g₀ + c₁·g₁ + c₂·g₂, elementwise along the nodes.
@@ -47,34 +64,7 @@ pub(crate) fn acc3<const NS: usize, const FAST: bool>(
     c: [f64; 3],
     g: &[[f64; NS]; 3],
 ) {
-    #[cfg(target_arch = "x86_64")]
-    if FAST {
-        use std::arch::x86_64::*;
-        // SAFETY: as in `comb3`.
-        unsafe {
-            let (c0, c1, c2) = (
-                _mm256_set1_pd(c[0]),
-                _mm256_set1_pd(c[1]),
-                _mm256_set1_pd(c[2]),
-            );
-            let mut m = 0;
-            while m + 4 <= NS {
-                let v = _mm256_loadu_pd(dst.as_ptr().add(m));
-                let v = _mm256_fmadd_pd(c0, _mm256_loadu_pd(g[0].as_ptr().add(m)), v);
-                let v = _mm256_fmadd_pd(c1, _mm256_loadu_pd(g[1].as_ptr().add(m)), v);
-                let v = _mm256_fmadd_pd(c2, _mm256_loadu_pd(g[2].as_ptr().add(m)), v);
-                _mm256_storeu_pd(dst.as_mut_ptr().add(m), v);
-                m += 4;
-            }
-            for m in m..NS {
-                dst[m] += c[0] * g[0][m] + c[1] * g[1][m] + c[2] * g[2][m];
-            }
-            return;
-        }
-    }
-    for m in 0..NS {
-        dst[m] += c[0] * g[0][m] + c[1] * g[1][m] + c[2] * g[2][m];
-    }
+    lincomb::<NS, FAST, true>(dst, c, g)
 }
 
 /// Σ_m a[m]·b[m] along the nodes.

@@ -21,7 +21,7 @@
 //!     .unwrap();
 //! ```
 
-use crate::{ElementKind, IntegrationRule, ShapeTable};
+use crate::{ElementKind, HEX20_EDGES, IntegrationRule, ShapeTable};
 use nonlin3d_laminate::{Orthotropic, ShearCoupling, Stiffness};
 use proptest::prelude::*;
 
@@ -90,7 +90,7 @@ pub fn distorted_element(kind: ElementKind) -> impl Strategy<Value = Vec<[f64; 3
             let mut x: Vec<[f64; 3]> = corners.to_vec();
             if kind == ElementKind::Hex20 {
                 for m in 8..20 {
-                    let (a, b) = EDGES[m - 8];
+                    let (a, b) = HEX20_EDGES[m - 8];
                     let mut p = [0.0; 3];
                     for r in 0..3 {
                         p[r] = 0.5 * (corners[a][r] + corners[b][r]) + 0.05 * h * noise[m][r];
@@ -108,22 +108,6 @@ pub fn distorted_element(kind: ElementKind) -> impl Strategy<Value = Vec<[f64; 3
         })
         .prop_filter("element must not be inverted", move |x| is_valid(kind, x))
 }
-
-/// Corner pairs of the 12 Hex20 mid-edge nodes 9–20 (zero-based).
-pub const EDGES: [(usize, usize); 12] = [
-    (0, 1),
-    (1, 2),
-    (2, 3),
-    (3, 0),
-    (4, 5),
-    (5, 6),
-    (6, 7),
-    (7, 4),
-    (0, 4),
-    (1, 5),
-    (2, 6),
-    (3, 7),
-];
 
 /// A random valid orthotropic ply: E11 1–300 GPa, E22 and E33 1/50–1 of it, G's 1/3–1/2.5 of
 /// the smaller E they connect, Poisson ratios within 0.1–0.45 of their bounds, rotated about
