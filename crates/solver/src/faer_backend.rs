@@ -1,0 +1,368 @@
+//! faer's sparse Cholesky (supernodal or simplicial, chosen by faer from the flop count) with
+//! AMD ordering: LLᵀ for positive definite matrices, LDLᵀ for symmetric indefinite ones.
+//! Symbolic analysis once per pattern, numeric factorisation many times.
+
+use crate::{
+    Analysis, Factorization, LinearSolver, SolverError, SymmetricMatrix, SymmetricPattern,
+};
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::linalg::cholesky::ldlt::factor::LdltRegularization;
+use faer::linalg::cholesky::llt::factor::LltRegularization;
+use faer::sparse::linalg::SupernodalThreshold;
+use faer::sparse::linalg::cholesky::{
+    CholeskySymbolicParams, LdltRef, LltRef, SymbolicCholesky, SymbolicCholeskyRaw,
+    SymmetricOrdering, factorize_symbolic_cholesky, supernodal,
+};
+use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
+use faer::{Conj, MatMut, Par, Side};
+use std::sync::Arc;
+
+/// Which factorisation faer computes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum FaerMode {
+    /// LDLᵀ without pivoting: positive definite and indefinite matrices, inertia from D.
+    #[default]
+    Ldlt,
+    /// Cholesky LLᵀ: positive definite only; a non-positive pivot is
+    /// [`SolverError::NotPositiveDefinite`].
+    Llt,
+}
+
+/// Simplicial (column by column) or supernodal (dense blocks) factor structure.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum FaerStructure {
+    /// faer decides from the flop count (the default): simplicial for small or very sparse
+    /// factors, supernodal otherwise.
+    #[default]
+    Auto,
+    /// Always simplicial.
+    Simplicial,
+    /// Always supernodal.
+    Supernodal,
+}
+
+/// faer's sparse Cholesky behind [`LinearSolver`].
+pub struct FaerSolver {
+    /// LDLᵀ or LLᵀ.
+    pub mode: FaerMode,
+    /// Simplicial, supernodal, or faer's choice.
+    pub structure: FaerStructure,
+    /// Relative zero-pivot tolerance (as [`crate::profile::DEFAULT_PIVOT_TOLERANCE`]).
+    pub tolerance: f64,
+    /// Threads for the numeric phase: `Par::Seq` or `Par::rayon(k)`.
+    pub par: Par,
+    pattern: Option<Arc<SymmetricPattern>>,
+    symbolic: Option<SymbolicCholesky<usize>>,
+    l_values: Vec<f64>,
+    buffer: Option<MemBuffer>,
+    factored: bool,
+    flops: f64,
+}
+
+impl std::fmt::Debug for FaerSolver {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("FaerSolver")
+            .field("mode", &self.mode)
+            .field("tolerance", &self.tolerance)
+            .field("factored", &self.factored)
+            .finish()
+    }
+}
+
+impl Default for FaerSolver {
+    fn default() -> Self {
+        Self::new(FaerMode::Ldlt)
+    }
+}
+
+impl FaerSolver {
+    /// A sequential solver in `mode` with the default pivot tolerance.
+    pub fn new(mode: FaerMode) -> Self {
+        Self {
+            mode,
+            structure: FaerStructure::Auto,
+            tolerance: crate::profile::DEFAULT_PIVOT_TOLERANCE,
+            par: Par::Seq,
+            pattern: None,
+            symbolic: None,
+            l_values: Vec::new(),
+            buffer: None,
+            factored: false,
+            flops: 0.0,
+        }
+    }
+
+    /// The same solver running its numeric phase on `threads` rayon threads (1 = sequential).
+    pub fn with_threads(mut self, threads: usize) -> Self {
+        self.par = if threads <= 1 {
+            Par::Seq
+        } else {
+            Par::rayon(threads)
+        };
+        self
+    }
+
+    /// The same solver with a forced factor structure.
+    pub fn with_structure(mut self, structure: FaerStructure) -> Self {
+        self.structure = structure;
+        self
+    }
+
+    /// Whether the analysed factor is supernodal (`None` before `analyze`).
+    pub fn is_supernodal(&self) -> Option<bool> {
+        self.symbolic
+            .as_ref()
+            .map(|s| matches!(s.raw(), SymbolicCholeskyRaw::Supernodal(_)))
+    }
+
+    /// The diagonal D in factorisation order (LDLᵀ), or the diagonal of L (LLᵀ).
+    fn factor_diagonal(&self) -> Vec<f64> {
+        let Some(symbolic) = &self.symbolic else {
+            return Vec::new();
+        };
+        let mut d = Vec::with_capacity(symbolic.nrows());
+        match symbolic.raw() {
+            SymbolicCholeskyRaw::Simplicial(s) => {
+                // Column k of the simplicial factor starts with its diagonal entry.
+                let cp = s.col_ptr();
+                for k in 0..s.nrows() {
+                    d.push(self.l_values[cp[k]]);
+                }
+            }
+            SymbolicCholeskyRaw::Supernodal(s) => {
+                let f = supernodal::SupernodalLdltRef::new(s, &self.l_values);
+                for k in 0..s.n_supernodes() {
+                    let v = f.supernode(k).val();
+                    for c in 0..v.ncols() {
+                        d.push(v[(c, c)]);
+                    }
+                }
+            }
+        }
+        d
+    }
+}
+
+/// Scratch sizes for numeric factorisation and solves with up to this many right-hand sides
+/// at once; larger batches are split.
+const RHS_BLOCK: usize = 16;
+
+impl LinearSolver for FaerSolver {
+    fn name(&self) -> &'static str {
+        match self.mode {
+            FaerMode::Ldlt => "faer LDLᵀ",
+            FaerMode::Llt => "faer LLᵀ",
+        }
+    }
+
+    fn analyze(&mut self, pattern: &Arc<SymmetricPattern>) -> Result<Analysis, SolverError> {
+        let n = pattern.n();
+        let a =
+            SymbolicSparseColMatRef::new_checked(n, n, pattern.col_ptr(), None, pattern.row_idx());
+        let threshold = match self.structure {
+            FaerStructure::Auto => SupernodalThreshold::AUTO,
+            FaerStructure::Simplicial => SupernodalThreshold::FORCE_SIMPLICIAL,
+            FaerStructure::Supernodal => SupernodalThreshold::FORCE_SUPERNODAL,
+        };
+        let params = CholeskySymbolicParams {
+            supernodal_flop_ratio_threshold: threshold,
+            ..Default::default()
+        };
+        let symbolic = factorize_symbolic_cholesky(a, Side::Lower, SymmetricOrdering::Amd, params)
+            .map_err(|e| SolverError::Faer(format!("symbolic analysis: {e:?}")))?;
+        let req = match self.mode {
+            FaerMode::Ldlt => {
+                symbolic.factorize_numeric_ldlt_scratch::<f64>(self.par, Default::default())
+            }
+            FaerMode::Llt => {
+                symbolic.factorize_numeric_llt_scratch::<f64>(self.par, Default::default())
+            }
+        }
+        .or(symbolic.solve_in_place_scratch::<f64>(RHS_BLOCK, self.par));
+        let buffer = MemBuffer::try_new(req).map_err(|_| SolverError::TooLarge {
+            what: "faer workspace",
+            entries: req.size_bytes() / 8,
+            limit: crate::profile::DEFAULT_MAX_ENTRIES,
+        })?;
+        let len = symbolic.len_val();
+        // Flops of the numeric phase: Σ_k c_k² over the factor's column counts c_k.
+        let flops = column_counts(&symbolic)
+            .iter()
+            .map(|&c| (c * c) as f64)
+            .sum();
+        self.l_values = vec![0.0; len];
+        self.symbolic = Some(symbolic);
+        self.buffer = Some(buffer);
+        self.pattern = Some(pattern.clone());
+        self.factored = false;
+        self.flops = flops;
+        Ok(Analysis {
+            factor_entries: len,
+            flops,
+            bandwidth: None,
+            profile: None,
+        })
+    }
+
+    fn factorize(&mut self, a: &SymmetricMatrix) -> Result<Factorization, SolverError> {
+        let (Some(pattern), Some(symbolic), Some(buffer)) =
+            (&self.pattern, &self.symbolic, &mut self.buffer)
+        else {
+            return Err(SolverError::NotReady("factorize called before analyze"));
+        };
+        if !Arc::ptr_eq(pattern, a.pattern()) && **pattern != **a.pattern() {
+            return Err(SolverError::DimensionMismatch {
+                what: "matrix pattern (not the analysed one)",
+                expected: pattern.nnz_lower(),
+                got: a.pattern().nnz_lower(),
+            });
+        }
+        a.check_finite()?;
+        self.factored = false;
+        let n = pattern.n();
+        let sym =
+            SymbolicSparseColMatRef::new_checked(n, n, pattern.col_ptr(), None, pattern.row_idx());
+        let mat = SparseColMatRef::new(sym, a.values());
+        let stack = MemStack::new(buffer);
+        let perm_fwd: Vec<usize> = match symbolic.perm() {
+            Some(p) => p.arrays().0.to_vec(),
+            None => (0..n).collect(),
+        };
+        match self.mode {
+            FaerMode::Ldlt => {
+                symbolic
+                    .factorize_numeric_ldlt(
+                        &mut self.l_values,
+                        mat,
+                        Side::Lower,
+                        LdltRegularization::default(),
+                        self.par,
+                        stack,
+                        Default::default(),
+                    )
+                    .map_err(|e| match e {
+                        faer::linalg::cholesky::ldlt::factor::LdltError::ZeroPivot { index } => {
+                            SolverError::ZeroPivot {
+                                equation: index,
+                                dof: perm_fwd.get(index).copied().unwrap_or(index),
+                                pivot: 0.0,
+                                diagonal: perm_fwd.get(index).map_or(0.0, |&d| a.get(d, d).abs()),
+                            }
+                        }
+                    })?;
+            }
+            FaerMode::Llt => {
+                symbolic
+                    .factorize_numeric_llt(
+                        &mut self.l_values,
+                        mat,
+                        Side::Lower,
+                        LltRegularization::default(),
+                        self.par,
+                        stack,
+                        Default::default(),
+                    )
+                    .map_err(|e| match e {
+                        faer::linalg::cholesky::llt::factor::LltError::NonPositivePivot {
+                            index,
+                        } => SolverError::NotPositiveDefinite {
+                            equation: index,
+                            dof: perm_fwd.get(index).copied().unwrap_or(index),
+                        },
+                    })?;
+            }
+        }
+        // Pivot checks and inertia from the factor's diagonal (D, or L_kk with d_k = L_kk²).
+        let diag = a.diagonal();
+        let mut negative = 0;
+        for (k, &v) in self.factor_diagonal().iter().enumerate() {
+            let dof = perm_fwd[k];
+            let d = if self.mode == FaerMode::Llt { v * v } else { v };
+            let scale = diag[dof].abs();
+            if crate::profile::is_zero_pivot(d, self.tolerance, scale) {
+                return Err(SolverError::ZeroPivot {
+                    equation: k,
+                    dof,
+                    pivot: d,
+                    diagonal: scale,
+                });
+            }
+            if d < 0.0 {
+                negative += 1;
+            }
+        }
+        self.factored = true;
+        Ok(Factorization {
+            negative_pivots: negative,
+            factor_entries: self.l_values.len(),
+            flops: self.flops,
+        })
+    }
+
+    fn solve_in_place(&mut self, b: &mut [f64], nrhs: usize) -> Result<(), SolverError> {
+        let (true, Some(symbolic), Some(buffer)) =
+            (self.factored, &self.symbolic, &mut self.buffer)
+        else {
+            return Err(SolverError::NotReady(
+                "solve called before a successful factorize",
+            ));
+        };
+        let n = symbolic.nrows();
+        if b.len() != n * nrhs {
+            return Err(SolverError::DimensionMismatch {
+                what: "right-hand sides",
+                expected: n * nrhs,
+                got: b.len(),
+            });
+        }
+        if let Some(p) = b.iter().position(|v| !v.is_finite()) {
+            return Err(SolverError::NonFinite {
+                row: p % n.max(1),
+                col: p / n.max(1),
+                value: b[p],
+            });
+        }
+        for block in b.chunks_mut((n * RHS_BLOCK).max(1)) {
+            let k = block.len() / n.max(1);
+            let rhs = MatMut::from_column_major_slice_mut(block, n, k);
+            let stack = MemStack::new(buffer);
+            match self.mode {
+                FaerMode::Ldlt => LdltRef::new(symbolic, &self.l_values).solve_in_place_with_conj(
+                    Conj::No,
+                    rhs,
+                    self.par,
+                    stack,
+                ),
+                FaerMode::Llt => LltRef::new(symbolic, &self.l_values).solve_in_place_with_conj(
+                    Conj::No,
+                    rhs,
+                    self.par,
+                    stack,
+                ),
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Entries per column of the factor (diagonal included), in factorisation order.
+fn column_counts(symbolic: &SymbolicCholesky<usize>) -> Vec<usize> {
+    match symbolic.raw() {
+        SymbolicCholeskyRaw::Simplicial(s) => {
+            let cp = s.col_ptr();
+            (0..s.nrows()).map(|k| cp[k + 1] - cp[k]).collect()
+        }
+        SymbolicCholeskyRaw::Supernodal(s) => {
+            let mut counts = Vec::with_capacity(s.nrows());
+            for k in 0..s.n_supernodes() {
+                let sn = s.supernode(k);
+                let (start, end) = (s.supernode_begin()[k], s.supernode_end()[k]);
+                let width = end - start;
+                for c in 0..width {
+                    counts.push(width - c + sn.pattern().len());
+                }
+            }
+            counts
+        }
+    }
+}

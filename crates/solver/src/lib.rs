@@ -1,0 +1,52 @@
+//! Sparse symmetric solvers for nonlin3d: the thesis's profile (skyline) LDLᵀ (§2.4, ref. 35)
+//! and faer's supernodal Cholesky, behind one [`LinearSolver`] trait, with inertia.
+//!
+//! | item | what it is |
+//! |---|---|
+//! | [`SymmetricPattern`] | lower-triangle CSC pattern, built once from element DOF lists |
+//! | [`SymmetricMatrix`] | values on a shared pattern: zero, scatter-add, matvec |
+//! | [`reverse_cuthill_mckee`], [`approximate_minimum_degree`], [`envelope_stats`] | orderings and their bandwidth/profile |
+//! | [`ProfileLdlt`] | envelope LDLᵀ, RCM ordered, SIMD inner products |
+//! | [`FaerSolver`] | faer LDLᵀ / LLᵀ with AMD, supernodal or simplicial |
+//! | [`LinearSolver`], [`SolverKind`] | the common interface; [`Factorization::negative_pivots`] is the inertia |
+//!
+//! ```
+//! use nonlin3d_solver::{LinearSolver, ProfileLdlt, SymmetricMatrix, SymmetricPattern};
+//! use std::sync::Arc;
+//! // Two springs in series, fixed at the left end (DOF 0 removed): [2 −1; −1 1] x = [0, 1].
+//! let p = Arc::new(SymmetricPattern::from_dof_lists(2, &[vec![0], vec![0, 1]]).unwrap());
+//! let mut a = SymmetricMatrix::zeros(p.clone());
+//! a.scatter_add(&[0], &[1.0]).unwrap();
+//! a.scatter_add(&[0, 1], &[1.0, -1.0, -1.0, 1.0]).unwrap();
+//! let mut s = ProfileLdlt::new();
+//! s.analyze(&p).unwrap();
+//! let f = s.factorize(&a).unwrap();
+//! assert_eq!(f.negative_pivots, 0);
+//! let mut x = vec![0.0, 1.0];
+//! s.solve_in_place(&mut x, 1).unwrap();
+//! assert!((x[0] - 1.0).abs() < 1e-14 && (x[1] - 2.0).abs() < 1e-14);
+//! ```
+#![deny(missing_docs)]
+#![cfg_attr(
+    not(test),
+    warn(clippy::unwrap_used, clippy::expect_used, clippy::panic)
+)]
+
+mod error;
+mod faer_backend;
+mod matrix;
+mod ordering;
+pub mod profile;
+mod solver;
+
+pub use error::SolverError;
+pub use faer_backend::{FaerMode, FaerSolver, FaerStructure};
+pub use matrix::SymmetricMatrix;
+pub use ordering::{
+    EnvelopeStats, Permutation, approximate_minimum_degree, envelope_stats, reverse_cuthill_mckee,
+};
+pub use pattern::SymmetricPattern;
+pub use profile::{ProfileLdlt, ProfileOrdering};
+pub use solver::{Analysis, Factorization, LinearSolver, SolverKind, solve};
+
+mod pattern;

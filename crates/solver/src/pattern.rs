@@ -1,0 +1,213 @@
+//! The sparsity pattern of a symmetric matrix, built once from element connectivity.
+
+use crate::SolverError;
+
+/// The lower triangle (diagonal included) of a symmetric n×n sparsity pattern in compressed
+/// sparse columns: column j holds rows `row_idx[col_ptr[j]..col_ptr[j + 1]]`, sorted, the first
+/// being j itself. Every diagonal entry is present, so a DOF no element touches shows up as a
+/// zero pivot, not as a malformed matrix.
+///
+/// Invariants (checked in every constructor): sorted unique rows ≥ j in each column, the
+/// diagonal first, all indices < n.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct SymmetricPattern {
+    n: usize,
+    col_ptr: Vec<usize>,
+    row_idx: Vec<usize>,
+}
+
+impl SymmetricPattern {
+    /// The pattern of Σ_e (DOFs of e) × (DOFs of e) for `n` DOFs, from one DOF list per element.
+    ///
+    /// Two passes over a DOF → elements index with a marker array: memory O(nnz), no sorting of
+    /// duplicates, so a 150 000-DOF Hex20 model (~18 M entries) builds in a fraction of a second.
+    pub fn from_dof_lists<L: AsRef<[usize]>>(n: usize, lists: &[L]) -> Result<Self, SolverError> {
+        // DOF → lists containing it (CSR).
+        let mut count = vec![0usize; n + 1];
+        for (list, dofs) in lists.iter().enumerate() {
+            for &dof in dofs.as_ref() {
+                if dof >= n {
+                    return Err(SolverError::DofOutOfRange { list, dof, n });
+                }
+                count[dof + 1] += 1;
+            }
+        }
+        for i in 0..n {
+            count[i + 1] += count[i];
+        }
+        let mut fill = count.clone();
+        let mut lists_of = vec![0usize; count[n]];
+        for (list, dofs) in lists.iter().enumerate() {
+            for &dof in dofs.as_ref() {
+                lists_of[fill[dof]] = list;
+                fill[dof] += 1;
+            }
+        }
+        let mut marker = vec![usize::MAX; n];
+        let mut col_ptr = Vec::with_capacity(n + 1);
+        let mut row_idx = Vec::new();
+        col_ptr.push(0);
+        for j in 0..n {
+            let start = row_idx.len();
+            row_idx.push(j);
+            marker[j] = j;
+            for &list in &lists_of[count[j]..count[j + 1]] {
+                for &i in lists[list].as_ref() {
+                    if i > j && marker[i] != j {
+                        marker[i] = j;
+                        row_idx.push(i);
+                    }
+                }
+            }
+            row_idx[start + 1..].sort_unstable();
+            col_ptr.push(row_idx.len());
+        }
+        Ok(Self {
+            n,
+            col_ptr,
+            row_idx,
+        })
+    }
+
+    /// A pattern from explicit lower-triangle columns (rows ≥ j; the diagonal is added if
+    /// missing; order and duplicates are fixed).
+    pub fn from_lower_columns(n: usize, columns: &[Vec<usize>]) -> Result<Self, SolverError> {
+        if columns.len() != n {
+            return Err(SolverError::DimensionMismatch {
+                what: "columns",
+                expected: n,
+                got: columns.len(),
+            });
+        }
+        let mut col_ptr = vec![0];
+        let mut row_idx = Vec::new();
+        for (j, col) in columns.iter().enumerate() {
+            let mut rows: Vec<usize> = col.clone();
+            rows.push(j);
+            rows.sort_unstable();
+            rows.dedup();
+            if let Some(&bad) = rows.iter().find(|&&i| i < j || i >= n) {
+                return Err(SolverError::PatternMismatch { row: bad, col: j });
+            }
+            row_idx.extend(rows);
+            col_ptr.push(row_idx.len());
+        }
+        Ok(Self {
+            n,
+            col_ptr,
+            row_idx,
+        })
+    }
+
+    /// Dimension n.
+    pub fn n(&self) -> usize {
+        self.n
+    }
+
+    /// Stored entries of the lower triangle (diagonal included).
+    pub fn nnz_lower(&self) -> usize {
+        self.row_idx.len()
+    }
+
+    /// Column pointers (length n + 1).
+    pub fn col_ptr(&self) -> &[usize] {
+        &self.col_ptr
+    }
+
+    /// Row indices, column after column.
+    pub fn row_idx(&self) -> &[usize] {
+        &self.row_idx
+    }
+
+    /// Rows of column j (sorted, j first).
+    pub fn column(&self, j: usize) -> &[usize] {
+        &self.row_idx[self.col_ptr[j]..self.col_ptr[j + 1]]
+    }
+
+    /// Position of entry (i, j) in the value array, either triangle; `None` if not stored.
+    pub fn position(&self, i: usize, j: usize) -> Option<usize> {
+        let (r, c) = if i >= j { (i, j) } else { (j, i) };
+        if c >= self.n {
+            return None;
+        }
+        let col = self.column(c);
+        col.binary_search(&r).ok().map(|k| self.col_ptr[c] + k)
+    }
+
+    /// For an element with global DOFs `dofs`, the value position of each entry (a, b) of its
+    /// row-major dense matrix whose global row ≥ global column, `None` for the others (they are
+    /// the mirror images). Compute once per element; [`crate::SymmetricMatrix::scatter_add_mapped`]
+    /// then adds without searching.
+    pub fn scatter_map(&self, dofs: &[usize]) -> Result<Vec<Option<usize>>, SolverError> {
+        let ne = dofs.len();
+        let mut map = vec![None; ne * ne];
+        for (a, &i) in dofs.iter().enumerate() {
+            for (b, &j) in dofs.iter().enumerate() {
+                if i >= j {
+                    let p = self
+                        .position(i, j)
+                        .ok_or(SolverError::PatternMismatch { row: i, col: j })?;
+                    map[a * ne + b] = Some(p);
+                }
+            }
+        }
+        Ok(map)
+    }
+
+    /// Neighbour lists of the graph of the pattern (both triangles, no self loops).
+    pub fn adjacency(&self) -> (Vec<usize>, Vec<usize>) {
+        let mut deg = vec![0usize; self.n + 1];
+        for j in 0..self.n {
+            for &i in &self.column(j)[1..] {
+                deg[i + 1] += 1;
+                deg[j + 1] += 1;
+            }
+        }
+        for i in 0..self.n {
+            deg[i + 1] += deg[i];
+        }
+        let mut fill = deg.clone();
+        let mut adj = vec![0usize; deg[self.n]];
+        for j in 0..self.n {
+            for &i in &self.column(j)[1..] {
+                adj[fill[i]] = j;
+                fill[i] += 1;
+                adj[fill[j]] = i;
+                fill[j] += 1;
+            }
+        }
+        (deg, adj)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pattern_from_two_elements() {
+        let p = SymmetricPattern::from_dof_lists(5, &[vec![0, 2, 1], vec![3, 2, 4]]).unwrap();
+        assert_eq!(p.column(0), &[0, 1, 2]);
+        assert_eq!(p.column(1), &[1, 2]);
+        assert_eq!(p.column(2), &[2, 3, 4]);
+        assert_eq!(p.column(3), &[3, 4]);
+        assert_eq!(p.column(4), &[4]);
+        assert_eq!(p.position(0, 2), p.position(2, 0));
+        assert_eq!(p.position(0, 3), None);
+        assert!(matches!(
+            SymmetricPattern::from_dof_lists(3, &[vec![0, 3]]),
+            Err(SolverError::DofOutOfRange {
+                list: 0,
+                dof: 3,
+                n: 3
+            })
+        ));
+    }
+
+    #[test]
+    fn isolated_dof_keeps_its_diagonal() {
+        let p = SymmetricPattern::from_dof_lists(3, &[vec![0, 1]]).unwrap();
+        assert_eq!(p.column(2), &[2]);
+        assert_eq!(p.nnz_lower(), 4);
+    }
+}

@@ -1,0 +1,381 @@
+//! The profile (skyline, envelope) LDLᵀ solver of the thesis (§2.4: "vectorized versions of
+//! banded and profile equation solvers", ref. 35), written for speed.
+//!
+//! Storage: row i of the permuted lower triangle holds columns first(i) … i contiguously, the
+//! diagonal last (the envelope; the Jennings scheme by rows). Crout factorisation, row by row:
+//!
+//! c_ij = a_ij − Σ_{k = max(f_i, f_j)}^{j−1} L_jk c_ik,   L_ij = c_ij / d_j,   d_i = a_ii − Σ_j L_ij c_ij
+//!
+//! Each Σ is an inner product of two contiguous row segments: the "column-oriented inner
+//! products" of the thesis's solver, here SIMD dot products compiled for AVX2 + FMA when the
+//! CPU has them. No pivoting: the inertia (count of d_i < 0) is exact by Sylvester's law
+//! whenever the factorisation exists; a pivot |d_i| ≤ tolerance·|a_ii| is an error.
+
+use crate::ordering::first_columns;
+use crate::{
+    Analysis, Factorization, LinearSolver, Permutation, SolverError, SymmetricMatrix,
+    SymmetricPattern, envelope_stats, reverse_cuthill_mckee,
+};
+use std::sync::Arc;
+
+/// Default relative pivot tolerance: |d_i| ≤ 1e-12·|a_ii| is a zero pivot. A stiffness with a
+/// rigid-body mode left unsupported produces d_i of 1e-16 … 1e-13 of a_ii (round-off of an
+/// exact zero); a genuine pivot of a stiffness with condition number κ is ≳ a_ii/κ, and
+/// laminate models stay below κ ≈ 1e11.
+pub const DEFAULT_PIVOT_TOLERANCE: f64 = 1e-12;
+
+/// Whether pivot `d` counts as zero against the diagonal scale |a_ii|: not finite, or
+/// |d| ≤ tolerance·|a_ii|.
+pub(crate) fn is_zero_pivot(d: f64, tolerance: f64, scale: f64) -> bool {
+    !d.is_finite() || d.abs() <= tolerance * scale
+}
+
+/// Default cap on envelope entries: 3 GiB of f64.
+pub const DEFAULT_MAX_ENTRIES: usize = 3 << 27;
+
+/// How the profile solver orders the equations.
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub enum ProfileOrdering {
+    /// Reverse Cuthill–McKee (the default).
+    #[default]
+    ReverseCuthillMckee,
+    /// The caller's numbering.
+    Natural,
+    /// A given permutation.
+    Given(Permutation),
+}
+
+/// The profile LDLᵀ solver. See the module documentation.
+#[derive(Debug, Clone)]
+pub struct ProfileLdlt {
+    /// Relative zero-pivot tolerance.
+    pub tolerance: f64,
+    /// Envelope size cap (entries).
+    pub max_entries: usize,
+    /// Equation ordering used by [`analyze`](LinearSolver::analyze).
+    pub ordering: ProfileOrdering,
+    pattern: Option<Arc<SymmetricPattern>>,
+    perm: Permutation,
+    first: Vec<usize>,
+    start: Vec<usize>,
+    map: Vec<usize>,
+    flops: f64,
+    env: Vec<f64>,
+    dinv: Vec<f64>,
+    scale: Vec<f64>,
+    factored: bool,
+    work: Vec<f64>,
+}
+
+impl Default for ProfileLdlt {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl ProfileLdlt {
+    /// A solver with the default tolerance, memory cap and RCM ordering.
+    pub fn new() -> Self {
+        Self {
+            tolerance: DEFAULT_PIVOT_TOLERANCE,
+            max_entries: DEFAULT_MAX_ENTRIES,
+            ordering: ProfileOrdering::default(),
+            pattern: None,
+            perm: Permutation::identity(0),
+            first: Vec::new(),
+            start: Vec::new(),
+            map: Vec::new(),
+            flops: 0.0,
+            env: Vec::new(),
+            dinv: Vec::new(),
+            scale: Vec::new(),
+            factored: false,
+            work: Vec::new(),
+        }
+    }
+
+    /// The same solver with another ordering.
+    pub fn with_ordering(mut self, ordering: ProfileOrdering) -> Self {
+        self.ordering = ordering;
+        self
+    }
+
+    /// The pivots d_i in factorisation order (after a successful factorisation).
+    pub fn pivots(&self) -> Vec<f64> {
+        (0..self.first.len())
+            .map(|i| self.env[self.start[i] + i - self.first[i]])
+            .collect()
+    }
+}
+
+impl LinearSolver for ProfileLdlt {
+    fn name(&self) -> &'static str {
+        "profile LDLᵀ"
+    }
+
+    fn analyze(&mut self, pattern: &Arc<SymmetricPattern>) -> Result<Analysis, SolverError> {
+        let n = pattern.n();
+        let perm = match &self.ordering {
+            ProfileOrdering::ReverseCuthillMckee => reverse_cuthill_mckee(pattern),
+            ProfileOrdering::Natural => Permutation::identity(n),
+            ProfileOrdering::Given(p) => {
+                if p.len() != n {
+                    return Err(SolverError::DimensionMismatch {
+                        what: "permutation",
+                        expected: n,
+                        got: p.len(),
+                    });
+                }
+                p.clone()
+            }
+        };
+        let first = first_columns(pattern, &perm);
+        let mut start = Vec::with_capacity(n + 1);
+        let mut total = 0usize;
+        for (i, &f) in first.iter().enumerate() {
+            start.push(total);
+            total += i - f + 1;
+        }
+        start.push(total);
+        if total > self.max_entries {
+            return Err(SolverError::TooLarge {
+                what: "profile envelope",
+                entries: total,
+                limit: self.max_entries,
+            });
+        }
+        // Position of each stored pattern entry in the envelope.
+        let inv = perm.inverse();
+        let mut map = Vec::with_capacity(pattern.nnz_lower());
+        for j in 0..n {
+            for &i in pattern.column(j) {
+                let (a, b) = (inv[i], inv[j]);
+                let (row, col) = if a >= b { (a, b) } else { (b, a) };
+                map.push(start[row] + col - first[row]);
+            }
+        }
+        // Flops of one numeric factorisation: 2 per multiply-add of the inner products, plus the
+        // scaling and the diagonal update (3 per off-diagonal entry).
+        let mut flops = 0.0;
+        for i in 0..n {
+            for j in first[i]..i {
+                flops += 2.0 * (j - first[i].max(first[j])) as f64 + 3.0;
+            }
+        }
+        let stats = envelope_stats(pattern, &perm);
+        self.pattern = Some(pattern.clone());
+        self.perm = perm;
+        self.first = first;
+        self.start = start;
+        self.map = map;
+        self.flops = flops;
+        self.env = vec![0.0; total];
+        self.dinv = vec![0.0; n];
+        self.scale = vec![0.0; n];
+        self.work = vec![0.0; n];
+        self.factored = false;
+        Ok(Analysis {
+            factor_entries: total,
+            flops,
+            bandwidth: Some(stats.bandwidth),
+            profile: Some(stats.profile),
+        })
+    }
+
+    fn factorize(&mut self, a: &SymmetricMatrix) -> Result<Factorization, SolverError> {
+        let pattern = self
+            .pattern
+            .as_ref()
+            .ok_or(SolverError::NotReady("factorize called before analyze"))?;
+        if !Arc::ptr_eq(pattern, a.pattern()) && **pattern != **a.pattern() {
+            return Err(SolverError::DimensionMismatch {
+                what: "matrix pattern (not the analysed one)",
+                expected: pattern.nnz_lower(),
+                got: a.pattern().nnz_lower(),
+            });
+        }
+        a.check_finite()?;
+        self.factored = false;
+        self.env.fill(0.0);
+        for (&p, &v) in self.map.iter().zip(a.values()) {
+            self.env[p] += v;
+        }
+        let inv = self.perm.inverse();
+        for (old, d) in a.diagonal().into_iter().enumerate() {
+            self.scale[inv[old]] = d.abs();
+        }
+        let negative = run_factor(self)?;
+        self.factored = true;
+        Ok(Factorization {
+            negative_pivots: negative,
+            factor_entries: self.env.len(),
+            flops: self.flops,
+        })
+    }
+
+    fn solve_in_place(&mut self, b: &mut [f64], nrhs: usize) -> Result<(), SolverError> {
+        if !self.factored {
+            return Err(SolverError::NotReady(
+                "solve called before a successful factorize",
+            ));
+        }
+        let n = self.first.len();
+        if b.len() != n * nrhs {
+            return Err(SolverError::DimensionMismatch {
+                what: "right-hand sides",
+                expected: n * nrhs,
+                got: b.len(),
+            });
+        }
+        for (c, col) in b.chunks_exact_mut(n.max(1)).enumerate().take(nrhs) {
+            if let Some(i) = col.iter().position(|v| !v.is_finite()) {
+                return Err(SolverError::NonFinite {
+                    row: i,
+                    col: c,
+                    value: col[i],
+                });
+            }
+            for (y, &old) in self.work.iter_mut().zip(self.perm.forward()) {
+                *y = col[old];
+            }
+            run_solve(self);
+            for (&y, &old) in self.work.iter().zip(self.perm.forward()) {
+                col[old] = y;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Σ a_k b_k with eight independent accumulators (vectorises to two 4-wide FMA chains).
+#[inline(always)]
+fn dot<const FMA: bool>(a: &[f64], b: &[f64]) -> f64 {
+    let n = a.len().min(b.len());
+    let (a, b) = (&a[..n], &b[..n]);
+    let mut acc = [0.0f64; 8];
+    let (ca, cb) = (a.chunks_exact(8), b.chunks_exact(8));
+    let (ra, rb) = (ca.remainder(), cb.remainder());
+    for (x, y) in ca.zip(cb) {
+        for l in 0..8 {
+            acc[l] = if FMA {
+                x[l].mul_add(y[l], acc[l])
+            } else {
+                acc[l] + x[l] * y[l]
+            };
+        }
+    }
+    let mut s = ((acc[0] + acc[4]) + (acc[1] + acc[5])) + ((acc[2] + acc[6]) + (acc[3] + acc[7]));
+    for (x, y) in ra.iter().zip(rb) {
+        s += x * y;
+    }
+    s
+}
+
+/// y −= α·x.
+#[inline(always)]
+fn axpy_neg<const FMA: bool>(alpha: f64, x: &[f64], y: &mut [f64]) {
+    for (yi, xi) in y.iter_mut().zip(x) {
+        *yi = if FMA {
+            (-alpha).mul_add(*xi, *yi)
+        } else {
+            *yi - alpha * xi
+        };
+    }
+}
+
+fn run_factor(s: &mut ProfileLdlt) -> Result<usize, SolverError> {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
+        // SAFETY: the AVX2 and FMA instruction sets were detected on this CPU just above.
+        return unsafe { factor_avx2(s) };
+    }
+    factor::<false>(s)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+fn factor_avx2(s: &mut ProfileLdlt) -> Result<usize, SolverError> {
+    factor::<true>(s)
+}
+
+/// The Crout LDLᵀ of the envelope, row by row (module documentation).
+#[inline(always)]
+fn factor<const FMA: bool>(s: &mut ProfileLdlt) -> Result<usize, SolverError> {
+    let n = s.first.len();
+    let (first, start) = (&s.first, &s.start);
+    let mut negative = 0;
+    for i in 0..n {
+        let (fi, si) = (first[i], start[i]);
+        let len = i - fi;
+        let (done, rest) = s.env.split_at_mut(si);
+        let row = &mut rest[..=len];
+        // c_ij = a_ij − Σ_k L_jk c_ik (row i overwritten by c in place).
+        for j in fi..i {
+            let fj = first[j];
+            let k0 = fi.max(fj);
+            if k0 < j {
+                let rj = &done[start[j] + (k0 - fj)..start[j] + (j - fj)];
+                let d = dot::<FMA>(rj, &row[k0 - fi..j - fi]);
+                row[j - fi] -= d;
+            }
+        }
+        // L_ij = c_ij / d_j and d_i = a_ii − Σ_j L_ij c_ij.
+        let mut d = row[len];
+        for (c, &dj_inv) in row[..len].iter_mut().zip(&s.dinv[fi..i]) {
+            let l = *c * dj_inv;
+            d -= l * *c;
+            *c = l;
+        }
+        if is_zero_pivot(d, s.tolerance, s.scale[i]) {
+            return Err(SolverError::ZeroPivot {
+                equation: i,
+                dof: s.perm.forward()[i],
+                pivot: d,
+                diagonal: s.scale[i],
+            });
+        }
+        row[len] = d;
+        s.dinv[i] = 1.0 / d;
+        if d < 0.0 {
+            negative += 1;
+        }
+    }
+    Ok(negative)
+}
+
+fn run_solve(s: &mut ProfileLdlt) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
+        // SAFETY: the AVX2 and FMA instruction sets were detected on this CPU just above.
+        unsafe { solve_avx2(s) };
+        return;
+    }
+    solve::<false>(s)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+fn solve_avx2(s: &mut ProfileLdlt) {
+    solve::<true>(s)
+}
+
+/// L y = b (inner products along rows), y ← D⁻¹ y, Lᵀ x = y (AXPYs along rows), on `work`.
+#[inline(always)]
+fn solve<const FMA: bool>(s: &mut ProfileLdlt) {
+    let n = s.first.len();
+    let y = &mut s.work;
+    for i in 0..n {
+        let (fi, si) = (s.first[i], s.start[i]);
+        let d = dot::<FMA>(&s.env[si..si + i - fi], &y[fi..i]);
+        y[i] -= d;
+    }
+    for (yi, dinv) in y.iter_mut().zip(&s.dinv) {
+        *yi *= dinv;
+    }
+    for i in (0..n).rev() {
+        let (fi, si) = (s.first[i], s.start[i]);
+        let xi = y[i];
+        let (head, _) = y.split_at_mut(i);
+        axpy_neg::<FMA>(xi, &s.env[si..si + i - fi], &mut head[fi..]);
+    }
+}

@@ -1,0 +1,80 @@
+//! One interface over the profile and faer solvers.
+
+use crate::{SolverError, SymmetricMatrix, SymmetricPattern};
+use std::sync::Arc;
+
+/// What a symbolic analysis found.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Analysis {
+    /// Stored entries of the factor (envelope for the profile solver, L for faer).
+    pub factor_entries: usize,
+    /// Floating-point operations of one numeric factorisation (a multiply-add counts 2).
+    pub flops: f64,
+    /// Bandwidth after ordering (profile solver).
+    pub bandwidth: Option<usize>,
+    /// Profile (off-diagonal envelope entries) after ordering (profile solver).
+    pub profile: Option<usize>,
+}
+
+/// What a numeric factorisation found.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Factorization {
+    /// Negative pivots = negative eigenvalues of the matrix (Sylvester's law of inertia). For
+    /// a tangent stiffness it changes where the equilibrium path bifurcates or turns.
+    pub negative_pivots: usize,
+    /// Stored entries of the factor.
+    pub factor_entries: usize,
+    /// Floating-point operations spent.
+    pub flops: f64,
+}
+
+/// A sparse symmetric direct solver: symbolic analysis once per pattern, numeric factorisation
+/// for every new set of values, then any number of solves.
+pub trait LinearSolver: Send {
+    /// A short name for reports.
+    fn name(&self) -> &'static str;
+    /// Orders the equations and sets up the factor's structure for `pattern`.
+    fn analyze(&mut self, pattern: &Arc<SymmetricPattern>) -> Result<Analysis, SolverError>;
+    /// Factors `a`, which must be on the analysed pattern; reports the inertia.
+    fn factorize(&mut self, a: &SymmetricMatrix) -> Result<Factorization, SolverError>;
+    /// Overwrites the `nrhs` column-major right-hand sides in `b` (n·nrhs values) with A⁻¹b.
+    fn solve_in_place(&mut self, b: &mut [f64], nrhs: usize) -> Result<(), SolverError>;
+}
+
+/// The solvers nonlin3d ships, by name.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum SolverKind {
+    /// [`crate::ProfileLdlt`] with reverse Cuthill–McKee.
+    Profile,
+    /// [`crate::FaerSolver`] LDLᵀ with AMD: the default, faster from a few thousand equations
+    /// on (docs/PERFORMANCE.md).
+    #[default]
+    FaerLdlt,
+    /// [`crate::FaerSolver`] LLᵀ with AMD: positive definite matrices only.
+    FaerLlt,
+}
+
+impl SolverKind {
+    /// A boxed solver of this kind with default settings.
+    pub fn build(self) -> Box<dyn LinearSolver> {
+        match self {
+            Self::Profile => Box::new(crate::ProfileLdlt::new()),
+            Self::FaerLdlt => Box::new(crate::FaerSolver::new(crate::FaerMode::Ldlt)),
+            Self::FaerLlt => Box::new(crate::FaerSolver::new(crate::FaerMode::Llt)),
+        }
+    }
+}
+
+/// Analyse, factor and solve A x = b in one call (for one-off systems).
+pub fn solve(
+    kind: SolverKind,
+    a: &SymmetricMatrix,
+    b: &[f64],
+) -> Result<(Vec<f64>, Factorization), SolverError> {
+    let mut s = kind.build();
+    s.analyze(a.pattern())?;
+    let f = s.factorize(a)?;
+    let mut x = b.to_vec();
+    s.solve_in_place(&mut x, 1)?;
+    Ok((x, f))
+}

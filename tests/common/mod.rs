@@ -1,0 +1,118 @@
+//! Structured Hex8/Hex20 boxes and their assembled linear stiffness, shared by the end-to-end
+//! tests and the solver benchmarks (`#[path]`-included there). The mesh crate will supersede it.
+#![allow(dead_code)]
+
+use nonlin3d::element::{ElementKind, IntegrationRule, ShapeTable, linear_stiffness};
+use nonlin3d::laminate::Stiffness;
+use nonlin3d::solver::{SymmetricMatrix, SymmetricPattern};
+use std::collections::HashMap;
+use std::sync::Arc;
+
+/// A structured box of n[0]×n[1]×n[2] elements with element sizes h (graded nothing).
+pub struct BoxMesh {
+    pub kind: ElementKind,
+    pub n: [usize; 3],
+    pub coords: Vec<[f64; 3]>,
+    /// Doubled integer grid coordinates of each node (mid-edge nodes have one odd coordinate).
+    pub grid: Vec<[usize; 3]>,
+    pub cells: Vec<Vec<usize>>,
+}
+
+impl BoxMesh {
+    pub fn new(kind: ElementKind, n: [usize; 3], h: [f64; 3]) -> Self {
+        let mut ids: HashMap<[usize; 3], usize> = HashMap::new();
+        let (mut coords, mut grid, mut cells) = (Vec::new(), Vec::new(), Vec::new());
+        for k in 0..n[2] {
+            for j in 0..n[1] {
+                for i in 0..n[0] {
+                    let cell = kind
+                        .reference_nodes()
+                        .iter()
+                        .map(|p| {
+                            let g = [
+                                (2 * i as i64 + 1 + p[0] as i64) as usize,
+                                (2 * j as i64 + 1 + p[1] as i64) as usize,
+                                (2 * k as i64 + 1 + p[2] as i64) as usize,
+                            ];
+                            *ids.entry(g).or_insert_with(|| {
+                                coords.push([
+                                    0.5 * h[0] * g[0] as f64,
+                                    0.5 * h[1] * g[1] as f64,
+                                    0.5 * h[2] * g[2] as f64,
+                                ]);
+                                grid.push(g);
+                                coords.len() - 1
+                            })
+                        })
+                        .collect();
+                    cells.push(cell);
+                }
+            }
+        }
+        Self {
+            kind,
+            n,
+            coords,
+            grid,
+            cells,
+        }
+    }
+
+    pub fn dofs(&self) -> usize {
+        3 * self.coords.len()
+    }
+
+    /// DOFs of each cell, node-major.
+    pub fn cell_dofs(&self) -> Vec<Vec<usize>> {
+        self.cells
+            .iter()
+            .map(|c| {
+                c.iter()
+                    .flat_map(|&n| [3 * n, 3 * n + 1, 3 * n + 2])
+                    .collect()
+            })
+            .collect()
+    }
+
+    /// Nodes on the face x = 0 (axis 0), y = 0 (axis 1) or z = 0 (axis 2).
+    pub fn nodes_at_zero(&self, axis: usize) -> Vec<usize> {
+        (0..self.coords.len())
+            .filter(|&i| self.grid[i][axis] == 0)
+            .collect()
+    }
+
+    /// The linear stiffness, with the DOFs in `fixed` replaced by unit rows and columns (so
+    /// the matrix keeps its pattern and its size).
+    pub fn stiffness(
+        &self,
+        material: &Stiffness,
+        rule: IntegrationRule,
+        fixed: &[usize],
+    ) -> SymmetricMatrix {
+        let table = ShapeTable::new(self.kind, rule).unwrap();
+        let lists = self.cell_dofs();
+        let pattern = Arc::new(SymmetricPattern::from_dof_lists(self.dofs(), &lists).unwrap());
+        let mut a = SymmetricMatrix::zeros(pattern);
+        let mut is_fixed = vec![false; self.dofs()];
+        for &d in fixed {
+            is_fixed[d] = true;
+        }
+        for (cell, dofs) in self.cells.iter().zip(&lists) {
+            let x: Vec<[f64; 3]> = cell.iter().map(|&n| self.coords[n]).collect();
+            let mut k = linear_stiffness(&table, &x, material).unwrap();
+            let ne = dofs.len();
+            for a_ in 0..ne {
+                for b in 0..ne {
+                    if is_fixed[dofs[a_]] || is_fixed[dofs[b]] {
+                        k[a_ * ne + b] = 0.0;
+                    }
+                }
+            }
+            a.scatter_add(dofs, &k).unwrap();
+        }
+        for &d in fixed {
+            a.add(d, d, 1.0).unwrap();
+        }
+        a
+    }
+}
