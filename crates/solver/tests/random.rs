@@ -137,6 +137,57 @@ fn check(c: &Case, indefinite: bool) -> Result<(), TestCaseError> {
     Ok(())
 }
 
+/// Larger banded systems (100–400 equations, elements on windows of nearby DOFs) so the
+/// profile factorisation runs through several row blocks (64 rows each) and its blocked phase.
+fn banded_case() -> impl Strategy<Value = Case> {
+    (100usize..400).prop_flat_map(|n| {
+        let list = (0..n - 8, proptest::collection::btree_set(0usize..8, 2..=6))
+            .prop_map(|(s, offs)| offs.into_iter().map(|o| s + o).collect::<Vec<_>>());
+        (
+            Just(n),
+            proptest::collection::vec(list, n..(2 * n)),
+            proptest::collection::vec(-1.0..1.0f64, 36 * 2 * n),
+            proptest::collection::vec(any::<bool>(), n),
+            proptest::collection::vec(-1.0..1.0f64, n),
+        )
+            .prop_map(|(n, lists, raw, signs, rhs)| {
+                let blocks = lists
+                    .iter()
+                    .enumerate()
+                    .map(|(e, l)| {
+                        let m = l.len();
+                        let r = &raw[e * 36..e * 36 + m * m];
+                        let mut b = vec![0.0; m * m];
+                        for i in 0..m {
+                            for j in 0..m {
+                                b[i * m + j] =
+                                    (0..m).map(|k| r[k * m + i] * r[k * m + j]).sum::<f64>();
+                            }
+                            b[i * m + i] += 0.1;
+                        }
+                        b
+                    })
+                    .collect();
+                Case {
+                    n,
+                    lists,
+                    blocks,
+                    signs,
+                    rhs,
+                }
+            })
+    })
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 24, .. ProptestConfig::default() })]
+
+    #[test]
+    fn banded_systems_across_row_blocks(c in banded_case(), indefinite in any::<bool>()) {
+        check(&c, indefinite)?;
+    }
+}
+
 proptest! {
     #![proptest_config(ProptestConfig { cases: 128, .. ProptestConfig::default() })]
 

@@ -1,0 +1,208 @@
+//! One-shot solver report over problem sizes (issue: sparse solvers): for structured Hex20
+//! elasticity matrices of ~1 k to ~150 k DOF and a laminate-like thin model, the time of
+//! symbolic analysis, numeric factorisation and one solve, factor entries, flops, GFLOP/s and
+//! peak memory, for the profile solver (RCM) and faer LDLᵀ (AMD) on 1 and 2 threads, plus the
+//! dense matmul GFLOP/s of this machine in the same run. Each case runs once (the large ones
+//! take seconds); criterion covers the small cases in `benches/solvers.rs`.
+//!
+//! Run: `cargo bench --bench solver_report` (add `-- quick` to stop at ~50 k DOF, or
+//! `-- only=laminate` to run the cases whose name contains that text).
+
+#[path = "../tests/common/mod.rs"]
+mod common;
+
+use common::BoxMesh;
+use nonlin3d::element::{ElementKind, IntegrationRule};
+use nonlin3d::laminate::{PlyStack, ShearCoupling, materials};
+use nonlin3d::solver::{FaerMode, FaerSolver, LinearSolver, ProfileLdlt, SymmetricMatrix};
+use std::time::Instant;
+
+/// Peak resident memory (VmHWM) in MiB, and a reset of it (Linux `clear_refs` 5).
+fn peak_mib() -> f64 {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("VmHWM"))
+                .and_then(|l| l.split_whitespace().nth(1)?.parse::<f64>().ok())
+        })
+        .map_or(f64::NAN, |kb| kb / 1024.0)
+}
+fn current_mib() -> f64 {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("VmRSS"))
+                .and_then(|l| l.split_whitespace().nth(1)?.parse::<f64>().ok())
+        })
+        .map_or(f64::NAN, |kb| kb / 1024.0)
+}
+fn reset_peak() {
+    let _ = std::fs::write("/proc/self/clear_refs", "5");
+}
+
+fn dense_matmul_gflops(threads: usize) -> f64 {
+    use faer::{Accum, Mat, Par};
+    let n = 1536;
+    let a = Mat::<f64>::from_fn(n, n, |i, j| ((i * 7 + j * 3) % 13) as f64 - 6.0);
+    let b = a.clone();
+    let mut c = Mat::<f64>::zeros(n, n);
+    let par = if threads > 1 {
+        Par::rayon(threads)
+    } else {
+        Par::Seq
+    };
+    let mut best = f64::INFINITY;
+    for _ in 0..5 {
+        let t = Instant::now();
+        faer::linalg::matmul::matmul(c.as_mut(), Accum::Replace, a.as_ref(), b.as_ref(), 1.0, par);
+        best = best.min(t.elapsed().as_secs_f64());
+    }
+    std::hint::black_box(&c);
+    2.0 * (n as f64).powi(3) / best / 1e9
+}
+
+struct Row {
+    case: String,
+    dofs: usize,
+    solver: String,
+    symbolic: f64,
+    numeric: f64,
+    solve: f64,
+    entries: usize,
+    flops: f64,
+    peak: f64,
+    negative: usize,
+}
+
+fn run(
+    case: &str,
+    k: &SymmetricMatrix,
+    mut s: Box<dyn LinearSolver>,
+    label: String,
+) -> Option<Row> {
+    let n = k.n();
+    let before = current_mib();
+    reset_peak();
+    let t = Instant::now();
+    let analysis = match s.analyze(k.pattern()) {
+        Ok(a) => a,
+        Err(e) => {
+            println!("| {case} | {n} | {label} | {e} | | | | | | |");
+            return None;
+        }
+    };
+    let symbolic = t.elapsed().as_secs_f64();
+    // Small systems take milliseconds: best of several runs there, one run for large ones.
+    let reps = if n < 20_000 { 15 } else { 1 };
+    let (mut numeric, mut solve) = (f64::INFINITY, f64::INFINITY);
+    let mut f = None;
+    for _ in 0..reps {
+        let t = Instant::now();
+        f = Some(s.factorize(k).ok()?);
+        numeric = numeric.min(t.elapsed().as_secs_f64());
+        let mut b = vec![1.0; n];
+        let t = Instant::now();
+        s.solve_in_place(&mut b, 1).ok()?;
+        solve = solve.min(t.elapsed().as_secs_f64());
+    }
+    let f = f?;
+    let peak = peak_mib() - before;
+    Some(Row {
+        case: case.into(),
+        dofs: n,
+        solver: label,
+        symbolic,
+        numeric,
+        solve,
+        entries: analysis.factor_entries,
+        flops: f.flops,
+        peak,
+        negative: f.negative_pivots,
+    })
+}
+
+fn main() {
+    let quick = std::env::args().any(|a| a == "quick");
+    let material = PlyStack::quasi_isotropic(materials::generic_graphite_epoxy(), 0.125e-3)
+        .and_then(|s| s.average_stiffness(ShearCoupling::Exact))
+        .unwrap_or_else(|e| panic!("{e}"));
+    println!(
+        "dense matmul 1536³ (faer): {:.1} GFLOP/s on 1 thread, {:.1} GFLOP/s on 2 threads",
+        dense_matmul_gflops(1),
+        dense_matmul_gflops(2)
+    );
+    println!();
+    println!(
+        "| case | DOF | solver | symbolic ms | numeric ms (best of 15 below 20 k DOF) | solve ms | factor entries | GFLOP/s | peak MiB | neg. pivots |"
+    );
+    println!("|---|---:|---|---:|---:|---:|---:|---:|---:|---:|");
+    let mut cases: Vec<(&str, [usize; 3], [f64; 3])> = vec![
+        ("cube 2×2×1", [2, 2, 1], [2e-3, 2e-3, 1e-3]),
+        ("cube 3×3×2", [3, 3, 2], [2e-3, 2e-3, 1e-3]),
+        ("cube 4×4×2", [4, 4, 2], [2e-3, 2e-3, 1e-3]),
+        ("cube 6×6×3", [6, 6, 3], [2e-3, 2e-3, 1e-3]),
+        ("cube 9×9×4", [9, 9, 4], [2e-3, 2e-3, 1e-3]),
+        ("cube 12×12×5 (~10 k)", [12, 12, 5], [2e-3, 2e-3, 1e-3]),
+        (
+            "laminate 30×30×4, 16:1 (~50 k)",
+            [30, 30, 4],
+            [2e-3, 2e-3, 0.125e-3],
+        ),
+        ("cube 20×20×8 (~50 k)", [20, 20, 8], [2e-3, 2e-3, 1e-3]),
+    ];
+    if !quick {
+        cases.push(("cube 30×30×12 (~150 k)", [30, 30, 12], [2e-3, 2e-3, 1e-3]));
+        cases.push((
+            "laminate 55×55×3, 16:1 (~140 k)",
+            [55, 55, 3],
+            [2e-3, 2e-3, 0.125e-3],
+        ));
+    }
+    // `only=TEXT` keeps the cases whose name contains TEXT.
+    let only = std::env::args().find_map(|a| a.strip_prefix("only=").map(str::to_owned));
+    cases.retain(|c| only.as_deref().is_none_or(|o| c.0.contains(o)));
+    for (case, n, h) in cases {
+        let mesh = BoxMesh::new(ElementKind::Hex20, n, h);
+        let fixed: Vec<usize> = mesh
+            .nodes_at_zero(0)
+            .iter()
+            .flat_map(|&v| [3 * v, 3 * v + 1, 3 * v + 2])
+            .collect();
+        let k = mesh.stiffness(&material, IntegrationRule::Gauss2, &fixed);
+        let mut solvers: Vec<(Box<dyn LinearSolver>, String)> = vec![
+            (
+                Box::new(FaerSolver::new(FaerMode::Ldlt)),
+                "faer LDLᵀ, 1 thread".into(),
+            ),
+            (
+                Box::new(FaerSolver::new(FaerMode::Ldlt).with_threads(2)),
+                "faer LDLᵀ, 2 threads".into(),
+            ),
+        ];
+        // The profile solver: only where its envelope fits the 3 GiB cap and its time is
+        // reasonable (analysis reports TooLarge otherwise).
+        solvers.insert(
+            0,
+            (Box::new(ProfileLdlt::new()), "profile LDLᵀ (RCM)".into()),
+        );
+        for (s, label) in solvers {
+            if let Some(r) = run(case, &k, s, label) {
+                println!(
+                    "| {} | {} | {} | {:.3} | {:.3} | {:.3} | {} | {:.1} | {:.0} | {} |",
+                    r.case,
+                    r.dofs,
+                    r.solver,
+                    1e3 * r.symbolic,
+                    1e3 * r.numeric,
+                    1e3 * r.solve,
+                    r.entries,
+                    r.flops / r.numeric / 1e9,
+                    r.peak,
+                    r.negative
+                );
+            }
+        }
+    }
+}

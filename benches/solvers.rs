@@ -1,0 +1,121 @@
+//! Criterion benchmarks of the sparse solvers (issue: sparse solvers) on structured Hex20
+//! elasticity matrices: symbolic analysis, numeric factorisation and solve for the profile
+//! solver (RCM) and faer LDLᵀ (AMD) on 1 and 2 threads, with the dense matmul of the same
+//! machine as the yardstick. The size sweep up to 150 k DOF with memory figures is
+//! `benches/solver_report.rs`; figures in docs/PERFORMANCE.md.
+
+#[path = "../tests/common/mod.rs"]
+mod common;
+
+use common::BoxMesh;
+use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+use nonlin3d::element::{ElementKind, IntegrationRule};
+use nonlin3d::laminate::{PlyStack, ShearCoupling, materials};
+use nonlin3d::solver::{FaerMode, FaerSolver, LinearSolver, ProfileLdlt, SymmetricMatrix};
+use std::hint::black_box;
+use std::time::Duration;
+
+fn model(n: [usize; 3], h: [f64; 3]) -> SymmetricMatrix {
+    let material = PlyStack::quasi_isotropic(materials::generic_graphite_epoxy(), 0.125e-3)
+        .and_then(|s| s.average_stiffness(ShearCoupling::Exact))
+        .unwrap_or_else(|e| panic!("{e}"));
+    let mesh = BoxMesh::new(ElementKind::Hex20, n, h);
+    let fixed: Vec<usize> = mesh
+        .nodes_at_zero(0)
+        .iter()
+        .flat_map(|&v| [3 * v, 3 * v + 1, 3 * v + 2])
+        .collect();
+    mesh.stiffness(&material, IntegrationRule::Gauss2, &fixed)
+}
+
+fn bench_phases(c: &mut Criterion, name: &str, k: &SymmetricMatrix, profile: bool) {
+    let mut group = c.benchmark_group(format!("solver_{name}"));
+    group
+        .sample_size(10)
+        .warm_up_time(Duration::from_millis(500))
+        .measurement_time(Duration::from_secs(4));
+    let mut solvers: Vec<(String, Box<dyn LinearSolver>)> = vec![
+        (
+            "faer_ldlt_1thread".into(),
+            Box::new(FaerSolver::new(FaerMode::Ldlt)),
+        ),
+        (
+            "faer_ldlt_2threads".into(),
+            Box::new(FaerSolver::new(FaerMode::Ldlt).with_threads(2)),
+        ),
+    ];
+    if profile {
+        solvers.insert(0, ("profile_rcm".into(), Box::new(ProfileLdlt::new())));
+    }
+    for (label, mut s) in solvers {
+        let analysis = s.analyze(k.pattern()).unwrap_or_else(|e| panic!("{e}"));
+        group.throughput(Throughput::Elements(analysis.flops as u64));
+        group.bench_function(BenchmarkId::new("symbolic", &label), |b| {
+            b.iter(|| black_box(s.analyze(k.pattern()).unwrap_or_else(|e| panic!("{e}"))))
+        });
+        group.bench_function(BenchmarkId::new("numeric", &label), |b| {
+            b.iter(|| black_box(s.factorize(k).unwrap_or_else(|e| panic!("{e}"))))
+        });
+        let mut rhs = vec![1.0; k.n()];
+        group.throughput(Throughput::Elements(k.n() as u64));
+        group.bench_function(BenchmarkId::new("solve", &label), |b| {
+            b.iter(|| {
+                rhs.fill(1.0);
+                s.solve_in_place(&mut rhs, 1)
+                    .unwrap_or_else(|e| panic!("{e}"));
+                black_box(&rhs);
+            })
+        });
+    }
+    group.finish();
+}
+
+fn bench_solvers(c: &mut Criterion) {
+    // ~11 k DOF cube-like block and a ~54 k DOF laminate-like plate (16:1 elements).
+    bench_phases(
+        c,
+        "hex20_11k",
+        &model([12, 12, 5], [2e-3, 2e-3, 1e-3]),
+        true,
+    );
+    bench_phases(
+        c,
+        "hex20_laminate_54k",
+        &model([30, 30, 4], [2e-3, 2e-3, 0.125e-3]),
+        false,
+    );
+}
+
+fn bench_dense(c: &mut Criterion) {
+    use faer::{Accum, Mat, Par};
+    let n = 1024;
+    let a = Mat::<f64>::from_fn(n, n, |i, j| ((i * 7 + j * 3) % 13) as f64 - 6.0);
+    let mut out = Mat::<f64>::zeros(n, n);
+    let mut group = c.benchmark_group("dense_matmul_1024");
+    group
+        .sample_size(10)
+        .throughput(Throughput::Elements(2 * (n as u64).pow(3)));
+    for threads in [1usize, 2] {
+        let par = if threads > 1 {
+            Par::rayon(threads)
+        } else {
+            Par::Seq
+        };
+        group.bench_function(BenchmarkId::new("faer_threads", threads), |b| {
+            b.iter(|| {
+                faer::linalg::matmul::matmul(
+                    out.as_mut(),
+                    Accum::Replace,
+                    a.as_ref(),
+                    a.as_ref(),
+                    1.0,
+                    par,
+                )
+            })
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, bench_dense, bench_solvers);
+criterion_main!(benches);
