@@ -11,33 +11,27 @@
 #[path = "../tests/common/mod.rs"]
 mod common;
 
-use common::BoxMesh;
-use nonlin3d::element::{ElementKind, IntegrationRule};
-use nonlin3d::laminate::{PlyStack, ShearCoupling, materials};
 use nonlin3d::solver::{FaerMode, FaerSolver, LinearSolver, ProfileLdlt, SymmetricMatrix};
 use std::time::Instant;
 
-/// Peak resident memory (VmHWM) in MiB, and a reset of it (Linux `clear_refs` 5).
-fn peak_mib() -> f64 {
+/// A memory figure of this process from /proc/self/status (`VmHWM` peak, `VmRSS` current), MiB.
+fn status_mib(key: &str) -> f64 {
     std::fs::read_to_string("/proc/self/status")
         .ok()
         .and_then(|s| {
             s.lines()
-                .find(|l| l.starts_with("VmHWM"))
+                .find(|l| l.starts_with(key))
                 .and_then(|l| l.split_whitespace().nth(1)?.parse::<f64>().ok())
         })
         .map_or(f64::NAN, |kb| kb / 1024.0)
+}
+fn peak_mib() -> f64 {
+    status_mib("VmHWM")
 }
 fn current_mib() -> f64 {
-    std::fs::read_to_string("/proc/self/status")
-        .ok()
-        .and_then(|s| {
-            s.lines()
-                .find(|l| l.starts_with("VmRSS"))
-                .and_then(|l| l.split_whitespace().nth(1)?.parse::<f64>().ok())
-        })
-        .map_or(f64::NAN, |kb| kb / 1024.0)
+    status_mib("VmRSS")
 }
+/// Resets VmHWM (Linux `clear_refs` 5).
 fn reset_peak() {
     let _ = std::fs::write("/proc/self/clear_refs", "5");
 }
@@ -125,9 +119,6 @@ fn run(
 
 fn main() {
     let quick = std::env::args().any(|a| a == "quick");
-    let material = PlyStack::quasi_isotropic(materials::generic_graphite_epoxy(), 0.125e-3)
-        .and_then(|s| s.average_stiffness(ShearCoupling::Exact))
-        .unwrap_or_else(|e| panic!("{e}"));
     println!(
         "dense matmul 1536³ (faer): {:.1} GFLOP/s on 1 thread, {:.1} GFLOP/s on 2 threads",
         dense_matmul_gflops(1),
@@ -164,13 +155,7 @@ fn main() {
     let only = std::env::args().find_map(|a| a.strip_prefix("only=").map(str::to_owned));
     cases.retain(|c| only.as_deref().is_none_or(|o| c.0.contains(o)));
     for (case, n, h) in cases {
-        let mesh = BoxMesh::new(ElementKind::Hex20, n, h);
-        let fixed: Vec<usize> = mesh
-            .nodes_at_zero(0)
-            .iter()
-            .flat_map(|&v| [3 * v, 3 * v + 1, 3 * v + 2])
-            .collect();
-        let k = mesh.stiffness(&material, IntegrationRule::Gauss2, &fixed);
+        let k = common::clamped_box_stiffness(n, h);
         let mut solvers: Vec<(Box<dyn LinearSolver>, String)> = vec![
             (
                 Box::new(FaerSolver::new(FaerMode::Ldlt)),

@@ -7,26 +7,10 @@
 #[path = "../tests/common/mod.rs"]
 mod common;
 
-use common::BoxMesh;
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
-use nonlin3d::element::{ElementKind, IntegrationRule};
-use nonlin3d::laminate::{PlyStack, ShearCoupling, materials};
 use nonlin3d::solver::{FaerMode, FaerSolver, LinearSolver, ProfileLdlt, SymmetricMatrix};
 use std::hint::black_box;
 use std::time::Duration;
-
-fn model(n: [usize; 3], h: [f64; 3]) -> SymmetricMatrix {
-    let material = PlyStack::quasi_isotropic(materials::generic_graphite_epoxy(), 0.125e-3)
-        .and_then(|s| s.average_stiffness(ShearCoupling::Exact))
-        .unwrap_or_else(|e| panic!("{e}"));
-    let mesh = BoxMesh::new(ElementKind::Hex20, n, h);
-    let fixed: Vec<usize> = mesh
-        .nodes_at_zero(0)
-        .iter()
-        .flat_map(|&v| [3 * v, 3 * v + 1, 3 * v + 2])
-        .collect();
-    mesh.stiffness(&material, IntegrationRule::Gauss2, &fixed)
-}
 
 fn bench_phases(c: &mut Criterion, name: &str, k: &SymmetricMatrix, profile: bool) {
     let mut group = c.benchmark_group(format!("solver_{name}"));
@@ -75,13 +59,13 @@ fn bench_solvers(c: &mut Criterion) {
     bench_phases(
         c,
         "hex20_11k",
-        &model([12, 12, 5], [2e-3, 2e-3, 1e-3]),
+        &common::clamped_box_stiffness([12, 12, 5], [2e-3, 2e-3, 1e-3]),
         true,
     );
     bench_phases(
         c,
         "hex20_laminate_54k",
-        &model([30, 30, 4], [2e-3, 2e-3, 0.125e-3]),
+        &common::clamped_box_stiffness([30, 30, 4], [2e-3, 2e-3, 0.125e-3]),
         false,
     );
 }

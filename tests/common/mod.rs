@@ -116,3 +116,21 @@ impl BoxMesh {
         a
     }
 }
+
+/// The benchmark model: a Hex20 box of n elements of size h, homogeneous quasi-isotropic
+/// graphite/epoxy (eq. 2.9.1), clamped on x = 0, 2×2×2 points.
+pub fn clamped_box_stiffness(n: [usize; 3], h: [f64; 3]) -> SymmetricMatrix {
+    let material = nonlin3d::laminate::PlyStack::quasi_isotropic(
+        nonlin3d::laminate::materials::generic_graphite_epoxy(),
+        0.125e-3,
+    )
+    .and_then(|s| s.average_stiffness(nonlin3d::laminate::ShearCoupling::Exact))
+    .unwrap_or_else(|e| panic!("{e}"));
+    let mesh = BoxMesh::new(ElementKind::Hex20, n, h);
+    let fixed: Vec<usize> = mesh
+        .nodes_at_zero(0)
+        .iter()
+        .flat_map(|&v| [3 * v, 3 * v + 1, 3 * v + 2])
+        .collect();
+    mesh.stiffness(&material, IntegrationRule::Gauss2, &fixed)
+}

@@ -210,14 +210,7 @@ impl LinearSolver for FaerSolver {
         else {
             return Err(SolverError::NotReady("factorize called before analyze"));
         };
-        if !Arc::ptr_eq(pattern, a.pattern()) && **pattern != **a.pattern() {
-            return Err(SolverError::DimensionMismatch {
-                what: "matrix pattern (not the analysed one)",
-                expected: pattern.nnz_lower(),
-                got: a.pattern().nnz_lower(),
-            });
-        }
-        a.check_finite()?;
+        a.check_for(pattern)?;
         self.factored = false;
         let n = pattern.n();
         let sym =

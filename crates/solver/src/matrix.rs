@@ -43,6 +43,19 @@ impl SymmetricMatrix {
         self.pattern.n()
     }
 
+    /// Checks that this matrix lives on `pattern` (the one a solver analysed) and holds only
+    /// finite values.
+    pub fn check_for(&self, pattern: &Arc<SymmetricPattern>) -> Result<(), SolverError> {
+        if !Arc::ptr_eq(pattern, &self.pattern) && **pattern != *self.pattern {
+            return Err(SolverError::DimensionMismatch {
+                what: "matrix pattern (not the analysed one)",
+                expected: pattern.nnz_lower(),
+                got: self.pattern.nnz_lower(),
+            });
+        }
+        self.check_finite()
+    }
+
     /// Lower-triangle values in the pattern's order.
     pub fn values(&self) -> &[f64] {
         &self.values

@@ -187,14 +187,7 @@ impl LinearSolver for ProfileLdlt {
             .pattern
             .as_ref()
             .ok_or(SolverError::NotReady("factorize called before analyze"))?;
-        if !Arc::ptr_eq(pattern, a.pattern()) && **pattern != **a.pattern() {
-            return Err(SolverError::DimensionMismatch {
-                what: "matrix pattern (not the analysed one)",
-                expected: pattern.nnz_lower(),
-                got: a.pattern().nnz_lower(),
-            });
-        }
-        a.check_finite()?;
+        a.check_for(pattern)?;
         self.factored = false;
         self.env.fill(0.0);
         for (&p, &v) in self.map.iter().zip(a.values()) {

@@ -23,6 +23,27 @@ struct Case {
     rhs: Vec<f64>,
 }
 
+/// One SPD block B = MᵀM + 0.1·I per DOF list, M from the random numbers `raw` (36 per list).
+/// The indefinite variant re-signs the assembled diagonal later.
+fn spd_blocks(lists: &[Vec<usize>], raw: &[f64]) -> Vec<Vec<f64>> {
+    lists
+        .iter()
+        .enumerate()
+        .map(|(e, l)| {
+            let m = l.len();
+            let r = &raw[e * 36..e * 36 + m * m];
+            let mut b = vec![0.0; m * m];
+            for i in 0..m {
+                for j in 0..m {
+                    b[i * m + j] = (0..m).map(|k| r[k * m + i] * r[k * m + j]).sum::<f64>();
+                }
+                b[i * m + i] += 0.1;
+            }
+            b
+        })
+        .collect()
+}
+
 fn case() -> impl Strategy<Value = Case> {
     (2usize..60).prop_flat_map(|n| {
         let list = proptest::collection::btree_set(0..n, 1..=6.min(n))
@@ -35,24 +56,7 @@ fn case() -> impl Strategy<Value = Case> {
             proptest::collection::vec(-1.0..1.0f64, n),
         )
             .prop_map(|(n, lists, raw, signs, rhs)| {
-                let blocks = lists
-                    .iter()
-                    .enumerate()
-                    .map(|(e, l)| {
-                        let m = l.len();
-                        let r = &raw[e * 36..e * 36 + m * m];
-                        // B = MᵀM + 0.1 I (SPD); the indefinite variant re-signs the diagonal later.
-                        let mut b = vec![0.0; m * m];
-                        for i in 0..m {
-                            for j in 0..m {
-                                b[i * m + j] =
-                                    (0..m).map(|k| r[k * m + i] * r[k * m + j]).sum::<f64>();
-                            }
-                            b[i * m + i] += 0.1;
-                        }
-                        b
-                    })
-                    .collect();
+                let blocks = spd_blocks(&lists, &raw);
                 Case {
                     n,
                     lists,
@@ -151,23 +155,7 @@ fn banded_case() -> impl Strategy<Value = Case> {
             proptest::collection::vec(-1.0..1.0f64, n),
         )
             .prop_map(|(n, lists, raw, signs, rhs)| {
-                let blocks = lists
-                    .iter()
-                    .enumerate()
-                    .map(|(e, l)| {
-                        let m = l.len();
-                        let r = &raw[e * 36..e * 36 + m * m];
-                        let mut b = vec![0.0; m * m];
-                        for i in 0..m {
-                            for j in 0..m {
-                                b[i * m + j] =
-                                    (0..m).map(|k| r[k * m + i] * r[k * m + j]).sum::<f64>();
-                            }
-                            b[i * m + i] += 0.1;
-                        }
-                        b
-                    })
-                    .collect();
+                let blocks = spd_blocks(&lists, &raw);
                 Case {
                     n,
                     lists,
