@@ -10,6 +10,9 @@ pub enum Error {
     /// An element kernel failed (inverted element, bad input).
     #[error(transparent)]
     Element(#[from] nonlin3d_element::ElementError),
+    /// Invalid mesh or mesh output failure.
+    #[error(transparent)]
+    Mesh(#[from] nonlin3d_mesh::MeshError),
     /// A linear solve failed (zero pivot, bad input).
     #[error(transparent)]
     Solver(#[from] nonlin3d_solver::SolverError),

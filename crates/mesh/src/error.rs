@@ -1,0 +1,75 @@
+//! The error type of `nonlin3d-mesh`.
+
+/// What can go wrong building, checking or writing a mesh; variants name the cell, node or set.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum MeshError {
+    /// A cell has the wrong number of nodes for its kind.
+    #[error("cell {cell}: {kind} needs {expected} nodes, has {got}")]
+    NodeCount {
+        /// Cell index.
+        cell: usize,
+        /// Element kind name.
+        kind: &'static str,
+        /// Nodes required.
+        expected: usize,
+        /// Nodes given.
+        got: usize,
+    },
+    /// A cell or set refers to a node that does not exist.
+    #[error("{owner}: node {node} does not exist ({count} nodes)")]
+    NodeIndex {
+        /// Which cell or set.
+        owner: String,
+        /// The index.
+        node: usize,
+        /// Number of nodes.
+        count: usize,
+    },
+    /// A set refers to a cell that does not exist, or a face number outside 0..6.
+    #[error("{owner}: cell {cell} (face {face:?}) does not exist ({count} cells)")]
+    CellIndex {
+        /// Which set.
+        owner: String,
+        /// The cell index.
+        cell: usize,
+        /// The face, for face sets.
+        face: Option<u8>,
+        /// Number of cells.
+        count: usize,
+    },
+    /// A coordinate or ply angle is NaN or infinite.
+    #[error("{what} {index} is not finite")]
+    NonFinite {
+        /// `"node"` or `"ply angle of cell"`.
+        what: &'static str,
+        /// Its index.
+        index: usize,
+    },
+    /// A cell is inverted or degenerate: det J ≤ 0 somewhere.
+    #[error("cell {cell}: det J = {det:e} ≤ 0 at reference point {xi:?}")]
+    Inverted {
+        /// Cell index.
+        cell: usize,
+        /// Where (reference coordinates).
+        xi: [f64; 3],
+        /// The determinant.
+        det: f64,
+    },
+    /// Generator parameters out of range (named).
+    #[error("invalid parameter {name}: {reason}")]
+    Parameter {
+        /// The parameter.
+        name: &'static str,
+        /// Why.
+        reason: String,
+    },
+    /// Writing a file failed.
+    #[error("writing {path}: {source}")]
+    Io {
+        /// The file.
+        path: String,
+        /// The I/O error.
+        source: std::io::Error,
+    },
+}

@@ -1,0 +1,206 @@
+//! Structured generators.
+
+use crate::MeshError;
+use crate::model::{Cell, Mesh};
+use nonlin3d_element::ElementKind;
+use std::collections::HashMap;
+
+/// A structured box `[0, size[0]] × [0, size[1]] × [0, size[2]]` (m) of `counts` elements per
+/// axis, graded so that along each axis the last element is `grading` times the first
+/// (1 = uniform; < 1 refines towards the far end).
+#[derive(Debug, Clone, PartialEq)]
+pub struct BoxParams {
+    /// Hex8 or Hex20.
+    pub kind: ElementKind,
+    /// Elements along x, y, z.
+    pub counts: [usize; 3],
+    /// Edge lengths along x, y, z in m.
+    pub size: [f64; 3],
+    /// Ratio of last to first element size per axis.
+    pub grading: [f64; 3],
+    /// Material index of every cell.
+    pub material: usize,
+}
+
+impl BoxParams {
+    /// Uniform box, material 0.
+    pub fn new(kind: ElementKind, counts: [usize; 3], size: [f64; 3]) -> Self {
+        Self {
+            kind,
+            counts,
+            size,
+            grading: [1.0; 3],
+            material: 0,
+        }
+    }
+}
+
+/// Node positions 0 = x_0 < … < x_n = length with geometric element sizes, last/first = `ratio`.
+pub fn graded_coordinates(n: usize, length: f64, ratio: f64) -> Result<Vec<f64>, MeshError> {
+    if n == 0 {
+        return Err(MeshError::Parameter {
+            name: "counts",
+            reason: "at least one element per axis".into(),
+        });
+    }
+    if !(length.is_finite() && length > 0.0) {
+        return Err(MeshError::Parameter {
+            name: "size",
+            reason: format!("{length} must be positive and finite"),
+        });
+    }
+    if !(ratio.is_finite() && ratio > 0.0) {
+        return Err(MeshError::Parameter {
+            name: "grading",
+            reason: format!("{ratio} must be positive and finite"),
+        });
+    }
+    // Sizes h_k = h_0 q^k with q^(n−1) = ratio.
+    let q = if n > 1 {
+        ratio.powf(1.0 / (n - 1) as f64)
+    } else {
+        1.0
+    };
+    let sizes: Vec<f64> = (0..n).map(|k| q.powi(k as i32)).collect();
+    let total: f64 = sizes.iter().sum();
+    let mut x = Vec::with_capacity(n + 1);
+    let mut acc = 0.0;
+    x.push(0.0);
+    for s in &sizes {
+        acc += s;
+        x.push(length * acc / total);
+    }
+    if let Some(last) = x.last_mut() {
+        *last = length;
+    }
+    Ok(x)
+}
+
+/// The structured box of `p`, with node sets `x0`, `x1`, `y0`, `y1`, `z0`, `z1` (nodes on each
+/// face), face sets of the same names, and the cell set `all`. Hex20 mid-edge nodes sit at the
+/// midpoints of their edges.
+pub fn structured_box(p: &BoxParams) -> Result<Mesh, MeshError> {
+    let axes = [
+        graded_coordinates(p.counts[0], p.size[0], p.grading[0])?,
+        graded_coordinates(p.counts[1], p.size[1], p.grading[1])?,
+        graded_coordinates(p.counts[2], p.size[2], p.grading[2])?,
+    ];
+    // Position of doubled grid index g along an axis: even = vertex, odd = midpoint.
+    let at = |axis: &[f64], g: usize| {
+        if g.is_multiple_of(2) {
+            axis[g / 2]
+        } else {
+            0.5 * (axis[g / 2] + axis[g / 2 + 1])
+        }
+    };
+    let mut ids: HashMap<[usize; 3], usize> = HashMap::new();
+    let mut mesh = Mesh::default();
+    let mut grid = Vec::new();
+    for k in 0..p.counts[2] {
+        for j in 0..p.counts[1] {
+            for i in 0..p.counts[0] {
+                let mut nodes = Vec::with_capacity(p.kind.nodes());
+                for r in p.kind.reference_nodes() {
+                    let g = [
+                        (2 * i as i64 + 1 + r[0] as i64) as usize,
+                        (2 * j as i64 + 1 + r[1] as i64) as usize,
+                        (2 * k as i64 + 1 + r[2] as i64) as usize,
+                    ];
+                    let id = *ids.entry(g).or_insert_with(|| {
+                        mesh.nodes.push([
+                            at(&axes[0], g[0]),
+                            at(&axes[1], g[1]),
+                            at(&axes[2], g[2]),
+                        ]);
+                        grid.push(g);
+                        mesh.nodes.len() - 1
+                    });
+                    nodes.push(id);
+                }
+                mesh.cells.push(Cell {
+                    kind: p.kind,
+                    nodes,
+                    material: p.material,
+                    ply_angle_deg: 0.0,
+                });
+            }
+        }
+    }
+    for (axis, name) in ["x", "y", "z"].iter().enumerate() {
+        for (end, suffix) in [(0, "0"), (2 * p.counts[axis], "1")] {
+            let set: Vec<usize> = (0..mesh.nodes.len())
+                .filter(|&n| grid[n][axis] == end)
+                .collect();
+            mesh.node_sets.insert(format!("{name}{suffix}"), set);
+        }
+    }
+    // Faces: (axis, side) → Abaqus face number (zero-based): ζ−: 0, ζ+: 1, η−: 2, ξ+: 3, η+: 4, ξ−: 5.
+    let face_of = [[5u8, 3], [2, 4], [0, 1]];
+    for (axis, name) in ["x", "y", "z"].iter().enumerate() {
+        for (side, suffix) in [(0usize, "0"), (1, "1")] {
+            let mut faces = Vec::new();
+            for (c, _) in mesh.cells.iter().enumerate() {
+                let idx = [
+                    c % p.counts[0],
+                    (c / p.counts[0]) % p.counts[1],
+                    c / (p.counts[0] * p.counts[1]),
+                ];
+                if (side == 0 && idx[axis] == 0) || (side == 1 && idx[axis] + 1 == p.counts[axis]) {
+                    faces.push((c, face_of[axis][side]));
+                }
+            }
+            mesh.face_sets.insert(format!("{name}{suffix}"), faces);
+        }
+    }
+    mesh.cell_sets
+        .insert("all".into(), (0..mesh.cells.len()).collect());
+    mesh.validate()?;
+    Ok(mesh)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn grading_hits_the_ratio_and_the_length() {
+        let x = graded_coordinates(5, 2.0, 0.25).unwrap();
+        assert_eq!(x.len(), 6);
+        assert_eq!(x[0], 0.0);
+        assert_eq!(x[5], 2.0);
+        let first = x[1] - x[0];
+        let last = x[5] - x[4];
+        assert!((last / first - 0.25).abs() < 1e-12);
+        assert!(graded_coordinates(0, 1.0, 1.0).is_err());
+        assert!(graded_coordinates(3, -1.0, 1.0).is_err());
+        assert!(graded_coordinates(3, 1.0, f64::NAN).is_err());
+    }
+
+    #[test]
+    fn box_counts_sets_and_volume() {
+        for kind in [ElementKind::Hex8, ElementKind::Hex20] {
+            let mut p = BoxParams::new(kind, [3, 2, 4], [3e-3, 2e-3, 1e-3]);
+            p.grading = [0.5, 1.0, 2.0];
+            let m = structured_box(&p).unwrap();
+            let corners = 4 * 3 * 5;
+            let expected = match kind {
+                ElementKind::Hex8 => corners,
+                ElementKind::Hex20 => corners + 3 * 3 * 5 + 4 * 2 * 5 + 4 * 3 * 4,
+            };
+            assert_eq!(m.nodes.len(), expected);
+            assert_eq!(m.cells.len(), 24);
+            // Volume exact to round-off.
+            assert!((m.volume().unwrap() - 6e-9).abs() < 1e-21);
+            for (name, axis, value) in [("x0", 0, 0.0), ("x1", 0, 3e-3), ("z1", 2, 1e-3)] {
+                let set = &m.node_sets[name];
+                assert!(!set.is_empty());
+                assert!(
+                    set.iter()
+                        .all(|&n| (m.nodes[n][axis] - value).abs() < 1e-18)
+                );
+            }
+            assert_eq!(m.face_sets["z0"].len(), 6);
+            assert_eq!(m.face_sets["x1"].len(), 8);
+        }
+    }
+}

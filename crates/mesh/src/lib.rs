@@ -1,0 +1,32 @@
+//! Hexahedral meshes for nonlin3d (thesis chapter 3).
+//!
+//! | item | what it is |
+//! |---|---|
+//! | [`Mesh`], [`Cell`] | nodes, Hex8/Hex20 cells (Abaqus/VTK order) with material and ply angle, named sets |
+//! | [`BoxParams`], [`structured_box`] | a graded structured box with the boundary sets x0 … z1 |
+//! | [`quality`], [`CellQuality`] | minimum scaled Jacobian and aspect ratio per cell |
+//! | [`vtu`] | VTU (VTK XML unstructured grid) and PVD series output |
+//!
+//! ```
+//! use nonlin3d_mesh::{BoxParams, structured_box, quality};
+//! use nonlin3d_element::ElementKind;
+//! let mesh = structured_box(&BoxParams::new(ElementKind::Hex20, [4, 3, 2], [4e-3, 3e-3, 1e-3])).unwrap();
+//! assert_eq!(mesh.cells.len(), 24);
+//! assert!(quality(&mesh).unwrap().iter().all(|q| (q.min_scaled_jacobian - 1.0).abs() < 1e-12));
+//! ```
+#![deny(missing_docs)]
+#![cfg_attr(
+    not(test),
+    warn(clippy::unwrap_used, clippy::expect_used, clippy::panic)
+)]
+
+mod error;
+mod generate;
+mod model;
+mod quality;
+pub mod vtu;
+
+pub use error::MeshError;
+pub use generate::{BoxParams, graded_coordinates, structured_box};
+pub use model::{Cell, Mesh};
+pub use quality::{CellQuality, quality};
