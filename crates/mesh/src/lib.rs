@@ -4,6 +4,7 @@
 //! |---|---|
 //! | [`Mesh`], [`Cell`] | nodes, Hex8/Hex20 cells (Abaqus/VTK order) with material and ply angle, named sets |
 //! | [`BoxParams`], [`structured_box`] | a graded structured box with the boundary sets x0 … z1 |
+//! | [`EmbeddedParams`], [`embedded_delamination`] | the embedded (elliptic) delamination model, Fig. 3.1.1 / 3.2.1, eq. 3.1.1–3.1.2 |
 //! | [`quality`], [`CellQuality`] | minimum scaled Jacobian and aspect ratio per cell |
 //! | [`vtu`] | VTU (VTK XML unstructured grid) and PVD series output |
 //!
@@ -20,12 +21,14 @@
     warn(clippy::unwrap_used, clippy::expect_used, clippy::panic)
 )]
 
+mod embedded;
 mod error;
 mod generate;
 mod model;
 mod quality;
 pub mod vtu;
 
+pub use embedded::{EllipticMap, EmbeddedParams, embedded_delamination};
 pub use error::MeshError;
 pub use generate::{BoxParams, graded_coordinates, structured_box};
 pub use model::{Cell, Mesh};

@@ -1,0 +1,448 @@
+//! The embedded delamination model of thesis Fig. 3.1.1 and Fig. 3.2.1 (§3.1–3.2).
+//!
+//! Quarter model 0 ≤ x, y ≤ W, base laminate 0 ≤ z ≤ H, sublaminate H ≤ z ≤ H + h, delamination
+//! on z = H inside the ellipse (x/a)² + (y/b)² < 1. Built as the thesis builds it, with one
+//! change at the axis:
+//!
+//! 1. A 2-D quarter section: circular rings at radii ρ graded towards the front ρ = a, each ring
+//!    divided into `slices` arcs; the thesis collapsed the innermost elements onto the axis (nodes
+//!    shifted to a 1e-9 m arc, degenerate elements). Here the inside of the first ring is an
+//!    O-grid: a square core [0, ρ₀/2]² of (slices/2)² cells and one ring of cells joining its
+//!    boundary to the circle ρ₀: no degenerate cell (docs/MESH.md compares the quality).
+//! 2. Rings beyond `transition`·a blend linearly into the square boundary x = W or y = W
+//!    (Fig. 3.1.1c).
+//! 3. The elliptic map (eq. 3.1.1, conformal; or eq. 3.1.2 with parameter r) turns the front
+//!    circle of radius a into the ellipse with semi-axes a (x) and b (y). The thesis applied it to
+//!    every node, which bends the outer boundary; here its stretch fades to zero across the blended
+//!    rings, so the outer boundary stays the square while the region around the front keeps the
+//!    exact map (and its orthogonality).
+//! 4. The section is swept through the thickness stations; Hex20 mid-edge nodes sit at the
+//!    midpoints of their corners (the thesis's re-centring after the map).
+//! 5. Corner nodes on z = H strictly inside the front are duplicated (lower copy for base cells,
+//!    upper for sublaminate cells); mid-edge nodes are keyed by their two corner nodes, so exactly
+//!    the mid-edge nodes between duplicated corners, or between a duplicated corner and the
+//!    front, are duplicated too. Everything else is shared.
+
+use crate::MeshError;
+use crate::generate::graded_coordinates;
+use crate::model::{Cell, Mesh};
+use nonlin3d_element::ElementKind;
+use std::collections::HashMap;
+
+/// Which elliptic map turns the front circle into the ellipse.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum EllipticMap {
+    /// Eq. 3.1.1: y′ = y·√(1 + (b² − a²)/(x² + y²)) (x and y swapped when a > b). Conformal.
+    Conformal,
+    /// Eq. 3.1.2 with stretch factor F = ρ/r for ρ ≤ r, 1 beyond; `r` a little below a keeps the
+    /// front region conformal and spreads the refinement more evenly.
+    Modified {
+        /// The radius r of eq. 3.1.2 (m), 0 < r.
+        r: f64,
+    },
+}
+
+/// Parameters of [`embedded_delamination`] (SI units).
+#[derive(Debug, Clone, PartialEq)]
+pub struct EmbeddedParams {
+    /// Hex20 (the thesis's) or Hex8.
+    pub kind: ElementKind,
+    /// Delamination semi-axis along x (load direction), m.
+    pub a: f64,
+    /// Delamination semi-axis along y, m.
+    pub b: f64,
+    /// Sublaminate thickness h, m.
+    pub h: f64,
+    /// Base laminate thickness H, m.
+    pub base: f64,
+    /// Half-width W of the square specimen (quarter model 0 ≤ x, y ≤ W), m.
+    pub w: f64,
+    /// Arcs per quarter ring (thesis: 4, 8, 12); even.
+    pub slices: usize,
+    /// Radial elements between the core and the front.
+    pub radial_inside: usize,
+    /// Radial elements between the front and the square boundary.
+    pub radial_outside: usize,
+    /// Ratio of the element next to the front to the element farthest from it, on each side
+    /// (< 1 refines towards the front).
+    pub front_grading: f64,
+    /// Core (first ring) radius as a fraction of a.
+    pub core_fraction: f64,
+    /// Rings out to `transition`·a stay circular; beyond they blend into the square.
+    pub transition: f64,
+    /// Elements through the sublaminate.
+    pub sub_layers: usize,
+    /// Elements through the base laminate (graded towards z = H).
+    pub base_layers: usize,
+    /// Ratio of the base element at z = H to the one at z = 0.
+    pub base_grading: f64,
+    /// The elliptic map.
+    pub map: EllipticMap,
+}
+
+impl EmbeddedParams {
+    /// The thesis's reference case (§5.1): 30 mm circular delamination (a = b = 15 mm),
+    /// h = 0.4 mm, H = 4 mm, W = 50 mm, Hex20, 8 slices.
+    pub fn thesis_reference() -> Self {
+        Self {
+            kind: ElementKind::Hex20,
+            a: 15e-3,
+            b: 15e-3,
+            h: 0.4e-3,
+            base: 4e-3,
+            w: 50e-3,
+            slices: 8,
+            radial_inside: 6,
+            radial_outside: 6,
+            front_grading: 0.25,
+            core_fraction: 0.3,
+            transition: 1.4,
+            sub_layers: 1,
+            base_layers: 3,
+            base_grading: 0.25,
+            map: EllipticMap::Conformal,
+        }
+    }
+
+    fn check(&self) -> Result<(), MeshError> {
+        let bad = |name: &'static str, reason: String| Err(MeshError::Parameter { name, reason });
+        for (name, v) in [
+            ("a", self.a),
+            ("b", self.b),
+            ("h", self.h),
+            ("base", self.base),
+            ("w", self.w),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                return bad(name, format!("{v} must be positive and finite"));
+            }
+        }
+        if self.slices < 2 || self.slices % 2 == 1 {
+            return bad("slices", format!("{} must be even and ≥ 2", self.slices));
+        }
+        for (name, n) in [
+            ("radial_inside", self.radial_inside),
+            ("radial_outside", self.radial_outside),
+            ("sub_layers", self.sub_layers),
+            ("base_layers", self.base_layers),
+        ] {
+            if n == 0 {
+                return bad(name, "at least one element".into());
+            }
+        }
+        if !(self.core_fraction > 0.0 && self.core_fraction < 1.0) {
+            return bad(
+                "core_fraction",
+                format!("{} must lie in (0, 1)", self.core_fraction),
+            );
+        }
+        let big = self.a.max(self.b);
+        if !(self.transition >= 1.0 && self.transition * big < self.w) {
+            return bad(
+                "transition",
+                format!(
+                    "need 1 ≤ transition and transition·max(a, b) < W ({} · {big} vs {})",
+                    self.transition, self.w
+                ),
+            );
+        }
+        if let EllipticMap::Modified { r } = self.map {
+            if !(r.is_finite() && r > 0.0) {
+                return bad("map.r", format!("{r} must be positive"));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Radial stations: core radius … a (graded finer towards a), a … W (finer at a), as radii of
+/// the undeformed circular mesh (the outer ones become blend parameters towards the square).
+fn radial_stations(p: &EmbeddedParams) -> Result<(Vec<f64>, usize), MeshError> {
+    let rc = p.core_fraction * p.a;
+    let inside = graded_coordinates(p.radial_inside, p.a - rc, p.front_grading)?;
+    let outside = graded_coordinates(p.radial_outside, p.w - p.a, 1.0 / p.front_grading)?;
+    let mut rho: Vec<f64> = inside.iter().map(|d| rc + d).collect();
+    let front = rho.len() - 1;
+    rho.extend(outside.iter().skip(1).map(|d| p.a + d));
+    Ok((rho, front))
+}
+
+/// The elliptic map of a point of the circular mesh (eq. 3.1.1 / 3.1.2), scaled by `fade`.
+fn elliptic(p: &EmbeddedParams, x: f64, y: f64, fade: f64) -> (f64, f64) {
+    let (a, b) = (p.a, p.b);
+    if a == b {
+        return (x, y);
+    }
+    // Stretch the coordinate along the long axis; eq. 3.1.1 is written for b > a.
+    let (long, short) = if b > a { (b, a) } else { (a, b) };
+    let (s, t) = if b > a { (x, y) } else { (y, x) };
+    let rho2 = s * s + t * t;
+    let factor = if rho2 > 0.0 {
+        let root = (1.0 + (long * long - short * short) / rho2).sqrt();
+        match p.map {
+            EllipticMap::Conformal => root,
+            EllipticMap::Modified { r } => {
+                let f = (rho2.sqrt() / r).min(1.0);
+                root * f - f + 1.0
+            }
+        }
+    } else {
+        long / short
+    };
+    let t2 = t * (1.0 + fade * (factor - 1.0));
+    if b > a { (s, t2) } else { (t2, s) }
+}
+
+/// The embedded delamination mesh. Node sets: `x0`, `y0`, `z0`, `x1` (x = W), `y1` (y = W),
+/// `center_top` (the node at (0, 0, H + h), where the thesis applies its perturbation load),
+/// `crack_upper` and `crack_lower` (paired crack-face nodes, same order), `front` (nodes on the
+/// delamination front line at z = H). Cell sets: `base`, `sublaminate`, `all`.
+pub fn embedded_delamination(p: &EmbeddedParams) -> Result<Mesh, MeshError> {
+    p.check()?;
+    let k = p.slices / 2;
+    let (rho, front) = radial_stations(p)?;
+    let rc = rho[0];
+    let angle = |q: usize| std::f64::consts::FRAC_PI_2 * q as f64 / p.slices as f64;
+    // --- 2-D vertices: core (k+1)² grid, then rings 1.. with slices+1 nodes each.
+    let mut v2: Vec<[f64; 2]> = Vec::new();
+    let mut inside: Vec<bool> = Vec::new();
+    // Square core [0, c]² with c = ρ₀/2 (its corner at 0.71 ρ₀): a k × k grid; one ring of
+    // cells joins its boundary to the first circle ρ₀, so no cell has a near-straight corner.
+    let c = 0.5 * rc;
+    let mut core_id = vec![vec![0usize; k + 1]; k + 1];
+    for j in 0..=k {
+        for i in 0..=k {
+            core_id[j][i] = v2.len();
+            v2.push([c * i as f64 / k as f64, c * j as f64 / k as f64]);
+            inside.push(true);
+        }
+    }
+    // Node q of the core boundary, counter-clockwise from the x axis: q ≤ k on x = c, q ≥ k on y = c.
+    let core_boundary = |q: usize| {
+        if q <= k {
+            core_id[q][k]
+        } else {
+            core_id[k][2 * k - q]
+        }
+    };
+    // Ring 0 is the core boundary; ring m ≥ 1 the circle (or blend) at radial station m − 1.
+    let mut ring_id = vec![vec![0usize; p.slices + 1]; rho.len() + 1];
+    for q in 0..=p.slices {
+        ring_id[0][q] = core_boundary(q);
+    }
+    let wt = p.transition * p.a;
+    for (m0, &r) in rho.iter().enumerate() {
+        let m = m0 + 1;
+        for q in 0..=p.slices {
+            let phi = angle(q);
+            let circle = [r * phi.cos(), r * phi.sin()];
+            let pt = if r <= wt {
+                circle
+            } else {
+                let beta = (r - wt) / (p.w - wt);
+                let sq = if phi <= std::f64::consts::FRAC_PI_4 {
+                    [p.w, p.w * phi.tan()]
+                } else {
+                    [p.w / phi.tan(), p.w]
+                };
+                let sq = if q == p.slices { [0.0, p.w] } else { sq };
+                [
+                    (1.0 - beta) * circle[0] + beta * sq[0],
+                    (1.0 - beta) * circle[1] + beta * sq[1],
+                ]
+            };
+            ring_id[m][q] = v2.len();
+            v2.push(pt);
+            inside.push(m0 < front);
+        }
+    }
+    // Fade of the elliptic stretch: 1 up to the transition ring, 0 on the square boundary.
+    let fade: Vec<f64> = v2
+        .iter()
+        .map(|pt| {
+            let r = (pt[0] * pt[0] + pt[1] * pt[1]).sqrt();
+            let edge = pt[0].max(pt[1]);
+            if r <= wt {
+                1.0
+            } else {
+                ((p.w - edge) / (p.w - wt)).clamp(0.0, 1.0)
+            }
+        })
+        .collect();
+    let mapped: Vec<[f64; 2]> = v2
+        .iter()
+        .zip(&fade)
+        .map(|(pt, &f)| {
+            let (x, y) = elliptic(p, pt[0], pt[1], f);
+            [x, y]
+        })
+        .collect();
+    // 2-D quads (counter-clockwise seen from +z): core, then rings.
+    let mut quads: Vec<[usize; 4]> = Vec::new();
+    for j in 0..k {
+        for i in 0..k {
+            quads.push([
+                core_id[j][i],
+                core_id[j][i + 1],
+                core_id[j + 1][i + 1],
+                core_id[j + 1][i],
+            ]);
+        }
+    }
+    for m in 0..rho.len() {
+        for q in 0..p.slices {
+            quads.push([
+                ring_id[m][q],
+                ring_id[m + 1][q],
+                ring_id[m + 1][q + 1],
+                ring_id[m][q + 1],
+            ]);
+        }
+    }
+    // --- z stations: base graded towards H, sublaminate uniform.
+    let zb = graded_coordinates(p.base_layers, p.base, p.base_grading)?;
+    let zs = graded_coordinates(p.sub_layers, p.h, 1.0)?;
+    let mut z: Vec<f64> = zb.clone();
+    z.extend(zs.iter().skip(1).map(|d| p.base + d));
+    let zh = p.base_layers;
+    // --- 3-D corner nodes: (2-D vertex, z station); lower copies on z = H inside the front.
+    let mut mesh = Mesh::default();
+    let nv = v2.len();
+    let mut corner = vec![vec![0usize; nv]; z.len()];
+    let mut lower = vec![usize::MAX; nv];
+    for (l, &zl) in z.iter().enumerate() {
+        for v in 0..nv {
+            corner[l][v] = mesh.nodes.len();
+            mesh.nodes.push([mapped[v][0], mapped[v][1], zl]);
+            if l == zh && inside[v] {
+                lower[v] = mesh.nodes.len();
+                mesh.nodes.push([mapped[v][0], mapped[v][1], zl]);
+            }
+        }
+    }
+    let node_at = |l: usize, v: usize, below: bool| {
+        if l == zh && below && inside[v] {
+            lower[v]
+        } else {
+            corner[l][v]
+        }
+    };
+    // --- cells; mid-edge nodes keyed by their corner pair.
+    let mut mid: HashMap<(usize, usize), usize> = HashMap::new();
+    let mut base_cells = Vec::new();
+    let mut sub_cells = Vec::new();
+    for l in 0..z.len() - 1 {
+        let below_plane = l < zh; // cells under z = H use the lower copies on it
+        for qd in &quads {
+            let bottom: Vec<usize> = qd.iter().map(|&v| node_at(l, v, below_plane)).collect();
+            let top: Vec<usize> = qd.iter().map(|&v| node_at(l + 1, v, below_plane)).collect();
+            let mut nodes: Vec<usize> = bottom.iter().chain(&top).copied().collect();
+            if p.kind == ElementKind::Hex20 {
+                for &(a, b) in nonlin3d_element::HEX20_EDGES.iter() {
+                    let (na, nb) = (nodes[a], nodes[b]);
+                    let key = (na.min(nb), na.max(nb));
+                    let id = *mid.entry(key).or_insert_with(|| {
+                        let (pa, pb) = (mesh.nodes[na], mesh.nodes[nb]);
+                        mesh.nodes.push([
+                            0.5 * (pa[0] + pb[0]),
+                            0.5 * (pa[1] + pb[1]),
+                            0.5 * (pa[2] + pb[2]),
+                        ]);
+                        mesh.nodes.len() - 1
+                    });
+                    nodes.push(id);
+                }
+            }
+            let c = mesh.cells.len();
+            mesh.cells.push(Cell {
+                kind: p.kind,
+                nodes,
+                material: 0,
+                ply_angle_deg: 0.0,
+            });
+            if below_plane {
+                base_cells.push(c)
+            } else {
+                sub_cells.push(c)
+            }
+        }
+    }
+    // --- sets.
+    let tol = 1e-9 * p.w;
+    let select = |f: &dyn Fn(&[f64; 3]) -> bool| -> Vec<usize> {
+        (0..mesh.nodes.len())
+            .filter(|&n| f(&mesh.nodes[n]))
+            .collect()
+    };
+    let sets = [
+        ("x0", select(&|x| x[0].abs() < tol)),
+        ("y0", select(&|x| x[1].abs() < tol)),
+        ("z0", select(&|x| x[2].abs() < tol)),
+        ("x1", select(&|x| (x[0] - p.w).abs() < tol)),
+        ("y1", select(&|x| (x[1] - p.w).abs() < tol)),
+    ];
+    for (name, s) in sets {
+        mesh.node_sets.insert(name.into(), s);
+    }
+    mesh.node_sets.insert(
+        "center_top".into(),
+        vec![corner[z.len() - 1][core_id[0][0]]],
+    );
+    // Crack faces: corner pairs, then mid-edge pairs (key with upper corners ↔ lower corners).
+    let (mut up, mut lo) = (Vec::new(), Vec::new());
+    for v in 0..nv {
+        if inside[v] {
+            up.push(corner[zh][v]);
+            lo.push(lower[v]);
+        }
+    }
+    if p.kind == ElementKind::Hex20 {
+        let upper_of: HashMap<usize, usize> = (0..nv)
+            .filter(|&v| inside[v])
+            .map(|v| (lower[v], corner[zh][v]))
+            .collect();
+        let mut pairs: Vec<(usize, usize)> = Vec::new();
+        for (&(na, nb), &id) in &mid {
+            // A mid-edge node on the lower crack face: both corners on z = H, at least one a
+            // lower copy, the other a lower copy or a front node.
+            let (la, lb) = (upper_of.get(&na), upper_of.get(&nb));
+            if la.is_some() || lb.is_some() {
+                let ua = la.copied().unwrap_or(na);
+                let ub = lb.copied().unwrap_or(nb);
+                if let Some(&uid) = mid.get(&(ua.min(ub), ua.max(ub))) {
+                    pairs.push((uid, id));
+                }
+            }
+        }
+        pairs.sort_unstable();
+        for (u, l) in pairs {
+            up.push(u);
+            lo.push(l);
+        }
+    }
+    mesh.node_sets.insert("crack_upper".into(), up);
+    mesh.node_sets.insert("crack_lower".into(), lo);
+    let front_ring = front + 1;
+    let mut front_nodes: Vec<usize> = (0..=p.slices)
+        .map(|q| corner[zh][ring_id[front_ring][q]])
+        .collect();
+    if p.kind == ElementKind::Hex20 {
+        for q in 0..p.slices {
+            let (na, nb) = (
+                corner[zh][ring_id[front_ring][q]],
+                corner[zh][ring_id[front_ring][q + 1]],
+            );
+            if let Some(&id) = mid.get(&(na.min(nb), na.max(nb))) {
+                front_nodes.push(id);
+            }
+        }
+    }
+    mesh.node_sets.insert("front".into(), front_nodes);
+    mesh.cell_sets.insert("base".into(), base_cells);
+    mesh.cell_sets.insert("sublaminate".into(), sub_cells);
+    mesh.cell_sets
+        .insert("all".into(), (0..mesh.cells.len()).collect());
+    mesh.validate()?;
+    mesh.check_geometry()?;
+    Ok(mesh)
+}
