@@ -146,10 +146,10 @@ impl EmbeddedParams {
                 ),
             );
         }
-        if let EllipticMap::Modified { r } = self.map {
-            if !(r.is_finite() && r > 0.0) {
-                return bad("map.r", format!("{r} must be positive"));
-            }
+        if let EllipticMap::Modified { r } = self.map
+            && !(r.is_finite() && r > 0.0)
+        {
+            return bad("map.r", format!("{r} must be positive"));
         }
         Ok(())
     }
