@@ -24,6 +24,7 @@
 //!    front, are duplicated too. Everything else is shared.
 
 use crate::MeshError;
+use crate::front::{Front, FrontPoint};
 use crate::generate::graded_coordinates;
 use crate::model::{Cell, Mesh};
 use nonlin3d_element::ElementKind;
@@ -198,6 +199,11 @@ fn elliptic(p: &EmbeddedParams, x: f64, y: f64, fade: f64) -> (f64, f64) {
 /// `crack_upper` and `crack_lower` (paired crack-face nodes, same order), `front` (nodes on the
 /// delamination front line at z = H). Cell sets: `base`, `sublaminate`, `all`.
 pub fn embedded_delamination(p: &EmbeddedParams) -> Result<Mesh, MeshError> {
+    embedded_delamination_with_front(p).map(|(mesh, _)| mesh)
+}
+
+/// [`embedded_delamination`] together with its [`Front`] descriptor for VCCT.
+pub fn embedded_delamination_with_front(p: &EmbeddedParams) -> Result<(Mesh, Front), MeshError> {
     p.check()?;
     let k = p.slices / 2;
     let (rho, front) = radial_stations(p)?;
@@ -438,11 +444,100 @@ pub fn embedded_delamination(p: &EmbeddedParams) -> Result<Mesh, MeshError> {
         }
     }
     mesh.node_sets.insert("front".into(), front_nodes);
+    // --- front descriptor, from the y axis (q = slices) to the x axis (q = 0).
+    let behind = front_ring - 1;
+    let ahead = front_ring + 1;
+    let midside = |na: usize, nb: usize| mid.get(&(na.min(nb), na.max(nb))).copied();
+    let lower_or = |v: usize| if inside[v] { lower[v] } else { corner[zh][v] };
+    let mut cells_of: HashMap<usize, Vec<usize>> = HashMap::new();
+    for &c in &sub_cells {
+        for &n in &mesh.cells[c].nodes {
+            cells_of.entry(n).or_default().push(c);
+        }
+    }
+    let touching = |a: usize, b: Option<usize>| {
+        let mut v: Vec<usize> = cells_of.get(&a).cloned().unwrap_or_default();
+        if let Some(b) = b {
+            v.extend(cells_of.get(&b).cloned().unwrap_or_default());
+        }
+        // Only cells in the first sublaminate layer touch z = H.
+        v.sort_unstable();
+        v.dedup();
+        v
+    };
+    let mut points = Vec::new();
+    let missing = |what: &str| MeshError::Parameter {
+        name: "front",
+        reason: format!("internal: {what} node not found"),
+    };
+    for q in (0..=p.slices).rev() {
+        let (cf, cb, ca) = (
+            ring_id[front_ring][q],
+            ring_id[behind][q],
+            ring_id[ahead][q],
+        );
+        let c = corner[zh][cf];
+        let (au, al) = (corner[zh][cb], lower_or(cb));
+        let (bu, bl, d) = if p.kind == ElementKind::Hex20 {
+            (
+                Some(midside(c, au).ok_or_else(|| missing("b"))?),
+                Some(midside(c, al).ok_or_else(|| missing("b′"))?),
+                Some(midside(c, corner[zh][ca]).ok_or_else(|| missing("d"))?),
+            )
+        } else {
+            (None, None, None)
+        };
+        points.push(FrontPoint {
+            c,
+            corner: true,
+            a_upper: au,
+            a_lower: al,
+            b_upper: bu,
+            b_lower: bl,
+            d,
+            cells_above: touching(c, d),
+            delta_a: 0.0,
+            x: 0.0,
+            y: 0.0,
+            tangent: [0.0; 2],
+            normal: [0.0; 2],
+            theta_deg: 0.0,
+            s: 0.0,
+        });
+        if p.kind == ElementKind::Hex20 && q > 0 {
+            // The mid-edge front node between q and q − 1, paired with the mid-edge nodes of the
+            // ring behind.
+            let (cf2, cb2) = (ring_id[front_ring][q - 1], ring_id[behind][q - 1]);
+            let cm = midside(c, corner[zh][cf2]).ok_or_else(|| missing("mid-edge front"))?;
+            let au =
+                midside(corner[zh][cb], corner[zh][cb2]).ok_or_else(|| missing("a (mid-edge)"))?;
+            let al =
+                midside(lower_or(cb), lower_or(cb2)).ok_or_else(|| missing("a′ (mid-edge)"))?;
+            points.push(FrontPoint {
+                c: cm,
+                corner: false,
+                a_upper: au,
+                a_lower: al,
+                b_upper: None,
+                b_lower: None,
+                d: None,
+                cells_above: touching(cm, None),
+                delta_a: 0.0,
+                x: 0.0,
+                y: 0.0,
+                tangent: [0.0; 2],
+                normal: [0.0; 2],
+                theta_deg: 0.0,
+                s: 0.0,
+            });
+        }
+    }
+    let front_descriptor = Front { points }.finish(&mesh.nodes);
     mesh.cell_sets.insert("base".into(), base_cells);
     mesh.cell_sets.insert("sublaminate".into(), sub_cells);
     mesh.cell_sets
         .insert("all".into(), (0..mesh.cells.len()).collect());
     mesh.validate()?;
     mesh.check_geometry()?;
-    Ok(mesh)
+    Ok((mesh, front_descriptor))
 }

@@ -5,6 +5,7 @@
 //! | [`Mesh`], [`Cell`] | nodes, Hex8/Hex20 cells (Abaqus/VTK order) with material and ply angle, named sets |
 //! | [`BoxParams`], [`structured_box`] | a graded structured box with the boundary sets x0 … z1 |
 //! | [`EmbeddedParams`], [`embedded_delamination`] | the embedded (elliptic) delamination model, Fig. 3.1.1 / 3.2.1, eq. 3.1.1–3.1.2 |
+//! | [`Front`], [`FrontPoint`] | delamination-front descriptor for VCCT (§2.8, Fig. 2.8.1): c, a/a′, b/b′, d, cells, Δa, θ, S |
 //! | [`quality`], [`CellQuality`] | minimum scaled Jacobian and aspect ratio per cell |
 //! | [`vtu`] | VTU (VTK XML unstructured grid) and PVD series output |
 //!
@@ -23,13 +24,17 @@
 
 mod embedded;
 mod error;
+mod front;
 mod generate;
 mod model;
 mod quality;
 pub mod vtu;
 
-pub use embedded::{EllipticMap, EmbeddedParams, embedded_delamination};
+pub use embedded::{
+    EllipticMap, EmbeddedParams, embedded_delamination, embedded_delamination_with_front,
+};
 pub use error::MeshError;
+pub use front::{Front, FrontPoint};
 pub use generate::{BoxParams, graded_coordinates, structured_box};
 pub use model::{Cell, Mesh};
 pub use quality::{CellQuality, quality};

@@ -235,3 +235,89 @@ fn bad_parameters_are_named() {
         Err(MeshError::Parameter { name: "h", .. })
     ));
 }
+
+#[test]
+fn front_descriptor_pairs_and_frames() {
+    use nonlin3d_mesh::embedded_delamination_with_front;
+    for kind in [ElementKind::Hex20, ElementKind::Hex8] {
+        let (a, b): (f64, f64) = (15e-3, 30e-3);
+        let p = EmbeddedParams {
+            kind,
+            map: EllipticMap::Modified { r: 14e-3 },
+            ..params(8, a, b)
+        };
+        let (m, front) = embedded_delamination_with_front(&p).unwrap();
+        let pts = &front.points;
+        let expected = if kind == ElementKind::Hex20 { 17 } else { 9 };
+        assert_eq!(pts.len(), expected, "{kind:?}");
+        let (up, lo) = (&m.node_sets["crack_upper"], &m.node_sets["crack_lower"]);
+        let sub: std::collections::HashSet<usize> =
+            m.cell_sets["sublaminate"].iter().copied().collect();
+        assert_eq!(pts[0].s, 0.0);
+        assert_eq!(pts[0].theta_deg, 0.0);
+        assert!(pts[0].x.abs() < 1e-15 && (pts[0].y - b).abs() < 1e-12);
+        assert!((pts.last().unwrap().theta_deg + 90.0).abs() < 1e-12);
+        for (i, pt) in pts.iter().enumerate() {
+            let c = m.nodes[pt.c];
+            if i > 0 {
+                assert!(pt.s > pts[i - 1].s);
+            }
+            // a and a′ coincide, one on each crack face, Δa behind the front (inside the ellipse).
+            assert_eq!(m.nodes[pt.a_upper], m.nodes[pt.a_lower]);
+            assert!(up.contains(&pt.a_upper) && lo.contains(&pt.a_lower));
+            assert!(pt.delta_a > 0.0 && pt.delta_a < 0.5 * a);
+            let grad = [c[0] / (a * a), c[1] / (b * b)];
+            assert!(
+                pt.normal[0] * grad[0] + pt.normal[1] * grad[1] > 0.0,
+                "normal must point outward at {i}"
+            );
+            // The tangent is normal to the ellipse's gradient (the front lies on it): the
+            // central difference over neighbours 1/16 of a quarter apart is within 1°.
+            let cos = (pt.tangent[0] * grad[0] + pt.tangent[1] * grad[1]) / grad[0].hypot(grad[1]);
+            assert!(
+                cos.abs() < (1.0f64).to_radians().sin(),
+                "tangent off by {}° at {i}",
+                cos.abs().asin().to_degrees()
+            );
+            assert!(!pt.cells_above.is_empty() && pt.cells_above.iter().all(|c| sub.contains(c)));
+            assert!(
+                pt.cells_above
+                    .iter()
+                    .all(|&cell| m.cells[cell].nodes.contains(&pt.c)
+                        || pt.d.is_some_and(|d| m.cells[cell].nodes.contains(&d)))
+            );
+            if kind == ElementKind::Hex20 && pt.corner {
+                // b, b′ halfway to a; d halfway to the next ring ahead.
+                let (bu, bl, d) = (pt.b_upper.unwrap(), pt.b_lower.unwrap(), pt.d.unwrap());
+                assert_eq!(m.nodes[bu], m.nodes[bl]);
+                let half = m.nodes[pt.a_upper]
+                    .iter()
+                    .zip(&c)
+                    .map(|(p, q)| 0.5 * (p + q))
+                    .collect::<Vec<_>>();
+                assert!(
+                    (m.nodes[bu][0] - half[0]).abs() < 1e-15
+                        && (m.nodes[bu][1] - half[1]).abs() < 1e-15
+                );
+                let dn = m.nodes[d];
+                assert!(
+                    (dn[0] / a).powi(2) + (dn[1] / b).powi(2) > 1.0
+                        && (dn[2] - p.base).abs() < 1e-15
+                );
+            } else {
+                assert!(pt.b_upper.is_none() && pt.d.is_none());
+            }
+        }
+        // S at the end is the length of the front polyline.
+        let f = front_corners(&m, 8);
+        let length: f64 = f
+            .windows(2)
+            .map(|w| (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]))
+            .sum();
+        if kind == ElementKind::Hex8 {
+            assert!((pts.last().unwrap().s - length).abs() < 1e-15);
+        } else {
+            assert!(pts.last().unwrap().s >= length * (1.0 - 1e-12));
+        }
+    }
+}

@@ -1,0 +1,87 @@
+//! The delamination-front descriptor the virtual crack closure technique needs (thesis §2.8,
+//! Fig. 2.8.1, eq. 2.8.1–2.8.2).
+
+/// One node c_i on the delamination front with the nodes VCCT pairs with it.
+///
+/// Hex20 (Fig. 2.8.1): forces at c_i pair with the opening between a_i (upper face) and a′_i
+/// (lower face) one element behind the front (distance Δa); on corner lines also the force at
+/// d_i (the mid-edge node Δa/2 ahead) pairs with the opening between b_i and b′_i (Δa/2
+/// behind). Hex8 fronts have only c and a.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FrontPoint {
+    /// The front node (shared by both faces).
+    pub c: usize,
+    /// Whether c is an element corner (false: a mid-edge node).
+    pub corner: bool,
+    /// Upper-face node one element behind the front.
+    pub a_upper: usize,
+    /// Lower-face node one element behind the front.
+    pub a_lower: usize,
+    /// Upper-face node Δa/2 behind (Hex20 corner lines).
+    pub b_upper: Option<usize>,
+    /// Lower-face node Δa/2 behind (Hex20 corner lines).
+    pub b_lower: Option<usize>,
+    /// Node Δa/2 ahead of the front (Hex20 corner lines).
+    pub d: Option<usize>,
+    /// Cells above the delamination plane that contain c (or d): their internal forces give the
+    /// forces transmitted across the plane at c and d.
+    pub cells_above: Vec<usize>,
+    /// Δa: distance from c to a.
+    pub delta_a: f64,
+    /// Position (x, y) of c.
+    pub x: f64,
+    /// y coordinate of c.
+    pub y: f64,
+    /// Unit tangent x′ (direction of increasing S).
+    pub tangent: [f64; 2],
+    /// Unit outward normal y′ in the delamination plane: (−sin θ, cos θ).
+    pub normal: [f64; 2],
+    /// θ: angle of x′ from x in degrees (0° where the front meets the y axis, −90° on the x axis).
+    pub theta_deg: f64,
+    /// Perimeter coordinate S (m), 0 on the y axis, growing towards the x axis.
+    pub s: f64,
+}
+
+/// The front, ordered by increasing S.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Front {
+    /// Front nodes from the y axis (S = 0) to the x axis.
+    pub points: Vec<FrontPoint>,
+}
+
+impl Front {
+    /// Fills tangent, normal, θ, S and Δa from node positions, for points already in order
+    /// of increasing S. Interior tangents are central differences over the neighbouring front
+    /// nodes (second order); the end points lie on the symmetry planes of the quarter model,
+    /// which the front crosses at right angles, so their tangents are exact: θ = 0° on the
+    /// y axis, −90° on the x axis.
+    pub(crate) fn finish(mut self, nodes: &[[f64; 3]]) -> Self {
+        let n = self.points.len();
+        let pos: Vec<[f64; 3]> = self.points.iter().map(|p| nodes[p.c]).collect();
+        let mut s = 0.0;
+        for i in 0..n {
+            if i > 0 {
+                s += (pos[i][0] - pos[i - 1][0]).hypot(pos[i][1] - pos[i - 1][1]);
+            }
+            let t = if i == 0 {
+                [1.0, 0.0]
+            } else if i + 1 == n {
+                [0.0, -1.0]
+            } else {
+                let t = [pos[i + 1][0] - pos[i - 1][0], pos[i + 1][1] - pos[i - 1][1]];
+                let len = t[0].hypot(t[1]).max(f64::MIN_POSITIVE);
+                [t[0] / len, t[1] / len]
+            };
+            let p = &mut self.points[i];
+            let a = nodes[p.a_upper];
+            p.delta_a = (a[0] - pos[i][0]).hypot(a[1] - pos[i][1]);
+            p.x = pos[i][0];
+            p.y = pos[i][1];
+            p.tangent = t;
+            p.normal = [-t[1], t[0]];
+            p.theta_deg = t[1].atan2(t[0]).to_degrees();
+            p.s = s;
+        }
+        self
+    }
+}
