@@ -321,3 +321,14 @@ fn front_descriptor_pairs_and_frames() {
         }
     }
 }
+
+#[test]
+fn default_refinement_reproduces_table_2_model_sizes() {
+    // Table 2: models 3, 4, 5 (4, 8, 12 slices) have 1 129, 2 085 and 3 041 nodes; all six
+    // models lie between 1 129 and 6 325 nodes. Within 20 % of the same-slice model.
+    for (slices, thesis_nodes) in [(4, 1129.0), (8, 2085.0), (12, 3041.0)] {
+        let m = embedded_delamination(&params(slices, 15e-3, 15e-3)).unwrap();
+        let ratio = m.nodes.len() as f64 / thesis_nodes;
+        assert!((0.8..1.2).contains(&ratio), "{slices} slices: {} nodes vs {thesis_nodes}", m.nodes.len());
+    }
+}
