@@ -50,6 +50,28 @@ pub struct Front {
 }
 
 impl Front {
+    /// Fills the fields for a straight front with unit tangent `tangent` (all points share it).
+    pub(crate) fn finish_straight(mut self, nodes: &[[f64; 3]], tangent: [f64; 2]) -> Self {
+        let mut s = 0.0;
+        for i in 0..self.points.len() {
+            let c = nodes[self.points[i].c];
+            if i > 0 {
+                let prev = nodes[self.points[i - 1].c];
+                s += (c[0] - prev[0]).hypot(c[1] - prev[1]);
+            }
+            let p = &mut self.points[i];
+            let a = nodes[p.a_upper];
+            p.delta_a = (a[0] - c[0]).hypot(a[1] - c[1]);
+            p.x = c[0];
+            p.y = c[1];
+            p.tangent = tangent;
+            p.normal = [-tangent[1], tangent[0]];
+            p.theta_deg = tangent[1].atan2(tangent[0]).to_degrees();
+            p.s = s;
+        }
+        self
+    }
+
     /// Fills tangent, normal, θ, S and Δa from node positions, for points already in order
     /// of increasing S. Interior tangents are central differences over the neighbouring front
     /// nodes (second order); the end points lie on the symmetry planes of the quarter model,

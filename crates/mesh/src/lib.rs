@@ -5,6 +5,7 @@
 //! | [`Mesh`], [`Cell`] | nodes, Hex8/Hex20 cells (Abaqus/VTK order) with material and ply angle, named sets |
 //! | [`BoxParams`], [`structured_box`] | a graded structured box with the boundary sets x0 … z1 |
 //! | [`EmbeddedParams`], [`embedded_delamination`] | the embedded (elliptic) delamination model, Fig. 3.1.1 / 3.2.1, eq. 3.1.1–3.1.2 |
+//! | [`ThroughWidthParams`], [`through_width_delamination`] | the through-width (plane strain) delamination model, Fig. 3.2.3 |
 //! | [`Front`], [`FrontPoint`] | delamination-front descriptor for VCCT (§2.8, Fig. 2.8.1): c, a/a′, b/b′, d, cells, Δa, θ, S |
 //! | [`quality`], [`CellQuality`] | minimum scaled Jacobian and aspect ratio per cell |
 //! | [`vtu`] | VTU (VTK XML unstructured grid) and PVD series output |
@@ -28,6 +29,7 @@ mod front;
 mod generate;
 mod model;
 mod quality;
+mod through_width;
 pub mod vtu;
 
 pub use embedded::{
@@ -38,3 +40,4 @@ pub use front::{Front, FrontPoint};
 pub use generate::{BoxParams, graded_coordinates, structured_box};
 pub use model::{Cell, Mesh};
 pub use quality::{CellQuality, quality};
+pub use through_width::{ThroughWidthParams, through_width_delamination};

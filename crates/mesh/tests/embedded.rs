@@ -329,6 +329,10 @@ fn default_refinement_reproduces_table_2_model_sizes() {
     for (slices, thesis_nodes) in [(4, 1129.0), (8, 2085.0), (12, 3041.0)] {
         let m = embedded_delamination(&params(slices, 15e-3, 15e-3)).unwrap();
         let ratio = m.nodes.len() as f64 / thesis_nodes;
-        assert!((0.8..1.2).contains(&ratio), "{slices} slices: {} nodes vs {thesis_nodes}", m.nodes.len());
+        assert!(
+            (0.8..1.2).contains(&ratio),
+            "{slices} slices: {} nodes vs {thesis_nodes}",
+            m.nodes.len()
+        );
     }
 }

@@ -1,0 +1,227 @@
+//! The through-width delamination model of thesis Fig. 3.2.3: a slab 0 ≤ x ≤ L, 0 ≤ y ≤ W,
+//! base 0 ≤ z ≤ H, sublaminate H ≤ z ≤ H + h, delaminated on z = H for 0 ≤ x < a (x = 0 a
+//! symmetry plane), so the front is the straight line x = a across the width. With v = 0 on
+//! y = 0 and y = W it responds in plane strain (§3.2).
+
+use crate::MeshError;
+use crate::front::{Front, FrontPoint};
+use crate::generate::graded_coordinates;
+use crate::model::{Cell, Mesh};
+use nonlin3d_element::ElementKind;
+use std::collections::HashMap;
+
+/// Parameters of [`through_width_delamination`] (SI units).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ThroughWidthParams {
+    /// Hex20 or Hex8.
+    pub kind: ElementKind,
+    /// Delamination half-length: delaminated for 0 ≤ x < a, m.
+    pub a: f64,
+    /// Model length along x (load direction), L > a, m.
+    pub length: f64,
+    /// Width along y, m.
+    pub width: f64,
+    /// Sublaminate thickness h, m.
+    pub h: f64,
+    /// Base laminate thickness H, m.
+    pub base: f64,
+    /// Elements along x over the delamination.
+    pub inside: usize,
+    /// Elements along x beyond the front.
+    pub outside: usize,
+    /// Element next to the front over the farthest one, on both sides (< 1 refines).
+    pub front_grading: f64,
+    /// Elements across the width.
+    pub across: usize,
+    /// Elements through the sublaminate.
+    pub sub_layers: usize,
+    /// Elements through the base (graded towards z = H by `base_grading`).
+    pub base_layers: usize,
+    /// Base element at z = H over the one at z = 0.
+    pub base_grading: f64,
+}
+
+impl ThroughWidthParams {
+    /// A 20 mm delamination (a = 10 mm) in the thesis's h = 0.4 mm, H = 4 mm laminate, L = 30 mm,
+    /// one Hex20 across a 1 mm width.
+    pub fn example() -> Self {
+        Self {
+            kind: ElementKind::Hex20,
+            a: 10e-3,
+            length: 30e-3,
+            width: 1e-3,
+            h: 0.4e-3,
+            base: 4e-3,
+            inside: 10,
+            outside: 6,
+            front_grading: 0.3,
+            across: 1,
+            sub_layers: 2,
+            base_layers: 3,
+            base_grading: 0.25,
+        }
+    }
+}
+
+/// The through-width delamination mesh and its front (from y = W to y = 0: tangent −y,
+/// θ = −90°, normal +x). Node sets `x0 x1 y0 y1 z0`, `crack_upper`/`crack_lower` (paired),
+/// `front`; cell sets `base`, `sublaminate`, `all`.
+pub fn through_width_delamination(p: &ThroughWidthParams) -> Result<(Mesh, Front), MeshError> {
+    if !(p.a > 0.0 && p.length > p.a && p.length.is_finite()) {
+        return Err(MeshError::Parameter {
+            name: "a",
+            reason: format!("need 0 < a < length ({} vs {})", p.a, p.length),
+        });
+    }
+    let xin = graded_coordinates(p.inside, p.a, p.front_grading)?;
+    let xout = graded_coordinates(p.outside, p.length - p.a, 1.0 / p.front_grading)?;
+    let mut xs = xin.clone();
+    xs.extend(xout.iter().skip(1).map(|d| p.a + d));
+    let ys = graded_coordinates(p.across, p.width, 1.0)?;
+    let zb = graded_coordinates(p.base_layers, p.base, p.base_grading)?;
+    let zs = graded_coordinates(p.sub_layers, p.h, 1.0)?;
+    let mut zz = zb.clone();
+    zz.extend(zs.iter().skip(1).map(|d| p.base + d));
+    let (gf, gh) = (2 * p.inside, 2 * p.base_layers); // doubled grid index of the front and of z = H
+    let at = |v: &[f64], g: usize| {
+        if g % 2 == 0 {
+            v[g / 2]
+        } else {
+            0.5 * (v[g / 2] + v[g / 2 + 1])
+        }
+    };
+    let mut mesh = Mesh::default();
+    let mut ids: HashMap<(usize, usize, usize, bool), usize> = HashMap::new();
+    let mut id = |mesh: &mut Mesh, g: [usize; 3], below: bool| -> usize {
+        let lower = below && g[2] == gh && g[0] < gf;
+        *ids.entry((g[0], g[1], g[2], lower)).or_insert_with(|| {
+            mesh.nodes
+                .push([at(&xs, g[0]), at(&ys, g[1]), at(&zz, g[2])]);
+            mesh.nodes.len() - 1
+        })
+    };
+    let (mut base_cells, mut sub_cells) = (Vec::new(), Vec::new());
+    for k in 0..zz.len() - 1 {
+        let below = k < p.base_layers;
+        for j in 0..ys.len() - 1 {
+            for i in 0..xs.len() - 1 {
+                let nodes: Vec<usize> = p
+                    .kind
+                    .reference_nodes()
+                    .iter()
+                    .map(|r| {
+                        let g = [
+                            (2 * i as i64 + 1 + r[0] as i64) as usize,
+                            (2 * j as i64 + 1 + r[1] as i64) as usize,
+                            (2 * k as i64 + 1 + r[2] as i64) as usize,
+                        ];
+                        id(&mut mesh, g, below)
+                    })
+                    .collect();
+                let c = mesh.cells.len();
+                mesh.cells.push(Cell {
+                    kind: p.kind,
+                    nodes,
+                    material: 0,
+                    ply_angle_deg: 0.0,
+                });
+                if below {
+                    base_cells.push(c)
+                } else {
+                    sub_cells.push(c)
+                }
+            }
+        }
+    }
+    let get = |g: [usize; 3], lower: bool| ids.get(&(g[0], g[1], g[2], lower)).copied();
+    let step = if p.kind == ElementKind::Hex20 { 1 } else { 2 };
+    let (mut up, mut lo) = (Vec::new(), Vec::new());
+    for gy in (0..=2 * p.across).step_by(step) {
+        for gx in (0..gf).step_by(step) {
+            if let (Some(u), Some(l)) = (get([gx, gy, gh], false), get([gx, gy, gh], true)) {
+                up.push(u);
+                lo.push(l);
+            }
+        }
+    }
+    let tol = 1e-9 * p.length;
+    let select = |f: &dyn Fn(&[f64; 3]) -> bool| -> Vec<usize> {
+        (0..mesh.nodes.len())
+            .filter(|&n| f(&mesh.nodes[n]))
+            .collect()
+    };
+    let sets = [
+        ("x0", select(&|x| x[0].abs() < tol)),
+        ("x1", select(&|x| (x[0] - p.length).abs() < tol)),
+        ("y0", select(&|x| x[1].abs() < tol)),
+        ("y1", select(&|x| (x[1] - p.width).abs() < tol)),
+        ("z0", select(&|x| x[2].abs() < tol)),
+    ];
+    for (name, s) in sets {
+        mesh.node_sets.insert(name.into(), s);
+    }
+    // Front from y = W down to y = 0.
+    let missing = |what: &str| MeshError::Parameter {
+        name: "front",
+        reason: format!("internal: {what} node not found"),
+    };
+    let mut cells_of: HashMap<usize, Vec<usize>> = HashMap::new();
+    for &c in &sub_cells {
+        for &n in &mesh.cells[c].nodes {
+            cells_of.entry(n).or_default().push(c);
+        }
+    }
+    let mut points = Vec::new();
+    let mut front_nodes = Vec::new();
+    for gy in (0..=2 * p.across).rev().step_by(step) {
+        let corner = gy % 2 == 0;
+        let c = get([gf, gy, gh], false).ok_or_else(|| missing("c"))?;
+        let a_up = get([gf - 2, gy, gh], false).ok_or_else(|| missing("a"))?;
+        let a_lo = get([gf - 2, gy, gh], true).ok_or_else(|| missing("a′"))?;
+        let hex20_corner = p.kind == ElementKind::Hex20 && corner;
+        let (b_up, b_lo, d) = if hex20_corner {
+            (
+                get([gf - 1, gy, gh], false),
+                get([gf - 1, gy, gh], true),
+                get([gf + 1, gy, gh], false),
+            )
+        } else {
+            (None, None, None)
+        };
+        let mut cells_above: Vec<usize> = cells_of.get(&c).cloned().unwrap_or_default();
+        if let Some(d) = d {
+            cells_above.extend(cells_of.get(&d).cloned().unwrap_or_default());
+        }
+        cells_above.sort_unstable();
+        cells_above.dedup();
+        front_nodes.push(c);
+        points.push(FrontPoint {
+            c,
+            corner,
+            a_upper: a_up,
+            a_lower: a_lo,
+            b_upper: b_up,
+            b_lower: b_lo,
+            d,
+            cells_above,
+            delta_a: 0.0,
+            x: 0.0,
+            y: 0.0,
+            tangent: [0.0; 2],
+            normal: [0.0; 2],
+            theta_deg: 0.0,
+            s: 0.0,
+        });
+    }
+    mesh.node_sets.insert("crack_upper".into(), up);
+    mesh.node_sets.insert("crack_lower".into(), lo);
+    mesh.node_sets.insert("front".into(), front_nodes);
+    mesh.cell_sets.insert("base".into(), base_cells);
+    mesh.cell_sets.insert("sublaminate".into(), sub_cells);
+    mesh.cell_sets
+        .insert("all".into(), (0..mesh.cells.len()).collect());
+    mesh.validate()?;
+    mesh.check_geometry()?;
+    let front = Front { points }.finish_straight(&mesh.nodes, [0.0, -1.0]);
+    Ok((mesh, front))
+}
