@@ -76,6 +76,16 @@ pub fn graded_coordinates(n: usize, length: f64, ratio: f64) -> Result<Vec<f64>,
     Ok(x)
 }
 
+/// Position of doubled grid index `g` along an axis with vertex positions `axis`: even `g` is
+/// vertex g/2, odd `g` the midpoint of its element (where Hex20 mid-edge nodes sit).
+pub(crate) fn grid_position(axis: &[f64], g: usize) -> f64 {
+    if g.is_multiple_of(2) {
+        axis[g / 2]
+    } else {
+        0.5 * (axis[g / 2] + axis[g / 2 + 1])
+    }
+}
+
 /// The structured box of `p`, with node sets `x0`, `x1`, `y0`, `y1`, `z0`, `z1` (nodes on each
 /// face), face sets of the same names, and the cell set `all`. Hex20 mid-edge nodes sit at the
 /// midpoints of their edges.
@@ -85,14 +95,7 @@ pub fn structured_box(p: &BoxParams) -> Result<Mesh, MeshError> {
         graded_coordinates(p.counts[1], p.size[1], p.grading[1])?,
         graded_coordinates(p.counts[2], p.size[2], p.grading[2])?,
     ];
-    // Position of doubled grid index g along an axis: even = vertex, odd = midpoint.
-    let at = |axis: &[f64], g: usize| {
-        if g.is_multiple_of(2) {
-            axis[g / 2]
-        } else {
-            0.5 * (axis[g / 2] + axis[g / 2 + 1])
-        }
-    };
+    let at = grid_position;
     let mut ids: HashMap<[usize; 3], usize> = HashMap::new();
     let mut mesh = Mesh::default();
     let mut grid = Vec::new();

@@ -5,7 +5,7 @@
 
 use crate::MeshError;
 use crate::front::{Front, FrontPoint};
-use crate::generate::graded_coordinates;
+use crate::generate::{graded_coordinates, grid_position};
 use crate::model::{Cell, Mesh};
 use nonlin3d_element::ElementKind;
 use std::collections::HashMap;
@@ -83,13 +83,7 @@ pub fn through_width_delamination(p: &ThroughWidthParams) -> Result<(Mesh, Front
     let mut zz = zb.clone();
     zz.extend(zs.iter().skip(1).map(|d| p.base + d));
     let (gf, gh) = (2 * p.inside, 2 * p.base_layers); // doubled grid index of the front and of z = H
-    let at = |v: &[f64], g: usize| {
-        if g % 2 == 0 {
-            v[g / 2]
-        } else {
-            0.5 * (v[g / 2] + v[g / 2 + 1])
-        }
-    };
+    let at = grid_position;
     let mut mesh = Mesh::default();
     let mut ids: HashMap<(usize, usize, usize, bool), usize> = HashMap::new();
     let mut id = |mesh: &mut Mesh, g: [usize; 3], below: bool| -> usize {
@@ -174,7 +168,7 @@ pub fn through_width_delamination(p: &ThroughWidthParams) -> Result<(Mesh, Front
     let mut points = Vec::new();
     let mut front_nodes = Vec::new();
     for gy in (0..=2 * p.across).rev().step_by(step) {
-        let corner = gy % 2 == 0;
+        let corner = gy.is_multiple_of(2);
         let c = get([gf, gy, gh], false).ok_or_else(|| missing("c"))?;
         let a_up = get([gf - 2, gy, gh], false).ok_or_else(|| missing("a"))?;
         let a_lo = get([gf - 2, gy, gh], true).ok_or_else(|| missing("a′"))?;
