@@ -8,6 +8,7 @@
 //! | [`ThroughWidthParams`], [`through_width_delamination`] | the through-width (plane strain) delamination model, Fig. 3.2.3 |
 //! | [`Front`], [`FrontPoint`] | delamination-front descriptor for VCCT (§2.8, Fig. 2.8.1): c, a/a′, b/b′, d, cells, Δa, θ, S |
 //! | [`quality`], [`CellQuality`] | minimum scaled Jacobian and aspect ratio per cell |
+//! | [`inp`] | Abaqus/CalculiX `.inp` deck writer (mesh, sets, materials, orientations, sections, steps) |
 //! | [`vtu`] | VTU (VTK XML unstructured grid) and PVD series output |
 //!
 //! ```
@@ -27,6 +28,7 @@ mod embedded;
 mod error;
 mod front;
 mod generate;
+pub mod inp;
 mod model;
 mod quality;
 mod through_width;

@@ -1,0 +1,254 @@
+//! Abaqus/CalculiX input decks (`.inp`): writer.
+//!
+//! Written: `*HEADING`, `*NODE`, `*ELEMENT` (C3D8 / C3D20), `*NSET` and `*ELSET` for the mesh's
+//! sets, `*SURFACE, TYPE=ELEMENT` for its face sets, `*MATERIAL` with `*ELASTIC` (ISO,
+//! ENGINEERING CONSTANTS or ANISO), one `*ORIENTATION` (rectangular, rotated about z) per
+//! distinct ply angle, `*SOLID SECTION` per (material, ply angle) group, and `*STEP`s (optionally
+//! `NLGEOM`) with `*STATIC`, `*BOUNDARY`, `*CLOAD` and output requests. Node and element ids are
+//! the mesh's indices + 1. CalculiX 2.20 runs the decks unchanged (tested when `ccx` is present;
+//! CI installs it).
+
+use crate::{Mesh, MeshError};
+use nonlin3d_element::ElementKind;
+use nonlin3d_laminate::{Orthotropic, Stiffness};
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+
+/// Elastic behaviour of a deck material.
+#[derive(Debug, Clone, PartialEq)]
+pub enum InpElastic {
+    /// `*ELASTIC, TYPE=ISO`: E, ν.
+    Isotropic {
+        /// Young's modulus, Pa.
+        e: f64,
+        /// Poisson ratio.
+        nu: f64,
+    },
+    /// `*ELASTIC, TYPE=ENGINEERING CONSTANTS` in the material (ply) axes.
+    Engineering(Orthotropic),
+    /// `*ELASTIC, TYPE=ANISO`: a full 6×6 stiffness (engineering shears, nonlin3d's order is
+    /// converted to Abaqus's 11, 22, 33, 12, 13, 23).
+    Anisotropic(Stiffness),
+}
+
+/// A named deck material; cells refer to it by their `material` index.
+#[derive(Debug, Clone, PartialEq)]
+pub struct InpMaterial {
+    /// Name (letters, digits, `_`, `-`).
+    pub name: String,
+    /// Elastic behaviour.
+    pub elastic: InpElastic,
+}
+
+/// `*BOUNDARY`: DOFs `first..=last` (1 = x, 2 = y, 3 = z) of node set `nset` set to `value`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct InpBoundary {
+    /// Node set name (one of the mesh's).
+    pub nset: String,
+    /// First DOF, 1–3.
+    pub first: u8,
+    /// Last DOF, 1–3.
+    pub last: u8,
+    /// Prescribed displacement, m.
+    pub value: f64,
+}
+
+/// `*CLOAD`: force `value` (N) on DOF `dof` (1–3) of node `node` (0-based mesh index).
+#[derive(Debug, Clone, PartialEq)]
+pub struct InpCload {
+    /// Node (0-based).
+    pub node: usize,
+    /// DOF, 1–3.
+    pub dof: u8,
+    /// Force, N.
+    pub value: f64,
+}
+
+/// A static step.
+#[derive(Debug, Clone, PartialEq)]
+pub struct InpStep {
+    /// `NLGEOM` (geometric nonlinearity) on.
+    pub nlgeom: bool,
+    /// Initial increment and step period (`*STATIC` data line).
+    pub increment: f64,
+    /// Step period.
+    pub period: f64,
+    /// Boundary conditions of the step.
+    pub boundaries: Vec<InpBoundary>,
+    /// Concentrated loads of the step.
+    pub cloads: Vec<InpCload>,
+}
+
+/// A deck: mesh, materials, steps.
+#[derive(Debug, Clone)]
+pub struct InpDeck<'a> {
+    /// First `*HEADING` line.
+    pub heading: String,
+    /// The mesh.
+    pub mesh: &'a Mesh,
+    /// Materials indexed by the cells' `material`.
+    pub materials: &'a [InpMaterial],
+    /// Steps in order.
+    pub steps: Vec<InpStep>,
+}
+
+fn bad(reason: String) -> MeshError {
+    MeshError::Parameter { name: "inp deck", reason }
+}
+
+fn check_name(name: &str) -> Result<(), MeshError> {
+    let ok = !name.is_empty() && name.len() <= 80 && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-');
+    if ok { Ok(()) } else { Err(bad(format!("name '{name}' must be 1–80 letters, digits, '_' or '-'"))) }
+}
+
+/// Writes `ids` (1-based) 16 per line.
+fn id_lines(s: &mut String, ids: impl Iterator<Item = usize>) {
+    let ids: Vec<usize> = ids.collect();
+    for chunk in ids.chunks(16) {
+        let line: Vec<String> = chunk.iter().map(|i| i.to_string()).collect();
+        let _ = writeln!(s, "{}", line.join(", "));
+    }
+}
+
+/// A number as CalculiX reads it: its fields are at most 20 characters (Fortran `f20.0`), so
+/// 13 significant digits, e.g. `-6.896551724138e-1` (18 characters, 2 to spare for the
+/// exponent's sign and digits: `-1.234567890123e-10` is 19).
+fn num(v: f64) -> String {
+    format!("{v:.12e}")
+}
+
+/// Abaqus's order of the 21 ANISO constants as (row, col) of nonlin3d's Voigt matrix
+/// (0 xx, 1 yy, 2 zz, 3 xy, 4 yz, 5 xz).
+const ANISO_ORDER: [(usize, usize); 21] = [
+    (0, 0), (0, 1), (1, 1), (0, 2), (1, 2), (2, 2), (0, 3), (1, 3), (2, 3), (3, 3), (0, 5), (1, 5),
+    (2, 5), (3, 5), (5, 5), (0, 4), (1, 4), (2, 4), (3, 4), (5, 4), (4, 4),
+];
+
+/// The deck as text.
+pub fn inp_string(deck: &InpDeck<'_>) -> Result<String, MeshError> {
+    let m = deck.mesh;
+    m.validate()?;
+    for mat in deck.materials {
+        check_name(&mat.name)?;
+    }
+    for name in m.node_sets.keys().chain(m.cell_sets.keys()).chain(m.face_sets.keys()) {
+        check_name(name)?;
+    }
+    if let Some(c) = m.cells.iter().position(|c| c.material >= deck.materials.len()) {
+        return Err(bad(format!("cell {c} uses material {} of {}", m.cells[c].material, deck.materials.len())));
+    }
+    let mut s = String::new();
+    let _ = writeln!(s, "*HEADING\n{}", deck.heading.replace('\n', " "));
+    s.push_str("*NODE, NSET=NALL\n");
+    for (i, x) in m.nodes.iter().enumerate() {
+        let _ = writeln!(s, "{}, {}, {}, {}", i + 1, num(x[0]), num(x[1]), num(x[2]));
+    }
+    for (kind, name) in [(ElementKind::Hex8, "C3D8"), (ElementKind::Hex20, "C3D20")] {
+        let cells: Vec<usize> = (0..m.cells.len()).filter(|&c| m.cells[c].kind == kind).collect();
+        if cells.is_empty() {
+            continue;
+        }
+        let _ = writeln!(s, "*ELEMENT, TYPE={name}, ELSET=E{name}");
+        for c in cells {
+            let ids: Vec<String> = std::iter::once(c + 1).chain(m.cells[c].nodes.iter().map(|n| n + 1)).map(|v| v.to_string()).collect();
+            // At most 16 entries per line; a trailing comma continues the element.
+            let lines: Vec<String> = ids.chunks(16).map(|ch| ch.join(", ")).collect();
+            let _ = writeln!(s, "{}", lines.join(",\n"));
+        }
+    }
+    for (name, set) in &m.node_sets {
+        let _ = writeln!(s, "*NSET, NSET={name}");
+        id_lines(&mut s, set.iter().map(|n| n + 1));
+    }
+    for (name, set) in &m.cell_sets {
+        let _ = writeln!(s, "*ELSET, ELSET={name}");
+        id_lines(&mut s, set.iter().map(|c| c + 1));
+    }
+    for (name, set) in &m.face_sets {
+        let _ = writeln!(s, "*SURFACE, NAME={name}, TYPE=ELEMENT");
+        for &(c, f) in set {
+            let _ = writeln!(s, "{}, S{}", c + 1, f + 1);
+        }
+    }
+    for mat in deck.materials {
+        let _ = writeln!(s, "*MATERIAL, NAME={}", mat.name);
+        match &mat.elastic {
+            InpElastic::Isotropic { e, nu } => {
+                let _ = writeln!(s, "*ELASTIC, TYPE=ISO\n{}, {}", num(*e), num(*nu));
+            }
+            InpElastic::Engineering(o) => {
+                o.validate().map_err(|e| bad(format!("material {}: {e}", mat.name)))?;
+                let _ = writeln!(
+                    s,
+                    "*ELASTIC, TYPE=ENGINEERING CONSTANTS\n{}, {}, {}, {}, {}, {}, {}, {}\n{}",
+                    num(o.e11), num(o.e22), num(o.e33), num(o.nu12), num(o.nu13), num(o.nu23), num(o.g12), num(o.g13), num(o.g23)
+                );
+            }
+            InpElastic::Anisotropic(c) => {
+                let v: Vec<String> = ANISO_ORDER.iter().map(|&(i, j)| num(c.c()[i][j])).collect();
+                let _ = writeln!(s, "*ELASTIC, TYPE=ANISO");
+                for chunk in v.chunks(8) {
+                    let _ = writeln!(s, "{}", chunk.join(", "));
+                }
+            }
+        }
+    }
+    // One orientation per distinct ply angle, one section per (material, angle).
+    let mut groups: BTreeMap<(usize, u64), Vec<usize>> = BTreeMap::new();
+    for (c, cell) in m.cells.iter().enumerate() {
+        groups.entry((cell.material, cell.ply_angle_deg.to_bits())).or_default().push(c);
+    }
+    let mut orientations: BTreeMap<u64, usize> = BTreeMap::new();
+    for (_, bits) in groups.keys() {
+        let next = orientations.len();
+        orientations.entry(*bits).or_insert(next);
+    }
+    for (&bits, &k) in &orientations {
+        let t = f64::from_bits(bits).to_radians();
+        let (sn, cs) = t.sin_cos();
+        let _ = writeln!(s, "*ORIENTATION, NAME=OR{k}, SYSTEM=RECTANGULAR\n{}, {}, 0., {}, {}, 0.", num(cs), num(sn), num(-sn), num(cs));
+    }
+    for (g, ((mat, bits), cells)) in groups.iter().enumerate() {
+        let _ = writeln!(s, "*ELSET, ELSET=SECTION{g}");
+        id_lines(&mut s, cells.iter().map(|c| c + 1));
+        let _ = writeln!(s, "*SOLID SECTION, ELSET=SECTION{g}, MATERIAL={}, ORIENTATION=OR{}", deck.materials[*mat].name, orientations[bits]);
+    }
+    for (k, step) in deck.steps.iter().enumerate() {
+        if !(step.increment > 0.0 && step.period >= step.increment) {
+            return Err(bad(format!("step {k}: increment {} and period {} must satisfy 0 < increment ≤ period", step.increment, step.period)));
+        }
+        // *STATIC: initial increment, period, minimum (1e-5 of the period), maximum (the period).
+        let _ = writeln!(
+            s,
+            "*STEP{}\n*STATIC\n{}, {}, {}, {}",
+            if step.nlgeom { ", NLGEOM" } else { "" },
+            num(step.increment),
+            num(step.period),
+            num(1e-5 * step.period),
+            num(step.period)
+        );
+        if !step.boundaries.is_empty() {
+            s.push_str("*BOUNDARY\n");
+        }
+        for b in &step.boundaries {
+            if !m.node_sets.contains_key(&b.nset) {
+                return Err(bad(format!("step {k}: boundary on unknown node set '{}'", b.nset)));
+            }
+            if !(1..=3).contains(&b.first) || !(b.first..=3).contains(&b.last) || !b.value.is_finite() {
+                return Err(bad(format!("step {k}: boundary {b:?} invalid")));
+            }
+            let _ = writeln!(s, "{}, {}, {}, {}", b.nset, b.first, b.last, num(b.value));
+        }
+        if !step.cloads.is_empty() {
+            s.push_str("*CLOAD\n");
+        }
+        for l in &step.cloads {
+            if l.node >= m.nodes.len() || !(1..=3).contains(&l.dof) || !l.value.is_finite() {
+                return Err(bad(format!("step {k}: load {l:?} invalid")));
+            }
+            let _ = writeln!(s, "{}, {}, {}", l.node + 1, l.dof, num(l.value));
+        }
+        s.push_str("*NODE PRINT, NSET=NALL\nU\n*NODE FILE\nU\n*EL FILE\nS\n*END STEP\n");
+    }
+    Ok(s)
+}
