@@ -8,7 +8,9 @@
 
 use nonlin3d::element::{ElementKind, IntegrationRule, ShapeTable, linear_stiffness};
 use nonlin3d::laminate::{ShearCoupling, Stiffness, materials};
-use nonlin3d::mesh::inp::{InpBoundary, InpCload, InpDeck, InpElastic, InpMaterial, InpStep, inp_string};
+use nonlin3d::mesh::inp::{
+    InpBoundary, InpCload, InpDeck, InpElastic, InpMaterial, InpStep, inp_string,
+};
 use nonlin3d::mesh::{BoxParams, Mesh, structured_box};
 use nonlin3d::solver::{SolverKind, SymmetricMatrix, SymmetricPattern, solve};
 use std::path::Path;
@@ -18,8 +20,13 @@ use std::sync::Arc;
 fn ccx_available() -> bool {
     let found = Command::new("ccx").arg("-v").output().is_ok();
     if !found {
-        assert!(std::env::var_os("CI").is_none(), "CI must provide CalculiX (ccx); .ci/run installs calculix-ccx");
-        eprintln!("ccx not found: CalculiX cross-check skipped (apt-get install calculix-ccx to run it)");
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "CI must provide CalculiX (ccx); .ci/run installs calculix-ccx"
+        );
+        eprintln!(
+            "ccx not found: CalculiX cross-check skipped (apt-get install calculix-ccx to run it)"
+        );
     }
     found
 }
@@ -31,8 +38,19 @@ fn run_ccx(name: &str, deck: &str, nodes: usize) -> Vec<[f64; 3]> {
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     std::fs::write(dir.join(format!("{name}.inp")), deck).unwrap();
-    let out = Command::new("ccx").arg("-i").arg(name).current_dir(&dir).output().unwrap();
-    assert!(out.status.success(), "ccx failed ({:?}): {}\n{}", out.status, String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+    let out = Command::new("ccx")
+        .arg("-i")
+        .arg(name)
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "ccx failed ({:?}): {}\n{}",
+        out.status,
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
     let dat = std::fs::read_to_string(dir.join(format!("{name}.dat"))).unwrap();
     let mut u = vec![[f64::NAN; 3]; nodes];
     // The last "displacements" block wins.
@@ -45,7 +63,14 @@ fn run_ccx(name: &str, deck: &str, nodes: usize) -> Vec<[f64; 3]> {
                 }
                 continue;
             }
-            let (Ok(id), Ok(x), Ok(y), Ok(z)) = (f[0].parse::<usize>(), f[1].parse::<f64>(), f[2].parse::<f64>(), f[3].parse::<f64>()) else { break };
+            let (Ok(id), Ok(x), Ok(y), Ok(z)) = (
+                f[0].parse::<usize>(),
+                f[1].parse::<f64>(),
+                f[2].parse::<f64>(),
+                f[3].parse::<f64>(),
+            ) else {
+                break;
+            };
             u[id - 1] = [x, y, z];
         }
     }
@@ -53,7 +78,12 @@ fn run_ccx(name: &str, deck: &str, nodes: usize) -> Vec<[f64; 3]> {
 }
 
 /// nonlin3d's linear solution: Hex20 3×3×3 stiffness, clamped set, point loads.
-fn solve_linear(mesh: &Mesh, stiffness: &[Stiffness], clamped: &str, loads: &[InpCload]) -> Vec<[f64; 3]> {
+fn solve_linear(
+    mesh: &Mesh,
+    stiffness: &[Stiffness],
+    clamped: &str,
+    loads: &[InpCload],
+) -> Vec<[f64; 3]> {
     let table = ShapeTable::new(ElementKind::Hex20, IntegrationRule::Gauss3).unwrap();
     let n = 3 * mesh.nodes.len();
     let dofs = mesh.cell_dofs();
@@ -91,7 +121,11 @@ fn solve_linear(mesh: &Mesh, stiffness: &[Stiffness], clamped: &str, loads: &[In
 
 fn compare(ours: &[[f64; 3]], theirs: &[[f64; 3]]) -> f64 {
     let scale = ours.iter().flatten().fold(0.0f64, |a, v| a.max(v.abs()));
-    let diff = ours.iter().flatten().zip(theirs.iter().flatten()).fold(0.0f64, |a, (p, q)| a.max((p - q).abs()));
+    let diff = ours
+        .iter()
+        .flatten()
+        .zip(theirs.iter().flatten())
+        .fold(0.0f64, |a, (p, q)| a.max((p - q).abs()));
     assert!(scale > 0.0 && diff.is_finite());
     eprintln!("max |u_nonlin3d − u_ccx| / max |u| = {:.2e}", diff / scale);
     diff / scale
@@ -99,7 +133,13 @@ fn compare(ours: &[[f64; 3]], theirs: &[[f64; 3]]) -> f64 {
 
 fn tip_loads(mesh: &Mesh, total: f64, dof: u8) -> Vec<InpCload> {
     let tip = &mesh.node_sets["x1"];
-    tip.iter().map(|&node| InpCload { node, dof, value: total / tip.len() as f64 }).collect()
+    tip.iter()
+        .map(|&node| InpCload {
+            node,
+            dof,
+            value: total / tip.len() as f64,
+        })
+        .collect()
 }
 
 #[test]
@@ -108,61 +148,134 @@ fn calculix_runs_our_decks_and_agrees_with_our_linear_solution() {
         return;
     }
     // 1. Steel cantilever 30 × 5 × 4 mm, 6 × 2 × 2 C3D20, clamped at x = 0, 100 N down at x = L.
-    let mesh = structured_box(&BoxParams::new(ElementKind::Hex20, [6, 2, 2], [30e-3, 5e-3, 4e-3])).unwrap();
+    let mesh = structured_box(&BoxParams::new(
+        ElementKind::Hex20,
+        [6, 2, 2],
+        [30e-3, 5e-3, 4e-3],
+    ))
+    .unwrap();
     let steel = materials::steel();
     let loads = tip_loads(&mesh, -100.0, 3);
     let step = |nlgeom: bool| InpStep {
         nlgeom,
         increment: 1.0,
         period: 1.0,
-        boundaries: vec![InpBoundary { nset: "x0".into(), first: 1, last: 3, value: 0.0 }],
+        boundaries: vec![InpBoundary {
+            nset: "x0".into(),
+            first: 1,
+            last: 3,
+            value: 0.0,
+        }],
         cloads: loads.clone(),
     };
-    let mats = [InpMaterial { name: "STEEL".into(), elastic: InpElastic::Isotropic { e: steel.e11, nu: steel.nu12 } }];
-    let deck = inp_string(&InpDeck { heading: "nonlin3d cantilever".into(), mesh: &mesh, materials: &mats, steps: vec![step(false)] }).unwrap();
+    let mats = [InpMaterial {
+        name: "STEEL".into(),
+        elastic: InpElastic::Isotropic {
+            e: steel.e11,
+            nu: steel.nu12,
+        },
+    }];
+    let deck = inp_string(&InpDeck {
+        heading: "nonlin3d cantilever".into(),
+        mesh: &mesh,
+        materials: &mats,
+        steps: vec![step(false)],
+    })
+    .unwrap();
     let theirs = run_ccx("cantilever", &deck, mesh.nodes.len());
-    let ours = solve_linear(&mesh, &vec![steel.stiffness().unwrap(); mesh.cells.len()], "x0", &loads);
+    let ours = solve_linear(
+        &mesh,
+        &vec![steel.stiffness().unwrap(); mesh.cells.len()],
+        "x0",
+        &loads,
+    );
     // Same element, same quadrature, both direct solvers in double precision: agreement to
     // round-off of κ(K) ≈ 1e8 times 1e-16, far below the 1e-8 asserted; CalculiX prints 6–7
     // significant digits in the .dat file, which sets the floor (≈ 1e-6 relative).
     let rel = compare(&ours, &theirs);
     assert!(rel < 2e-6, "cantilever: max relative difference {rel:e}");
     // The NLGEOM variant of the deck runs unchanged too.
-    let deck_nl = inp_string(&InpDeck { heading: "nonlin3d cantilever NLGEOM".into(), mesh: &mesh, materials: &mats, steps: vec![step(true)] }).unwrap();
+    let deck_nl = inp_string(&InpDeck {
+        heading: "nonlin3d cantilever NLGEOM".into(),
+        mesh: &mesh,
+        materials: &mats,
+        steps: vec![step(true)],
+    })
+    .unwrap();
     let theirs_nl = run_ccx("cantilever_nlgeom", &deck_nl, mesh.nodes.len());
     assert!(theirs_nl.iter().flatten().all(|v| v.is_finite()));
 
     // 2. Graphite/epoxy block with plies at 30° (ENGINEERING CONSTANTS + ORIENTATION) against
     // our exact rotation of C about z.
-    let mut block = structured_box(&BoxParams::new(ElementKind::Hex20, [4, 3, 2], [8e-3, 6e-3, 2e-3])).unwrap();
+    let mut block = structured_box(&BoxParams::new(
+        ElementKind::Hex20,
+        [4, 3, 2],
+        [8e-3, 6e-3, 2e-3],
+    ))
+    .unwrap();
     for c in &mut block.cells {
         c.ply_angle_deg = 30.0;
     }
     let ge = materials::generic_graphite_epoxy();
-    let rotated = ge.stiffness().unwrap().rotated_about_z(30f64.to_radians(), ShearCoupling::Exact).unwrap();
+    let rotated = ge
+        .stiffness()
+        .unwrap()
+        .rotated_about_z(30f64.to_radians(), ShearCoupling::Exact)
+        .unwrap();
     let loads = [tip_loads(&block, 50.0, 1), tip_loads(&block, -20.0, 3)].concat();
-    let mats = [InpMaterial { name: "GR-EP".into(), elastic: InpElastic::Engineering(ge) }];
+    let mats = [InpMaterial {
+        name: "GR-EP".into(),
+        elastic: InpElastic::Engineering(ge),
+    }];
     let deck = inp_string(&InpDeck {
         heading: "nonlin3d orthotropic block at 30 degrees".into(),
         mesh: &block,
         materials: &mats,
-        steps: vec![InpStep { nlgeom: false, increment: 1.0, period: 1.0, boundaries: vec![InpBoundary { nset: "x0".into(), first: 1, last: 3, value: 0.0 }], cloads: loads.clone() }],
+        steps: vec![InpStep {
+            nlgeom: false,
+            increment: 1.0,
+            period: 1.0,
+            boundaries: vec![InpBoundary {
+                nset: "x0".into(),
+                first: 1,
+                last: 3,
+                value: 0.0,
+            }],
+            cloads: loads.clone(),
+        }],
     })
     .unwrap();
     let theirs = run_ccx("ortho30", &deck, block.nodes.len());
     let ours = solve_linear(&block, &vec![rotated; block.cells.len()], "x0", &loads);
     let rel = compare(&ours, &theirs);
-    assert!(rel < 2e-6, "orthotropic 30° block: max relative difference {rel:e}");
+    assert!(
+        rel < 2e-6,
+        "orthotropic 30° block: max relative difference {rel:e}"
+    );
     // And the same block through ANISO with the rotated C, no orientation.
     for c in &mut block.cells {
         c.ply_angle_deg = 0.0;
     }
-    let mats = [InpMaterial { name: "GR-EP-30".into(), elastic: InpElastic::Anisotropic(rotated) }];
+    let mats = [InpMaterial {
+        name: "GR-EP-30".into(),
+        elastic: InpElastic::Anisotropic(Box::new(rotated)),
+    }];
     let deck = inp_string(&InpDeck {
         heading: "nonlin3d aniso block".into(),
         mesh: &block,
         materials: &mats,
-        steps: vec![InpStep { nlgeom: false, increment: 1.0, period: 1.0, boundaries: vec![InpBoundary { nset: "x0".into(), first: 1, last: 3, value: 0.0 }], cloads: loads.clone() }],
+        steps: vec![InpStep {
+            nlgeom: false,
+            increment: 1.0,
+            period: 1.0,
+            boundaries: vec![InpBoundary {
+                nset: "x0".into(),
+                first: 1,
+                last: 3,
+                value: 0.0,
+            }],
+            cloads: loads.clone(),
+        }],
     })
     .unwrap();
     let theirs = run_ccx("aniso30", &deck, block.nodes.len());

@@ -28,7 +28,7 @@ pub enum InpElastic {
     Engineering(Orthotropic),
     /// `*ELASTIC, TYPE=ANISO`: a full 6×6 stiffness (engineering shears, nonlin3d's order is
     /// converted to Abaqus's 11, 22, 33, 12, 13, 23).
-    Anisotropic(Stiffness),
+    Anisotropic(Box<Stiffness>),
 }
 
 /// A named deck material; cells refer to it by their `material` index.
@@ -93,12 +93,25 @@ pub struct InpDeck<'a> {
 }
 
 fn bad(reason: String) -> MeshError {
-    MeshError::Parameter { name: "inp deck", reason }
+    MeshError::Parameter {
+        name: "inp deck",
+        reason,
+    }
 }
 
 fn check_name(name: &str) -> Result<(), MeshError> {
-    let ok = !name.is_empty() && name.len() <= 80 && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-');
-    if ok { Ok(()) } else { Err(bad(format!("name '{name}' must be 1–80 letters, digits, '_' or '-'"))) }
+    let ok = !name.is_empty()
+        && name.len() <= 80
+        && name
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-');
+    if ok {
+        Ok(())
+    } else {
+        Err(bad(format!(
+            "name '{name}' must be 1–80 letters, digits, '_' or '-'"
+        )))
+    }
 }
 
 /// Writes `ids` (1-based) 16 per line.
@@ -120,8 +133,27 @@ fn num(v: f64) -> String {
 /// Abaqus's order of the 21 ANISO constants as (row, col) of nonlin3d's Voigt matrix
 /// (0 xx, 1 yy, 2 zz, 3 xy, 4 yz, 5 xz).
 const ANISO_ORDER: [(usize, usize); 21] = [
-    (0, 0), (0, 1), (1, 1), (0, 2), (1, 2), (2, 2), (0, 3), (1, 3), (2, 3), (3, 3), (0, 5), (1, 5),
-    (2, 5), (3, 5), (5, 5), (0, 4), (1, 4), (2, 4), (3, 4), (5, 4), (4, 4),
+    (0, 0),
+    (0, 1),
+    (1, 1),
+    (0, 2),
+    (1, 2),
+    (2, 2),
+    (0, 3),
+    (1, 3),
+    (2, 3),
+    (3, 3),
+    (0, 5),
+    (1, 5),
+    (2, 5),
+    (3, 5),
+    (5, 5),
+    (0, 4),
+    (1, 4),
+    (2, 4),
+    (3, 4),
+    (5, 4),
+    (4, 4),
 ];
 
 /// The deck as text.
@@ -131,11 +163,24 @@ pub fn inp_string(deck: &InpDeck<'_>) -> Result<String, MeshError> {
     for mat in deck.materials {
         check_name(&mat.name)?;
     }
-    for name in m.node_sets.keys().chain(m.cell_sets.keys()).chain(m.face_sets.keys()) {
+    for name in m
+        .node_sets
+        .keys()
+        .chain(m.cell_sets.keys())
+        .chain(m.face_sets.keys())
+    {
         check_name(name)?;
     }
-    if let Some(c) = m.cells.iter().position(|c| c.material >= deck.materials.len()) {
-        return Err(bad(format!("cell {c} uses material {} of {}", m.cells[c].material, deck.materials.len())));
+    if let Some(c) = m
+        .cells
+        .iter()
+        .position(|c| c.material >= deck.materials.len())
+    {
+        return Err(bad(format!(
+            "cell {c} uses material {} of {}",
+            m.cells[c].material,
+            deck.materials.len()
+        )));
     }
     let mut s = String::new();
     let _ = writeln!(s, "*HEADING\n{}", deck.heading.replace('\n', " "));
@@ -144,13 +189,18 @@ pub fn inp_string(deck: &InpDeck<'_>) -> Result<String, MeshError> {
         let _ = writeln!(s, "{}, {}, {}, {}", i + 1, num(x[0]), num(x[1]), num(x[2]));
     }
     for (kind, name) in [(ElementKind::Hex8, "C3D8"), (ElementKind::Hex20, "C3D20")] {
-        let cells: Vec<usize> = (0..m.cells.len()).filter(|&c| m.cells[c].kind == kind).collect();
+        let cells: Vec<usize> = (0..m.cells.len())
+            .filter(|&c| m.cells[c].kind == kind)
+            .collect();
         if cells.is_empty() {
             continue;
         }
         let _ = writeln!(s, "*ELEMENT, TYPE={name}, ELSET=E{name}");
         for c in cells {
-            let ids: Vec<String> = std::iter::once(c + 1).chain(m.cells[c].nodes.iter().map(|n| n + 1)).map(|v| v.to_string()).collect();
+            let ids: Vec<String> = std::iter::once(c + 1)
+                .chain(m.cells[c].nodes.iter().map(|n| n + 1))
+                .map(|v| v.to_string())
+                .collect();
             // At most 16 entries per line; a trailing comma continues the element.
             let lines: Vec<String> = ids.chunks(16).map(|ch| ch.join(", ")).collect();
             let _ = writeln!(s, "{}", lines.join(",\n"));
@@ -177,11 +227,20 @@ pub fn inp_string(deck: &InpDeck<'_>) -> Result<String, MeshError> {
                 let _ = writeln!(s, "*ELASTIC, TYPE=ISO\n{}, {}", num(*e), num(*nu));
             }
             InpElastic::Engineering(o) => {
-                o.validate().map_err(|e| bad(format!("material {}: {e}", mat.name)))?;
+                o.validate()
+                    .map_err(|e| bad(format!("material {}: {e}", mat.name)))?;
                 let _ = writeln!(
                     s,
                     "*ELASTIC, TYPE=ENGINEERING CONSTANTS\n{}, {}, {}, {}, {}, {}, {}, {}\n{}",
-                    num(o.e11), num(o.e22), num(o.e33), num(o.nu12), num(o.nu13), num(o.nu23), num(o.g12), num(o.g13), num(o.g23)
+                    num(o.e11),
+                    num(o.e22),
+                    num(o.e33),
+                    num(o.nu12),
+                    num(o.nu13),
+                    num(o.nu23),
+                    num(o.g12),
+                    num(o.g13),
+                    num(o.g23)
                 );
             }
             InpElastic::Anisotropic(c) => {
@@ -196,7 +255,10 @@ pub fn inp_string(deck: &InpDeck<'_>) -> Result<String, MeshError> {
     // One orientation per distinct ply angle, one section per (material, angle).
     let mut groups: BTreeMap<(usize, u64), Vec<usize>> = BTreeMap::new();
     for (c, cell) in m.cells.iter().enumerate() {
-        groups.entry((cell.material, cell.ply_angle_deg.to_bits())).or_default().push(c);
+        groups
+            .entry((cell.material, cell.ply_angle_deg.to_bits()))
+            .or_default()
+            .push(c);
     }
     let mut orientations: BTreeMap<u64, usize> = BTreeMap::new();
     for (_, bits) in groups.keys() {
@@ -206,16 +268,30 @@ pub fn inp_string(deck: &InpDeck<'_>) -> Result<String, MeshError> {
     for (&bits, &k) in &orientations {
         let t = f64::from_bits(bits).to_radians();
         let (sn, cs) = t.sin_cos();
-        let _ = writeln!(s, "*ORIENTATION, NAME=OR{k}, SYSTEM=RECTANGULAR\n{}, {}, 0., {}, {}, 0.", num(cs), num(sn), num(-sn), num(cs));
+        let _ = writeln!(
+            s,
+            "*ORIENTATION, NAME=OR{k}, SYSTEM=RECTANGULAR\n{}, {}, 0., {}, {}, 0.",
+            num(cs),
+            num(sn),
+            num(-sn),
+            num(cs)
+        );
     }
     for (g, ((mat, bits), cells)) in groups.iter().enumerate() {
         let _ = writeln!(s, "*ELSET, ELSET=SECTION{g}");
         id_lines(&mut s, cells.iter().map(|c| c + 1));
-        let _ = writeln!(s, "*SOLID SECTION, ELSET=SECTION{g}, MATERIAL={}, ORIENTATION=OR{}", deck.materials[*mat].name, orientations[bits]);
+        let _ = writeln!(
+            s,
+            "*SOLID SECTION, ELSET=SECTION{g}, MATERIAL={}, ORIENTATION=OR{}",
+            deck.materials[*mat].name, orientations[bits]
+        );
     }
     for (k, step) in deck.steps.iter().enumerate() {
         if !(step.increment > 0.0 && step.period >= step.increment) {
-            return Err(bad(format!("step {k}: increment {} and period {} must satisfy 0 < increment ≤ period", step.increment, step.period)));
+            return Err(bad(format!(
+                "step {k}: increment {} and period {} must satisfy 0 < increment ≤ period",
+                step.increment, step.period
+            )));
         }
         // *STATIC: initial increment, period, minimum (1e-5 of the period), maximum (the period).
         let _ = writeln!(
@@ -232,9 +308,15 @@ pub fn inp_string(deck: &InpDeck<'_>) -> Result<String, MeshError> {
         }
         for b in &step.boundaries {
             if !m.node_sets.contains_key(&b.nset) {
-                return Err(bad(format!("step {k}: boundary on unknown node set '{}'", b.nset)));
+                return Err(bad(format!(
+                    "step {k}: boundary on unknown node set '{}'",
+                    b.nset
+                )));
             }
-            if !(1..=3).contains(&b.first) || !(b.first..=3).contains(&b.last) || !b.value.is_finite() {
+            if !(1..=3).contains(&b.first)
+                || !(b.first..=3).contains(&b.last)
+                || !b.value.is_finite()
+            {
                 return Err(bad(format!("step {k}: boundary {b:?} invalid")));
             }
             let _ = writeln!(s, "{}, {}, {}, {}", b.nset, b.first, b.last, num(b.value));
