@@ -123,16 +123,22 @@ fn id_lines(s: &mut String, ids: impl Iterator<Item = usize>) {
     }
 }
 
-/// A number as CalculiX reads it: its fields are at most 20 characters (Fortran `f20.0`), so
-/// 13 significant digits, e.g. `-6.896551724138e-1` (18 characters, 2 to spare for the
-/// exponent's sign and digits: `-1.234567890123e-10` is 19).
+/// A number as CalculiX reads it: its fields are at most 20 characters (Fortran `f20.0`). The
+/// shortest representation that reads back to the same f64 when it fits (so decks round-trip
+/// exactly), else 13 significant digits, e.g. `-6.896551724138e-1` (`-1.234567890123e-10` is
+/// 19 characters).
 fn num(v: f64) -> String {
-    format!("{v:.12e}")
+    let exact = format!("{v:?}");
+    if exact.len() <= 20 {
+        exact
+    } else {
+        format!("{v:.12e}")
+    }
 }
 
 /// Abaqus's order of the 21 ANISO constants as (row, col) of nonlin3d's Voigt matrix
 /// (0 xx, 1 yy, 2 zz, 3 xy, 4 yz, 5 xz).
-const ANISO_ORDER: [(usize, usize); 21] = [
+pub(crate) const ANISO_ORDER: [(usize, usize); 21] = [
     (0, 0),
     (0, 1),
     (1, 1),

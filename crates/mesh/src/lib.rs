@@ -8,7 +8,7 @@
 //! | [`ThroughWidthParams`], [`through_width_delamination`] | the through-width (plane strain) delamination model, Fig. 3.2.3 |
 //! | [`Front`], [`FrontPoint`] | delamination-front descriptor for VCCT (§2.8, Fig. 2.8.1): c, a/a′, b/b′, d, cells, Δa, θ, S |
 //! | [`quality`], [`CellQuality`] | minimum scaled Jacobian and aspect ratio per cell |
-//! | [`inp`] | Abaqus/CalculiX `.inp` deck writer (mesh, sets, materials, orientations, sections, steps) |
+//! | [`inp`], [`read_inp`] | Abaqus/CalculiX `.inp` deck writer, and reader of a documented subset |
 //! | [`vtu`] | VTU (VTK XML unstructured grid) and PVD series output |
 //!
 //! ```
@@ -29,6 +29,7 @@ mod error;
 mod front;
 mod generate;
 pub mod inp;
+mod inp_read;
 mod model;
 mod quality;
 mod through_width;
@@ -40,6 +41,7 @@ pub use embedded::{
 pub use error::MeshError;
 pub use front::{Front, FrontPoint};
 pub use generate::{BoxParams, graded_coordinates, structured_box};
+pub use inp_read::{InpModel, NodeRef, ReadBoundary, ReadCload, ReadStep, read_inp};
 pub use model::{Cell, Mesh};
 pub use quality::{CellQuality, quality};
 pub use through_width::{ThroughWidthParams, through_width_delamination};
