@@ -33,6 +33,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             EllipticMap::Modified { r: 14e-3 },
         ),
         ("60 mm circle", 30e-3, 30e-3, EllipticMap::Conformal),
+        (
+            "25.4 × 50.8 mm rectangle (§5.3)",
+            12.7e-3,
+            25.4e-3,
+            EllipticMap::Rectangle,
+        ),
     ];
     for (name, a, b, map) in cases {
         for slices in [4, 8, 12] {
@@ -62,6 +68,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             }
             if slices == 8 && name.contains("eq. 3.1.2") {
                 write_vtu(&dir.join("ellipse_30x60_modified.vtu"), &m, &[], &[])?;
+            }
+            if slices == 8 && name.contains("rectangle") {
+                write_vtu(&dir.join("rectangle.vtu"), &m, &[], &[])?;
             }
             if slices == 8 && name == "30 mm circle" {
                 write_vtu(&dir.join("circle_30.vtu"), &m, &[], &[])?;

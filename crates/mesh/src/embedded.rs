@@ -12,10 +12,11 @@
 //! 2. Rings beyond `transition`·a blend linearly into the square boundary x = W or y = W
 //!    (Fig. 3.1.1c).
 //! 3. The elliptic map (eq. 3.1.1, conformal; or eq. 3.1.2 with parameter r) turns the front
-//!    circle of radius a into the ellipse with semi-axes a (x) and b (y). The thesis applied it to
-//!    every node, which bends the outer boundary; here its stretch fades to zero across the blended
-//!    rings, so the outer boundary stays the square while the region around the front keeps the
-//!    exact map (and its orthogonality).
+//!    circle of radius a into the ellipse with semi-axes a (x) and b (y); the rectangular planform
+//!    stretches it onto a rectangle (Fig. 3.1.3). The thesis applied the map to every node, which
+//!    bends the outer boundary; here the rings are mapped first and the rings beyond the
+//!    transition then blend into the square, so the boundary stays the square while the region
+//!    around the front keeps the exact map (and its orthogonality).
 //! 4. The section is swept through the thickness stations; Hex20 mid-edge nodes sit at the
 //!    midpoints of their corners (the thesis's re-centring after the map).
 //! 5. Corner nodes on z = H strictly inside the front are duplicated (lower copy for base cells,
@@ -41,6 +42,11 @@ pub enum EllipticMap {
         /// The radius r of eq. 3.1.2 (m), 0 < r.
         r: f64,
     },
+    /// Not elliptic: a square or rectangular delamination of half-sides a × b (§5.3,
+    /// Fig. 3.1.3): the circular arcs are stretched radially onto the sides of a square of
+    /// half-side a, then y is magnified by b/a. Not conformal (the thesis notes the loss of
+    /// orthogonality at the front).
+    Rectangle,
 }
 
 /// Parameters of [`embedded_delamination`] (SI units).
@@ -77,8 +83,24 @@ pub struct EmbeddedParams {
     pub base_layers: usize,
     /// Ratio of the base element at z = H to the one at z = 0.
     pub base_grading: f64,
-    /// The elliptic map.
+    /// The elliptic map (or the rectangular planform).
     pub map: EllipticMap,
+    /// Ply-level modelling (chapter 7); `None`: homogeneous layers, material 0.
+    pub plies: Option<PlyLayout>,
+}
+
+/// Ply-level layers (chapter 7): one element through each ply of the sublaminate and of the
+/// base plies just below the delamination; the rest of the base as homogenised layers.
+/// Cells in plies get material 1 and their ply angle; homogenised cells material 0, angle 0.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PlyLayout {
+    /// Ply thickness, m.
+    pub ply_thickness: f64,
+    /// Sublaminate ply angles (degrees), bottom (at z = H) to top; their count × thickness
+    /// must equal h.
+    pub sublaminate: Vec<f64>,
+    /// Base ply angles modelled ply by ply, from z = H downwards.
+    pub base_below: Vec<f64>,
 }
 
 impl EmbeddedParams {
@@ -104,6 +126,7 @@ impl EmbeddedParams {
             base_layers: 3,
             base_grading: 0.25,
             map: EllipticMap::Conformal,
+            plies: None,
         }
     }
 
@@ -154,7 +177,62 @@ impl EmbeddedParams {
         {
             return bad("map.r", format!("{r} must be positive"));
         }
+        if let Some(pl) = &self.plies {
+            let t = pl.ply_thickness;
+            if !(t.is_finite() && t > 0.0) || pl.sublaminate.is_empty() {
+                return bad(
+                    "plies",
+                    "positive ply thickness and at least one sublaminate ply".into(),
+                );
+            }
+            if ((pl.sublaminate.len() as f64 * t) - self.h).abs() > 1e-9 * self.h {
+                return bad(
+                    "plies",
+                    format!("{} plies × {t} m ≠ h = {} m", pl.sublaminate.len(), self.h),
+                );
+            }
+            if pl.base_below.len() as f64 * t >= self.base {
+                return bad("plies", "base plies leave no homogenised base".into());
+            }
+            if pl
+                .sublaminate
+                .iter()
+                .chain(&pl.base_below)
+                .any(|a| !a.is_finite())
+            {
+                return bad("plies", "ply angles must be finite".into());
+            }
+        }
         Ok(())
+    }
+
+    /// z stations and, per layer between them, (material, ply angle); and the index of z = H.
+    fn layers(&self) -> Result<(Vec<f64>, Vec<(usize, f64)>, usize), MeshError> {
+        let Some(pl) = &self.plies else {
+            let zb = graded_coordinates(self.base_layers, self.base, self.base_grading)?;
+            let zs = graded_coordinates(self.sub_layers, self.h, 1.0)?;
+            let mut z = zb.clone();
+            z.extend(zs.iter().skip(1).map(|d| self.base + d));
+            let layers = vec![(0, 0.0); z.len() - 1];
+            return Ok((z, layers, self.base_layers));
+        };
+        let t = pl.ply_thickness;
+        let homog = self.base - pl.base_below.len() as f64 * t;
+        let mut z = graded_coordinates(self.base_layers, homog, self.base_grading)?;
+        let mut layers = vec![(0, 0.0); self.base_layers];
+        for (k, &angle) in pl.base_below.iter().rev().enumerate() {
+            z.push(homog + (k + 1) as f64 * t);
+            layers.push((1, angle));
+        }
+        if let Some(last) = z.last_mut() {
+            *last = self.base;
+        }
+        let zh = z.len() - 1;
+        for (k, &angle) in pl.sublaminate.iter().enumerate() {
+            z.push(self.base + (k + 1) as f64 * t);
+            layers.push((1, angle));
+        }
+        Ok((z, layers, zh))
     }
 }
 
@@ -170,9 +248,22 @@ fn radial_stations(p: &EmbeddedParams) -> Result<(Vec<f64>, usize), MeshError> {
     Ok((rho, front))
 }
 
-/// The elliptic map of a point of the circular mesh (eq. 3.1.1 / 3.1.2), scaled by `fade`.
+/// The planform map of a point of the circular mesh (eq. 3.1.1 / 3.1.2, or the rectangle),
+/// its stretch scaled by `fade` (1 = the full map).
 fn elliptic(p: &EmbeddedParams, x: f64, y: f64, fade: f64) -> (f64, f64) {
     let (a, b) = (p.a, p.b);
+    if p.map == EllipticMap::Rectangle {
+        let rho = x.hypot(y);
+        let s = if rho > 0.0 {
+            rho / x.abs().max(y.abs())
+        } else {
+            1.0
+        };
+        return (
+            x * (1.0 + fade * (s - 1.0)),
+            y * (1.0 + fade * (s * b / a - 1.0)),
+        );
+    }
     if a == b {
         return (x, y);
     }
@@ -188,6 +279,7 @@ fn elliptic(p: &EmbeddedParams, x: f64, y: f64, fade: f64) -> (f64, f64) {
                 let f = (rho2.sqrt() / r).min(1.0);
                 root * f - f + 1.0
             }
+            EllipticMap::Rectangle => 1.0,
         }
     } else {
         long / short
@@ -238,25 +330,37 @@ pub fn embedded_delamination_with_front(p: &EmbeddedParams) -> Result<(Mesh, Fro
     for q in 0..=p.slices {
         ring_id[0][q] = core_boundary(q);
     }
+    // Ring nodes: the planform map (ellipse or rectangle) of the circle point up to the
+    // transition ring; beyond it, points on the straight line from the mapped transition ring to
+    // the square boundary, reached on the last ring. Monotone whenever the mapped transition
+    // ring lies inside the square, which `check` ensures: it needs transition·max(a, b) < W, and
+    // both maps send the ring ρ = t·a (t ≥ 1) inside |x| ≤ t·a, |y| ≤ t·b (for a ≤ b; swapped
+    // otherwise).
     let wt = p.transition * p.a;
+    let planform = |x: f64, y: f64| {
+        let (u, v) = elliptic(p, x, y, 1.0);
+        [u, v]
+    };
     for (m0, &r) in rho.iter().enumerate() {
         let m = m0 + 1;
         for q in 0..=p.slices {
             let phi = angle(q);
-            let circle = [r * phi.cos(), r * phi.sin()];
             let pt = if r <= wt {
-                circle
+                planform(r * phi.cos(), r * phi.sin())
             } else {
+                // Straight from the mapped transition ring to the square boundary.
+                let mapped = planform(wt * phi.cos(), wt * phi.sin());
                 let beta = (r - wt) / (p.w - wt);
-                let sq = if phi <= std::f64::consts::FRAC_PI_4 {
+                let sq = if q == p.slices {
+                    [0.0, p.w]
+                } else if phi <= std::f64::consts::FRAC_PI_4 {
                     [p.w, p.w * phi.tan()]
                 } else {
                     [p.w / phi.tan(), p.w]
                 };
-                let sq = if q == p.slices { [0.0, p.w] } else { sq };
                 [
-                    (1.0 - beta) * circle[0] + beta * sq[0],
-                    (1.0 - beta) * circle[1] + beta * sq[1],
+                    (1.0 - beta) * mapped[0] + beta * sq[0],
+                    (1.0 - beta) * mapped[1] + beta * sq[1],
                 ]
             };
             ring_id[m][q] = v2.len();
@@ -264,25 +368,17 @@ pub fn embedded_delamination_with_front(p: &EmbeddedParams) -> Result<(Mesh, Fro
             inside.push(m0 < front);
         }
     }
-    // Fade of the elliptic stretch: 1 up to the transition ring, 0 on the square boundary.
-    let fade: Vec<f64> = v2
-        .iter()
-        .map(|pt| {
-            let r = (pt[0] * pt[0] + pt[1] * pt[1]).sqrt();
-            let edge = pt[0].max(pt[1]);
-            if r <= wt {
-                1.0
-            } else {
-                ((p.w - edge) / (p.w - wt)).clamp(0.0, 1.0)
-            }
-        })
-        .collect();
+    // The core and its joining ring take the planform map too.
+    let core_nodes = (k + 1) * (k + 1);
     let mapped: Vec<[f64; 2]> = v2
         .iter()
-        .zip(&fade)
-        .map(|(pt, &f)| {
-            let (x, y) = elliptic(p, pt[0], pt[1], f);
-            [x, y]
+        .enumerate()
+        .map(|(v, pt)| {
+            if v < core_nodes {
+                planform(pt[0], pt[1])
+            } else {
+                *pt
+            }
         })
         .collect();
     // 2-D quads (counter-clockwise seen from +z): core, then rings.
@@ -308,11 +404,7 @@ pub fn embedded_delamination_with_front(p: &EmbeddedParams) -> Result<(Mesh, Fro
         }
     }
     // --- z stations: base graded towards H, sublaminate uniform.
-    let zb = graded_coordinates(p.base_layers, p.base, p.base_grading)?;
-    let zs = graded_coordinates(p.sub_layers, p.h, 1.0)?;
-    let mut z: Vec<f64> = zb.clone();
-    z.extend(zs.iter().skip(1).map(|d| p.base + d));
-    let zh = p.base_layers;
+    let (z, layer_props, zh) = p.layers()?;
     // --- 3-D corner nodes: (2-D vertex, z station); lower copies on z = H inside the front.
     let mut mesh = Mesh::default();
     let nv = v2.len();
@@ -362,11 +454,12 @@ pub fn embedded_delamination_with_front(p: &EmbeddedParams) -> Result<(Mesh, Fro
                 }
             }
             let c = mesh.cells.len();
+            let (material, ply_angle_deg) = layer_props[l];
             mesh.cells.push(Cell {
                 kind: p.kind,
                 nodes,
-                material: 0,
-                ply_angle_deg: 0.0,
+                material,
+                ply_angle_deg,
             });
             if below_plane {
                 base_cells.push(c)
@@ -542,4 +635,41 @@ pub fn embedded_delamination_with_front(p: &EmbeddedParams) -> Result<(Mesh, Fro
     mesh.validate()?;
     mesh.check_geometry()?;
     Ok((mesh, front_descriptor))
+}
+
+/// The edge delamination of §5.5: the same quarter mesh as [`embedded_delamination_with_front`]
+/// (a semicircular or semi-elliptical delamination at the free edge y = 0 of a specimen
+/// symmetric about x = 0); the analysis leaves the `y0` set free instead of imposing v = 0.
+pub fn edge_delamination(p: &EmbeddedParams) -> Result<(Mesh, Front), MeshError> {
+    embedded_delamination_with_front(p)
+}
+
+/// The thin-film model of §5.3: only the sublaminate of [`embedded_delamination`]; its lower
+/// face outside the delamination (node set `bonded`, z = H) receives the displacements of the
+/// base laminate, known in closed form; `crack_upper` is its free lower face inside the
+/// delamination; `front`, `x0`, `y0`, `x1`, `y1`, `center_top` as in the full model.
+pub fn thin_film(p: &EmbeddedParams) -> Result<Mesh, MeshError> {
+    let full = embedded_delamination(p)?;
+    let sub = full
+        .cell_sets
+        .get("sublaminate")
+        .cloned()
+        .unwrap_or_default();
+    let (mut m, _) = full.extract(&sub)?;
+    m.node_sets.remove("crack_lower");
+    m.node_sets.remove("z0");
+    m.cell_sets.remove("base");
+    let free: std::collections::HashSet<usize> = m
+        .node_sets
+        .get("crack_upper")
+        .into_iter()
+        .flatten()
+        .copied()
+        .collect();
+    let tol = 1e-9 * p.w;
+    let bonded = (0..m.nodes.len())
+        .filter(|&n| (m.nodes[n][2] - p.base).abs() < tol && !free.contains(&n))
+        .collect();
+    m.node_sets.insert("bonded".into(), bonded);
+    Ok(m)
 }

@@ -4,7 +4,8 @@
 //! |---|---|
 //! | [`Mesh`], [`Cell`] | nodes, Hex8/Hex20 cells (Abaqus/VTK order) with material and ply angle, named sets |
 //! | [`BoxParams`], [`structured_box`] | a graded structured box with the boundary sets x0 … z1 |
-//! | [`EmbeddedParams`], [`embedded_delamination`] | the embedded (elliptic) delamination model, Fig. 3.1.1 / 3.2.1, eq. 3.1.1–3.1.2 |
+//! | [`EmbeddedParams`], [`embedded_delamination`] | the embedded delamination model (ellipse, eq. 3.1.1–3.1.2, or rectangle, Fig. 3.1.3), Fig. 3.1.1 / 3.2.1, with optional ply-level layers ([`PlyLayout`], chapter 7) |
+//! | [`edge_delamination`], [`thin_film`] | the edge (§5.5) and thin-film (§5.3) variants |
 //! | [`ThroughWidthParams`], [`through_width_delamination`] | the through-width (plane strain) delamination model, Fig. 3.2.3 |
 //! | [`Front`], [`FrontPoint`] | delamination-front descriptor for VCCT (§2.8, Fig. 2.8.1): c, a/a′, b/b′, d, cells, Δa, θ, S |
 //! | [`quality`], [`CellQuality`] | minimum scaled Jacobian and aspect ratio per cell |
@@ -36,7 +37,8 @@ mod through_width;
 pub mod vtu;
 
 pub use embedded::{
-    EllipticMap, EmbeddedParams, embedded_delamination, embedded_delamination_with_front,
+    EllipticMap, EmbeddedParams, PlyLayout, edge_delamination, embedded_delamination,
+    embedded_delamination_with_front, thin_film,
 };
 pub use error::MeshError;
 pub use front::{Front, FrontPoint};

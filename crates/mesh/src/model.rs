@@ -107,6 +107,61 @@ impl Mesh {
         Ok(())
     }
 
+    /// The sub-mesh of `cells`: only the nodes they use (renumbered in their old order), the
+    /// sets restricted and renumbered. Returns it with `old node → new node` (None if dropped).
+    pub fn extract(&self, cells: &[usize]) -> Result<(Mesh, Vec<Option<usize>>), MeshError> {
+        self.validate()?;
+        let mut used = vec![false; self.nodes.len()];
+        let mut cell_map = vec![None; self.cells.len()];
+        for (new, &c) in cells.iter().enumerate() {
+            let cell = self.cells.get(c).ok_or_else(|| MeshError::CellIndex {
+                owner: "extract".into(),
+                cell: c,
+                face: None,
+                count: self.cells.len(),
+            })?;
+            cell_map[c] = Some(new);
+            for &n in &cell.nodes {
+                used[n] = true;
+            }
+        }
+        let mut node_map = vec![None; self.nodes.len()];
+        let mut out = Mesh::default();
+        for (old, &u) in used.iter().enumerate() {
+            if u {
+                node_map[old] = Some(out.nodes.len());
+                out.nodes.push(self.nodes[old]);
+            }
+        }
+        for &c in cells {
+            let mut cell = self.cells[c].clone();
+            cell.nodes = cell.nodes.iter().filter_map(|&n| node_map[n]).collect();
+            out.cells.push(cell);
+        }
+        for (name, set) in &self.node_sets {
+            out.node_sets.insert(
+                name.clone(),
+                set.iter().filter_map(|&n| node_map[n]).collect(),
+            );
+        }
+        for (name, set) in &self.cell_sets {
+            out.cell_sets.insert(
+                name.clone(),
+                set.iter().filter_map(|&c| cell_map[c]).collect(),
+            );
+        }
+        for (name, set) in &self.face_sets {
+            out.face_sets.insert(
+                name.clone(),
+                set.iter()
+                    .filter_map(|&(c, f)| cell_map[c].map(|n| (n, f)))
+                    .collect(),
+            );
+        }
+        out.validate()?;
+        Ok((out, node_map))
+    }
+
     /// Global DOFs (3 per node, node-major) of each cell.
     pub fn cell_dofs(&self) -> Vec<Vec<usize>> {
         self.cells

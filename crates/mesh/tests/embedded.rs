@@ -336,3 +336,117 @@ fn default_refinement_reproduces_table_2_model_sizes() {
         );
     }
 }
+
+#[test]
+fn square_and_rectangular_planforms() {
+    // §5.3: 25.4 × 25.4 mm and 25.4 × 50.8 mm delaminations, h = 0.51 mm, H = 5.1 mm.
+    for (a, b) in [(12.7e-3, 12.7e-3), (12.7e-3, 25.4e-3)] {
+        for slices in [4, 8] {
+            let p = EmbeddedParams {
+                a,
+                b,
+                h: 0.51e-3,
+                base: 5.1e-3,
+                slices,
+                map: EllipticMap::Rectangle,
+                ..EmbeddedParams::thesis_reference()
+            };
+            let m = embedded_delamination(&p).unwrap();
+            let f = front_corners(&m, slices);
+            // The front corners lie on the rectangle's sides (the 45° node on its corner), so the
+            // polygon is the rectangle itself: area a·b and length a + b exactly.
+            for q in &f {
+                let on_side = (q[0] - a).abs() < 1e-15 || (q[1] - b).abs() < 1e-15;
+                assert!(on_side && q[0] <= a + 1e-15 && q[1] <= b + 1e-15, "{q:?}");
+            }
+            let area: f64 = f
+                .windows(2)
+                .map(|w| 0.5 * (w[0][0] * w[1][1] - w[1][0] * w[0][1]))
+                .sum();
+            assert!(
+                (area - a * b).abs() < 1e-12 * a * b,
+                "area {area} vs {}",
+                a * b
+            );
+            let exact = p.w * p.w * (p.base + p.h);
+            assert!((m.volume().unwrap() - exact).abs() < 1e-10 * exact);
+        }
+    }
+}
+
+#[test]
+fn ply_angles_land_on_the_right_cells() {
+    use nonlin3d_mesh::PlyLayout;
+    let t = 0.1e-3;
+    let sub = vec![45.0, -45.0, 0.0, 90.0];
+    let below = vec![90.0, 0.0];
+    let p = EmbeddedParams {
+        slices: 4,
+        plies: Some(PlyLayout {
+            ply_thickness: t,
+            sublaminate: sub.clone(),
+            base_below: below.clone(),
+        }),
+        ..EmbeddedParams::thesis_reference()
+    };
+    let m = embedded_delamination(&p).unwrap();
+    let h_top = p.base + p.h;
+    for (c, cell) in m.cells.iter().enumerate() {
+        let zc = cell.nodes.iter().map(|&n| m.nodes[n][2]).sum::<f64>() / cell.nodes.len() as f64;
+        let (mat, angle) = if zc > p.base {
+            (1, sub[((zc - p.base) / t) as usize])
+        } else if zc > p.base - below.len() as f64 * t {
+            (1, below[((p.base - zc) / t) as usize])
+        } else {
+            (0, 0.0)
+        };
+        assert_eq!(
+            (cell.material, cell.ply_angle_deg),
+            (mat, angle),
+            "cell {c} at z = {zc}"
+        );
+        assert!(zc < h_top);
+    }
+    // The crack still sits on z = H and the volume is the box.
+    assert!(
+        m.node_sets["crack_upper"]
+            .iter()
+            .all(|&n| (m.nodes[n][2] - p.base).abs() < 1e-15)
+    );
+    let exact = p.w * p.w * (p.base + p.h);
+    assert!((m.volume().unwrap() - exact).abs() < 1e-10 * exact);
+    // A layout that does not add up to h is refused.
+    let bad = EmbeddedParams {
+        plies: Some(PlyLayout {
+            ply_thickness: t,
+            sublaminate: vec![0.0; 3],
+            base_below: vec![],
+        }),
+        ..p
+    };
+    assert!(embedded_delamination(&bad).is_err());
+}
+
+#[test]
+fn thin_film_is_the_sublaminate_with_its_bonded_face() {
+    use nonlin3d_mesh::thin_film;
+    let p = params(8, 15e-3, 15e-3);
+    let m = thin_film(&p).unwrap();
+    let exact = p.w * p.w * p.h;
+    assert!((m.volume().unwrap() - exact).abs() < 1e-10 * exact);
+    assert!(m.nodes.iter().all(|x| x[2] >= p.base - 1e-15));
+    let (bonded, free) = (&m.node_sets["bonded"], &m.node_sets["crack_upper"]);
+    let at_h = m
+        .nodes
+        .iter()
+        .filter(|x| (x[2] - p.base).abs() < 1e-15)
+        .count();
+    assert_eq!(bonded.len() + free.len(), at_h);
+    assert!(bonded.iter().all(|n| !free.contains(n)));
+    // The front is bonded; the centre of the top face is kept.
+    assert!(m.node_sets["front"].iter().all(|n| bonded.contains(n)));
+    assert_eq!(
+        m.nodes[m.node_sets["center_top"][0]],
+        [0.0, 0.0, p.base + p.h]
+    );
+}
