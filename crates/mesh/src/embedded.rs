@@ -207,7 +207,7 @@ impl EmbeddedParams {
     }
 
     /// z stations and, per layer between them, (material, ply angle); and the index of z = H.
-    fn layers(&self) -> Result<(Vec<f64>, Vec<(usize, f64)>, usize), MeshError> {
+    fn layers(&self) -> Result<Layers, MeshError> {
         let Some(pl) = &self.plies else {
             let zb = graded_coordinates(self.base_layers, self.base, self.base_grading)?;
             let zs = graded_coordinates(self.sub_layers, self.h, 1.0)?;
@@ -235,6 +235,9 @@ impl EmbeddedParams {
         Ok((z, layers, zh))
     }
 }
+
+/// Thickness stations, (material, ply angle) of each layer, index of z = H.
+type Layers = (Vec<f64>, Vec<(usize, f64)>, usize);
 
 /// Radial stations: core radius … a (graded finer towards a), a … W (finer at a), as radii of
 /// the undeformed circular mesh (the outer ones become blend parameters towards the square).
