@@ -40,6 +40,33 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             EllipticMap::Rectangle,
         ),
     ];
+    // The thesis's own centre (axis nodes on a 1e-9 m arc) for comparison.
+    for slices in [4, 8, 12] {
+        let p = EmbeddedParams {
+            slices,
+            centre: nonlin3d::mesh::Centre::ThesisArc,
+            ..base.clone()
+        };
+        match embedded_delamination(&p) {
+            Ok(m) => {
+                let q = quality(&m)?;
+                let min = q
+                    .iter()
+                    .map(|c| c.min_scaled_jacobian)
+                    .fold(f64::INFINITY, f64::min);
+                let aspect = q.iter().map(|c| c.aspect_ratio).fold(0.0, f64::max);
+                println!(
+                    "| 30 mm circle, thesis centre (1e-9 m arc) | {slices} | {} | {} | {} | {min:.3} | {aspect:.1e} |",
+                    m.nodes.len(),
+                    m.cells.len(),
+                    m.node_sets["crack_upper"].len()
+                );
+            }
+            Err(e) => {
+                println!("| 30 mm circle, thesis centre (1e-9 m arc) | {slices} | {e} | | | | |")
+            }
+        }
+    }
     for (name, a, b, map) in cases {
         for slices in [4, 8, 12] {
             let p = EmbeddedParams {

@@ -87,6 +87,19 @@ pub struct EmbeddedParams {
     pub map: EllipticMap,
     /// Ply-level modelling (chapter 7); `None`: homogeneous layers, material 0.
     pub plies: Option<PlyLayout>,
+    /// How the centre (the axis r = 0) is meshed.
+    pub centre: Centre,
+}
+
+/// The centre of the swept section.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Centre {
+    /// A square core of (slices/2)² cells and one joining ring (the default): no degenerate cell.
+    #[default]
+    OGrid,
+    /// The thesis's construction (§3.1): the first ring of cells reaches the axis, whose nodes
+    /// are moved onto an arc of radius 1e-9 m; those cells are nearly triangular.
+    ThesisArc,
 }
 
 /// Ply-level layers (chapter 7): one element through each ply of the sublaminate and of the
@@ -127,6 +140,7 @@ impl EmbeddedParams {
             base_grading: 0.25,
             map: EllipticMap::Conformal,
             plies: None,
+            centre: Centre::OGrid,
         }
     }
 
@@ -313,11 +327,13 @@ pub fn embedded_delamination_with_front(p: &EmbeddedParams) -> Result<(Mesh, Fro
     // cells joins its boundary to the first circle ρ₀, so no cell has a near-straight corner.
     let c = 0.5 * rc;
     let mut core_id = vec![vec![0usize; k + 1]; k + 1];
-    for j in 0..=k {
-        for i in 0..=k {
-            core_id[j][i] = v2.len();
-            v2.push([c * i as f64 / k as f64, c * j as f64 / k as f64]);
-            inside.push(true);
+    if p.centre == Centre::OGrid {
+        for j in 0..=k {
+            for i in 0..=k {
+                core_id[j][i] = v2.len();
+                v2.push([c * i as f64 / k as f64, c * j as f64 / k as f64]);
+                inside.push(true);
+            }
         }
     }
     // Node q of the core boundary, counter-clockwise from the x axis: q ≤ k on x = c, q ≥ k on y = c.
@@ -331,7 +347,16 @@ pub fn embedded_delamination_with_front(p: &EmbeddedParams) -> Result<(Mesh, Fro
     // Ring 0 is the core boundary; ring m ≥ 1 the circle (or blend) at radial station m − 1.
     let mut ring_id = vec![vec![0usize; p.slices + 1]; rho.len() + 1];
     for q in 0..=p.slices {
-        ring_id[0][q] = core_boundary(q);
+        ring_id[0][q] = match p.centre {
+            Centre::OGrid => core_boundary(q),
+            Centre::ThesisArc => {
+                // The thesis's axis nodes, spread on an arc of 1e-9 m.
+                let phi = angle(q);
+                v2.push([1e-9 * phi.cos(), 1e-9 * phi.sin()]);
+                inside.push(true);
+                v2.len() - 1
+            }
+        };
     }
     // Ring nodes: the planform map (ellipse or rectangle) of the circle point up to the
     // transition ring; beyond it, points on the straight line from the mapped transition ring to
@@ -372,7 +397,10 @@ pub fn embedded_delamination_with_front(p: &EmbeddedParams) -> Result<(Mesh, Fro
         }
     }
     // The core and its joining ring take the planform map too.
-    let core_nodes = (k + 1) * (k + 1);
+    let core_nodes = match p.centre {
+        Centre::OGrid => (k + 1) * (k + 1),
+        Centre::ThesisArc => p.slices + 1,
+    };
     let mapped: Vec<[f64; 2]> = v2
         .iter()
         .enumerate()
@@ -386,7 +414,7 @@ pub fn embedded_delamination_with_front(p: &EmbeddedParams) -> Result<(Mesh, Fro
         .collect();
     // 2-D quads (counter-clockwise seen from +z): core, then rings.
     let mut quads: Vec<[usize; 4]> = Vec::new();
-    for j in 0..k {
+    for j in 0..if p.centre == Centre::OGrid { k } else { 0 } {
         for i in 0..k {
             quads.push([
                 core_id[j][i],
@@ -490,7 +518,14 @@ pub fn embedded_delamination_with_front(p: &EmbeddedParams) -> Result<(Mesh, Fro
     }
     mesh.node_sets.insert(
         "center_top".into(),
-        vec![corner[z.len() - 1][core_id[0][0]]],
+        // The O-grid has a node on the axis; the thesis's centre the arc node on y = 0.
+        vec![
+            corner[z.len() - 1][if p.centre == Centre::OGrid {
+                core_id[0][0]
+            } else {
+                ring_id[0][0]
+            }],
+        ],
     );
     // Crack faces: corner pairs, then mid-edge pairs (key with upper corners ↔ lower corners).
     let (mut up, mut lo) = (Vec::new(), Vec::new());

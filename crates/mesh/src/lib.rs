@@ -37,7 +37,7 @@ mod through_width;
 pub mod vtu;
 
 pub use embedded::{
-    EllipticMap, EmbeddedParams, PlyLayout, edge_delamination, embedded_delamination,
+    Centre, EllipticMap, EmbeddedParams, PlyLayout, edge_delamination, embedded_delamination,
     embedded_delamination_with_front, thin_film,
 };
 pub use error::MeshError;

@@ -450,3 +450,27 @@ fn thin_film_is_the_sublaminate_with_its_bonded_face() {
         [0.0, 0.0, p.base + p.h]
     );
 }
+
+#[test]
+fn thesis_centre_is_valid_but_extremely_stretched() {
+    use nonlin3d_mesh::Centre;
+    let p = EmbeddedParams {
+        centre: Centre::ThesisArc,
+        ..params(8, 15e-3, 15e-3)
+    };
+    let m = embedded_delamination(&p).unwrap();
+    let exact = p.w * p.w * (p.base + p.h);
+    // The 1e-9 m arc leaves a sliver of the axis region unmeshed: ~(π/4)·(1e-9)²·(H + h).
+    assert!((m.volume().unwrap() - exact).abs() < 1e-12 * exact);
+    let q = quality(&m).unwrap();
+    let worst_aspect = q.iter().map(|c| c.aspect_ratio).fold(0.0, f64::max);
+    assert!(worst_aspect > 1e6, "{worst_aspect}");
+    assert!(q.iter().all(|c| c.min_scaled_jacobian > 0.0));
+    let o = embedded_delamination(&params(8, 15e-3, 15e-3)).unwrap();
+    let o_aspect = quality(&o)
+        .unwrap()
+        .iter()
+        .map(|c| c.aspect_ratio)
+        .fold(0.0, f64::max);
+    assert!(o_aspect < 100.0, "{o_aspect}");
+}
