@@ -281,4 +281,33 @@ fn calculix_runs_our_decks_and_agrees_with_our_linear_solution() {
     let theirs = run_ccx("aniso30", &deck, block.nodes.len());
     let rel = compare(&ours, &theirs);
     assert!(rel < 2e-6, "ANISO block: max relative difference {rel:e}");
+    // The unrotated ply through ORTHO with a 30° orientation.
+    for c in &mut block.cells {
+        c.ply_angle_deg = 30.0;
+    }
+    let mats = [InpMaterial {
+        name: "GR-EP-ORTHO".into(),
+        elastic: InpElastic::Orthotropic(Box::new(ge.stiffness().unwrap())),
+    }];
+    let deck = inp_string(&InpDeck {
+        heading: "nonlin3d ortho block".into(),
+        mesh: &block,
+        materials: &mats,
+        steps: vec![InpStep {
+            nlgeom: false,
+            increment: 1.0,
+            period: 1.0,
+            boundaries: vec![InpBoundary {
+                nset: "x0".into(),
+                first: 1,
+                last: 3,
+                value: 0.0,
+            }],
+            cloads: loads.clone(),
+        }],
+    })
+    .unwrap();
+    let theirs = run_ccx("ortho_d30", &deck, block.nodes.len());
+    let rel = compare(&ours, &theirs);
+    assert!(rel < 2e-6, "ORTHO block: max relative difference {rel:e}");
 }

@@ -2,7 +2,7 @@
 //!
 //! Written: `*HEADING`, `*NODE`, `*ELEMENT` (C3D8 / C3D20), `*NSET` and `*ELSET` for the mesh's
 //! sets, `*SURFACE, TYPE=ELEMENT` for its face sets, `*MATERIAL` with `*ELASTIC` (ISO,
-//! ENGINEERING CONSTANTS or ANISO), one `*ORIENTATION` (rectangular, rotated about z) per
+//! ENGINEERING CONSTANTS, ORTHO or ANISO), one `*ORIENTATION` (rectangular, rotated about z) per
 //! distinct ply angle, `*SOLID SECTION` per (material, ply angle) group, and `*STEP`s (optionally
 //! `NLGEOM`) with `*STATIC`, `*BOUNDARY`, `*CLOAD` and output requests. Node and element ids are
 //! the mesh's indices + 1. CalculiX 2.20 runs the decks unchanged (tested when `ccx` is present;
@@ -26,6 +26,10 @@ pub enum InpElastic {
     },
     /// `*ELASTIC, TYPE=ENGINEERING CONSTANTS` in the material (ply) axes.
     Engineering(Orthotropic),
+    /// `*ELASTIC, TYPE=ORTHO`: the nine constants D1111, D1122, D2222, D1133, D2233, D3333,
+    /// D1212, D1313, D2323 of a stiffness with no normal–shear or shear–shear coupling (an error
+    /// otherwise: use ANISO).
+    Orthotropic(Box<Stiffness>),
     /// `*ELASTIC, TYPE=ANISO`: a full 6×6 stiffness (engineering shears, nonlin3d's order is
     /// converted to Abaqus's 11, 22, 33, 12, 13, 23).
     Anisotropic(Box<Stiffness>),
@@ -135,6 +139,20 @@ fn num(v: f64) -> String {
         format!("{v:.12e}")
     }
 }
+
+/// Abaqus's order of the 9 ORTHO constants as (row, col) of nonlin3d's Voigt matrix:
+/// D1111 D1122 D2222 D1133 D2233 D3333 D1212 D1313 D2323.
+pub(crate) const ORTHO_ORDER: [(usize, usize); 9] = [
+    (0, 0),
+    (0, 1),
+    (1, 1),
+    (0, 2),
+    (1, 2),
+    (2, 2),
+    (3, 3),
+    (5, 5),
+    (4, 4),
+];
 
 /// Abaqus's order of the 21 ANISO constants as (row, col) of nonlin3d's Voigt matrix
 /// (0 xx, 1 yy, 2 zz, 3 xy, 4 yz, 5 xz).
@@ -248,6 +266,21 @@ pub fn inp_string(deck: &InpDeck<'_>) -> Result<String, MeshError> {
                     num(o.g13),
                     num(o.g23)
                 );
+            }
+            InpElastic::Orthotropic(c) => {
+                let k = c.c();
+                let scale = (0..6).map(|i| k[i][i]).fold(0.0, f64::max);
+                let coupled = (0..6)
+                    .flat_map(|i| (0..6).map(move |j| (i, j)))
+                    .any(|(i, j)| (i >= 3 || j >= 3) && i != j && k[i][j].abs() > 1e-12 * scale);
+                if coupled {
+                    return Err(bad(format!(
+                        "material {}: ORTHO needs no shear coupling; use ANISO",
+                        mat.name
+                    )));
+                }
+                let v: Vec<String> = ORTHO_ORDER.iter().map(|&(i, j)| num(k[i][j])).collect();
+                let _ = writeln!(s, "*ELASTIC, TYPE=ORTHO\n{}\n{}", v[..8].join(", "), v[8]);
             }
             InpElastic::Anisotropic(c) => {
                 let v: Vec<String> = ANISO_ORDER.iter().map(|&(i, j)| num(c.c()[i][j])).collect();
