@@ -131,6 +131,34 @@ fn compare(ours: &[[f64; 3]], theirs: &[[f64; 3]]) -> f64 {
     diff / scale
 }
 
+/// A one-step linear deck clamping `x0` under `loads`.
+fn linear_deck(
+    heading: &str,
+    mesh: &Mesh,
+    materials: &[InpMaterial],
+    loads: &[InpCload],
+) -> String {
+    let step = InpStep {
+        nlgeom: false,
+        increment: 1.0,
+        period: 1.0,
+        boundaries: vec![InpBoundary {
+            nset: "x0".into(),
+            first: 1,
+            last: 3,
+            value: 0.0,
+        }],
+        cloads: loads.to_vec(),
+    };
+    inp_string(&InpDeck {
+        heading: heading.into(),
+        mesh,
+        materials,
+        steps: vec![step],
+    })
+    .unwrap()
+}
+
 fn tip_loads(mesh: &Mesh, total: f64, dof: u8) -> Vec<InpCload> {
     let tip = &mesh.node_sets["x1"];
     tip.iter()
@@ -175,13 +203,7 @@ fn calculix_runs_our_decks_and_agrees_with_our_linear_solution() {
             nu: steel.nu12,
         },
     }];
-    let deck = inp_string(&InpDeck {
-        heading: "nonlin3d cantilever".into(),
-        mesh: &mesh,
-        materials: &mats,
-        steps: vec![step(false)],
-    })
-    .unwrap();
+    let deck = linear_deck("nonlin3d cantilever", &mesh, &mats, &loads);
     let theirs = run_ccx("cantilever", &deck, mesh.nodes.len());
     let ours = solve_linear(
         &mesh,
@@ -227,24 +249,12 @@ fn calculix_runs_our_decks_and_agrees_with_our_linear_solution() {
         name: "GR-EP".into(),
         elastic: InpElastic::Engineering(ge),
     }];
-    let deck = inp_string(&InpDeck {
-        heading: "nonlin3d orthotropic block at 30 degrees".into(),
-        mesh: &block,
-        materials: &mats,
-        steps: vec![InpStep {
-            nlgeom: false,
-            increment: 1.0,
-            period: 1.0,
-            boundaries: vec![InpBoundary {
-                nset: "x0".into(),
-                first: 1,
-                last: 3,
-                value: 0.0,
-            }],
-            cloads: loads.clone(),
-        }],
-    })
-    .unwrap();
+    let deck = linear_deck(
+        "nonlin3d orthotropic block at 30 degrees",
+        &block,
+        &mats,
+        &loads,
+    );
     let theirs = run_ccx("ortho30", &deck, block.nodes.len());
     let ours = solve_linear(&block, &vec![rotated; block.cells.len()], "x0", &loads);
     let rel = compare(&ours, &theirs);
@@ -260,24 +270,7 @@ fn calculix_runs_our_decks_and_agrees_with_our_linear_solution() {
         name: "GR-EP-30".into(),
         elastic: InpElastic::Anisotropic(Box::new(rotated)),
     }];
-    let deck = inp_string(&InpDeck {
-        heading: "nonlin3d aniso block".into(),
-        mesh: &block,
-        materials: &mats,
-        steps: vec![InpStep {
-            nlgeom: false,
-            increment: 1.0,
-            period: 1.0,
-            boundaries: vec![InpBoundary {
-                nset: "x0".into(),
-                first: 1,
-                last: 3,
-                value: 0.0,
-            }],
-            cloads: loads.clone(),
-        }],
-    })
-    .unwrap();
+    let deck = linear_deck("nonlin3d aniso block", &block, &mats, &loads);
     let theirs = run_ccx("aniso30", &deck, block.nodes.len());
     let rel = compare(&ours, &theirs);
     assert!(rel < 2e-6, "ANISO block: max relative difference {rel:e}");
@@ -289,24 +282,7 @@ fn calculix_runs_our_decks_and_agrees_with_our_linear_solution() {
         name: "GR-EP-ORTHO".into(),
         elastic: InpElastic::Orthotropic(Box::new(ge.stiffness().unwrap())),
     }];
-    let deck = inp_string(&InpDeck {
-        heading: "nonlin3d ortho block".into(),
-        mesh: &block,
-        materials: &mats,
-        steps: vec![InpStep {
-            nlgeom: false,
-            increment: 1.0,
-            period: 1.0,
-            boundaries: vec![InpBoundary {
-                nset: "x0".into(),
-                first: 1,
-                last: 3,
-                value: 0.0,
-            }],
-            cloads: loads.clone(),
-        }],
-    })
-    .unwrap();
+    let deck = linear_deck("nonlin3d ortho block", &block, &mats, &loads);
     let theirs = run_ccx("ortho_d30", &deck, block.nodes.len());
     let rel = compare(&ours, &theirs);
     assert!(rel < 2e-6, "ORTHO block: max relative difference {rel:e}");

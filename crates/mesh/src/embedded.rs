@@ -25,7 +25,7 @@
 //!    front, are duplicated too. Everything else is shared.
 
 use crate::MeshError;
-use crate::front::{Front, FrontPoint};
+use crate::front::{CellsTouching, Front, FrontPoint};
 use crate::generate::graded_coordinates;
 use crate::model::{Cell, Mesh};
 use nonlin3d_element::ElementKind;
@@ -501,21 +501,16 @@ pub fn embedded_delamination_with_front(p: &EmbeddedParams) -> Result<(Mesh, Fro
     }
     // --- sets.
     let tol = 1e-9 * p.w;
-    let select = |f: &dyn Fn(&[f64; 3]) -> bool| -> Vec<usize> {
-        (0..mesh.nodes.len())
-            .filter(|&n| f(&mesh.nodes[n]))
-            .collect()
-    };
-    let sets = [
-        ("x0", select(&|x| x[0].abs() < tol)),
-        ("y0", select(&|x| x[1].abs() < tol)),
-        ("z0", select(&|x| x[2].abs() < tol)),
-        ("x1", select(&|x| (x[0] - p.w).abs() < tol)),
-        ("y1", select(&|x| (x[1] - p.w).abs() < tol)),
-    ];
-    for (name, s) in sets {
-        mesh.node_sets.insert(name.into(), s);
-    }
+    mesh.add_plane_sets(
+        &[
+            ("x0", 0, 0.0),
+            ("y0", 1, 0.0),
+            ("z0", 2, 0.0),
+            ("x1", 0, p.w),
+            ("y1", 1, p.w),
+        ],
+        tol,
+    );
     mesh.node_sets.insert(
         "center_top".into(),
         // The O-grid has a node on the axis; the thesis's centre the arc node on y = 0.
@@ -582,22 +577,8 @@ pub fn embedded_delamination_with_front(p: &EmbeddedParams) -> Result<(Mesh, Fro
     let ahead = front_ring + 1;
     let midside = |na: usize, nb: usize| mid.get(&(na.min(nb), na.max(nb))).copied();
     let lower_or = |v: usize| if inside[v] { lower[v] } else { corner[zh][v] };
-    let mut cells_of: HashMap<usize, Vec<usize>> = HashMap::new();
-    for &c in &sub_cells {
-        for &n in &mesh.cells[c].nodes {
-            cells_of.entry(n).or_default().push(c);
-        }
-    }
-    let touching = |a: usize, b: Option<usize>| {
-        let mut v: Vec<usize> = cells_of.get(&a).cloned().unwrap_or_default();
-        if let Some(b) = b {
-            v.extend(cells_of.get(&b).cloned().unwrap_or_default());
-        }
-        // Only cells in the first sublaminate layer touch z = H.
-        v.sort_unstable();
-        v.dedup();
-        v
-    };
+    let cells_of = CellsTouching::new(&mesh, &sub_cells);
+    let touching = |a: usize, b: Option<usize>| cells_of.touching(a, b);
     let mut points = Vec::new();
     let missing = |what: &str| MeshError::Parameter {
         name: "front",
@@ -611,32 +592,17 @@ pub fn embedded_delamination_with_front(p: &EmbeddedParams) -> Result<(Mesh, Fro
         );
         let c = corner[zh][cf];
         let (au, al) = (corner[zh][cb], lower_or(cb));
-        let (bu, bl, d) = if p.kind == ElementKind::Hex20 {
+        let (b, d) = if p.kind == ElementKind::Hex20 {
+            let bu = midside(c, au).ok_or_else(|| missing("b"))?;
+            let bl = midside(c, al).ok_or_else(|| missing("b′"))?;
             (
-                Some(midside(c, au).ok_or_else(|| missing("b"))?),
-                Some(midside(c, al).ok_or_else(|| missing("b′"))?),
+                Some((bu, bl)),
                 Some(midside(c, corner[zh][ca]).ok_or_else(|| missing("d"))?),
             )
         } else {
-            (None, None, None)
+            (None, None)
         };
-        points.push(FrontPoint {
-            c,
-            corner: true,
-            a_upper: au,
-            a_lower: al,
-            b_upper: bu,
-            b_lower: bl,
-            d,
-            cells_above: touching(c, d),
-            delta_a: 0.0,
-            x: 0.0,
-            y: 0.0,
-            tangent: [0.0; 2],
-            normal: [0.0; 2],
-            theta_deg: 0.0,
-            s: 0.0,
-        });
+        points.push(FrontPoint::new(c, true, (au, al), b, d, touching(c, d)));
         if p.kind == ElementKind::Hex20 && q > 0 {
             // The mid-edge front node between q and q − 1, paired with the mid-edge nodes of the
             // ring behind.
@@ -646,23 +612,14 @@ pub fn embedded_delamination_with_front(p: &EmbeddedParams) -> Result<(Mesh, Fro
                 midside(corner[zh][cb], corner[zh][cb2]).ok_or_else(|| missing("a (mid-edge)"))?;
             let al =
                 midside(lower_or(cb), lower_or(cb2)).ok_or_else(|| missing("a′ (mid-edge)"))?;
-            points.push(FrontPoint {
-                c: cm,
-                corner: false,
-                a_upper: au,
-                a_lower: al,
-                b_upper: None,
-                b_lower: None,
-                d: None,
-                cells_above: touching(cm, None),
-                delta_a: 0.0,
-                x: 0.0,
-                y: 0.0,
-                tangent: [0.0; 2],
-                normal: [0.0; 2],
-                theta_deg: 0.0,
-                s: 0.0,
-            });
+            points.push(FrontPoint::new(
+                cm,
+                false,
+                (au, al),
+                None,
+                None,
+                touching(cm, None),
+            ));
         }
     }
     let front_descriptor = Front { points }.finish(&mesh.nodes);

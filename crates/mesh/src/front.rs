@@ -42,6 +42,66 @@ pub struct FrontPoint {
     pub s: f64,
 }
 
+impl FrontPoint {
+    /// A point with its node pairing; Δa, position, frame, θ and S are filled in by the front
+    /// once all points are known.
+    pub(crate) fn new(
+        c: usize,
+        corner: bool,
+        a: (usize, usize),
+        b: Option<(usize, usize)>,
+        d: Option<usize>,
+        cells_above: Vec<usize>,
+    ) -> Self {
+        Self {
+            c,
+            corner,
+            a_upper: a.0,
+            a_lower: a.1,
+            b_upper: b.map(|p| p.0),
+            b_lower: b.map(|p| p.1),
+            d,
+            cells_above,
+            delta_a: 0.0,
+            x: 0.0,
+            y: 0.0,
+            tangent: [0.0; 2],
+            normal: [0.0; 2],
+            theta_deg: 0.0,
+            s: 0.0,
+        }
+    }
+}
+
+/// Which of a set of cells contain each node: for the cells above the delamination plane that
+/// touch c and d.
+pub(crate) struct CellsTouching(std::collections::HashMap<usize, Vec<usize>>);
+
+impl CellsTouching {
+    /// Index of `cells` of `mesh` by node.
+    pub(crate) fn new(mesh: &crate::Mesh, cells: &[usize]) -> Self {
+        let mut map: std::collections::HashMap<usize, Vec<usize>> =
+            std::collections::HashMap::new();
+        for &c in cells {
+            for &n in &mesh.cells[c].nodes {
+                map.entry(n).or_default().push(c);
+            }
+        }
+        Self(map)
+    }
+
+    /// The indexed cells containing node `a` or node `b`, sorted, without repeats.
+    pub(crate) fn touching(&self, a: usize, b: Option<usize>) -> Vec<usize> {
+        let mut v: Vec<usize> = self.0.get(&a).cloned().unwrap_or_default();
+        if let Some(b) = b {
+            v.extend(self.0.get(&b).cloned().unwrap_or_default());
+        }
+        v.sort_unstable();
+        v.dedup();
+        v
+    }
+}
+
 /// The front, ordered by increasing S.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct Front {

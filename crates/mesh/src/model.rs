@@ -162,6 +162,17 @@ impl Mesh {
         Ok((out, node_map))
     }
 
+    /// Adds, for each (name, axis, value), the node set of the nodes with coordinate `axis`
+    /// within `tol` of `value`.
+    pub fn add_plane_sets(&mut self, planes: &[(&str, usize, f64)], tol: f64) {
+        for &(name, axis, value) in planes {
+            let set = (0..self.nodes.len())
+                .filter(|&n| (self.nodes[n][axis] - value).abs() < tol)
+                .collect();
+            self.node_sets.insert(name.into(), set);
+        }
+    }
+
     /// Global DOFs (3 per node, node-major) of each cell.
     pub fn cell_dofs(&self) -> Vec<Vec<usize>> {
         self.cells

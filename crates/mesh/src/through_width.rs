@@ -4,7 +4,7 @@
 //! y = 0 and y = W it responds in plane strain (§3.2).
 
 use crate::MeshError;
-use crate::front::{Front, FrontPoint};
+use crate::front::{CellsTouching, Front, FrontPoint};
 use crate::generate::{graded_coordinates, grid_position};
 use crate::model::{Cell, Mesh};
 use nonlin3d_element::ElementKind;
@@ -139,32 +139,22 @@ pub fn through_width_delamination(p: &ThroughWidthParams) -> Result<(Mesh, Front
         }
     }
     let tol = 1e-9 * p.length;
-    let select = |f: &dyn Fn(&[f64; 3]) -> bool| -> Vec<usize> {
-        (0..mesh.nodes.len())
-            .filter(|&n| f(&mesh.nodes[n]))
-            .collect()
-    };
-    let sets = [
-        ("x0", select(&|x| x[0].abs() < tol)),
-        ("x1", select(&|x| (x[0] - p.length).abs() < tol)),
-        ("y0", select(&|x| x[1].abs() < tol)),
-        ("y1", select(&|x| (x[1] - p.width).abs() < tol)),
-        ("z0", select(&|x| x[2].abs() < tol)),
-    ];
-    for (name, s) in sets {
-        mesh.node_sets.insert(name.into(), s);
-    }
+    mesh.add_plane_sets(
+        &[
+            ("x0", 0, 0.0),
+            ("x1", 0, p.length),
+            ("y0", 1, 0.0),
+            ("y1", 1, p.width),
+            ("z0", 2, 0.0),
+        ],
+        tol,
+    );
     // Front from y = W down to y = 0.
     let missing = |what: &str| MeshError::Parameter {
         name: "front",
         reason: format!("internal: {what} node not found"),
     };
-    let mut cells_of: HashMap<usize, Vec<usize>> = HashMap::new();
-    for &c in &sub_cells {
-        for &n in &mesh.cells[c].nodes {
-            cells_of.entry(n).or_default().push(c);
-        }
-    }
+    let cells_of = CellsTouching::new(&mesh, &sub_cells);
     let mut points = Vec::new();
     let mut front_nodes = Vec::new();
     for gy in (0..=2 * p.across).rev().step_by(step) {
@@ -173,39 +163,21 @@ pub fn through_width_delamination(p: &ThroughWidthParams) -> Result<(Mesh, Front
         let a_up = get([gf - 2, gy, gh], false).ok_or_else(|| missing("a"))?;
         let a_lo = get([gf - 2, gy, gh], true).ok_or_else(|| missing("a′"))?;
         let hex20_corner = p.kind == ElementKind::Hex20 && corner;
-        let (b_up, b_lo, d) = if hex20_corner {
-            (
-                get([gf - 1, gy, gh], false),
-                get([gf - 1, gy, gh], true),
-                get([gf + 1, gy, gh], false),
-            )
+        let (b, d) = if hex20_corner {
+            let pair = get([gf - 1, gy, gh], false).zip(get([gf - 1, gy, gh], true));
+            (pair, get([gf + 1, gy, gh], false))
         } else {
-            (None, None, None)
+            (None, None)
         };
-        let mut cells_above: Vec<usize> = cells_of.get(&c).cloned().unwrap_or_default();
-        if let Some(d) = d {
-            cells_above.extend(cells_of.get(&d).cloned().unwrap_or_default());
-        }
-        cells_above.sort_unstable();
-        cells_above.dedup();
         front_nodes.push(c);
-        points.push(FrontPoint {
+        points.push(FrontPoint::new(
             c,
             corner,
-            a_upper: a_up,
-            a_lower: a_lo,
-            b_upper: b_up,
-            b_lower: b_lo,
+            (a_up, a_lo),
+            b,
             d,
-            cells_above,
-            delta_a: 0.0,
-            x: 0.0,
-            y: 0.0,
-            tangent: [0.0; 2],
-            normal: [0.0; 2],
-            theta_deg: 0.0,
-            s: 0.0,
-        });
+            cells_of.touching(c, d),
+        ));
     }
     mesh.node_sets.insert("crack_upper".into(), up);
     mesh.node_sets.insert("crack_lower".into(), lo);
