@@ -13,6 +13,12 @@ pub enum Error {
     /// Invalid mesh or mesh output failure.
     #[error(transparent)]
     Mesh(#[from] nonlin3d_mesh::MeshError),
+    /// Assembly failed.
+    #[error(transparent)]
+    Assembly(#[from] nonlin3d_assembly::AssemblyError),
+    /// Path following failed.
+    #[error(transparent)]
+    Newton(#[from] nonlin3d_newton::NewtonError),
     /// A linear solve failed (zero pivot, bad input).
     #[error(transparent)]
     Solver(#[from] nonlin3d_solver::SolverError),

@@ -8,10 +8,12 @@
 //! | [`laminate`] | `nonlin3d-laminate` | ply stiffness, rotation, stacks, Cholesky factor (§2.1, §2.9) |
 //! | [`element`] | `nonlin3d-element` | Hex8/Hex20, quadrature, B0BL3D / ESTIF3D kernels, eigen-analysis (§2.1–2.5) |
 //! | [`mesh`] | `nonlin3d-mesh` | the Mesh model with named sets, structured box generator, quality, VTU/PVD output (§3) |
+//! | [`assembly`] | `nonlin3d-assembly` | constraints, deterministic parallel assembly of residual and tangent, reactions (§2.2–2.3) |
+//! | [`newton`] | `nonlin3d-newton` | Newton–Raphson path following: line search, modified Newton, load stepping with cutback, inertia (§2.1, §4.4) |
 //! | [`solver`] | `nonlin3d-solver` | sparse patterns and matrices, RCM/AMD, profile LDLᵀ, faer Cholesky, inertia (§2.4) |
 //! | [`eigen_check`] | this crate | the element eigen-check the `nonlin3d` program runs (§2.5) |
 //!
-//! The thesis's mesh generators, assembly, Newton path following, substructuring, contact and VCCT come as
+//! Substructuring, contact and VCCT come as
 //! their own crates in later releases.
 #![deny(missing_docs)]
 #![warn(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
@@ -25,7 +27,9 @@ pub struct ReadmeDoctests;
 mod error;
 
 pub use error::Error;
+pub use nonlin3d_assembly as assembly;
 pub use nonlin3d_element as element;
 pub use nonlin3d_laminate as laminate;
 pub use nonlin3d_mesh as mesh;
+pub use nonlin3d_newton as newton;
 pub use nonlin3d_solver as solver;

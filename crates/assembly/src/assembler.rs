@@ -1,0 +1,276 @@
+//! Parallel, deterministic assembly of internal forces and tangents over the cells of a mesh.
+
+use crate::{AssemblyError, Constraints};
+use nonlin3d_element::{
+    BatchInput, BatchOutput, ElementError, ElementKind, IntegrationRule, Kinematics, ShapeTable,
+    evaluate_batch,
+};
+use nonlin3d_laminate::{ShearCoupling, Stiffness};
+use nonlin3d_mesh::Mesh;
+use nonlin3d_solver::{SymmetricMatrix, SymmetricPattern};
+use std::collections::HashMap;
+use std::sync::Arc;
+
+/// Cells of one element kind: evaluated together by the batched kernel.
+struct Group {
+    table: ShapeTable,
+    cells: Vec<usize>,
+    coords: Vec<[f64; 3]>,
+    material_of: Vec<usize>,
+}
+
+/// Everything needed to assemble a mesh again and again: shape tables, per-cell stiffness
+/// (rotated to each cell's ply angle once), DOF lists, the sparsity pattern and each cell's
+/// scatter map into it.
+pub struct Assembler {
+    n: usize,
+    groups: Vec<Group>,
+    stiffness: Vec<Stiffness>,
+    dofs: Vec<Vec<usize>>,
+    maps: Vec<Vec<Option<usize>>>,
+    pattern: Arc<SymmetricPattern>,
+    kinematics: Kinematics,
+}
+
+/// One assembly: internal forces, strain energy, and the tangent if it was asked for.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Assembly {
+    /// f_int(u), node-major.
+    pub internal: Vec<f64>,
+    /// Strain energy Σ over cells.
+    pub energy: f64,
+}
+
+/// Re-attributes a batch error (group-local element index) to the mesh cell.
+fn relocate(err: ElementError, cells: &[usize]) -> ElementError {
+    let cell = |e: Option<usize>| e.and_then(|e| cells.get(e).copied());
+    match err {
+        ElementError::NonPositiveJacobian {
+            element,
+            point,
+            xi,
+            det,
+        } => ElementError::NonPositiveJacobian {
+            element: cell(element),
+            point,
+            xi,
+            det,
+        },
+        ElementError::NonFiniteInput {
+            element,
+            what,
+            node,
+            value,
+        } => ElementError::NonFiniteInput {
+            element: cell(element),
+            what,
+            node,
+            value,
+        },
+        other => other,
+    }
+}
+
+impl Assembler {
+    /// Sets up `mesh` with `materials[cell.material]` in ply axes, rotated about z by each cell's
+    /// ply angle (`coupling` as in [`Stiffness::rotated_about_z`]); Hex20 cells integrated with
+    /// `hex20_rule`, Hex8 cells with `hex8_rule`.
+    pub fn new(
+        mesh: &Mesh,
+        materials: &[Stiffness],
+        coupling: ShearCoupling,
+        hex20_rule: IntegrationRule,
+        hex8_rule: IntegrationRule,
+        kinematics: Kinematics,
+    ) -> Result<Self, AssemblyError> {
+        mesh.validate()?;
+        let n = 3 * mesh.nodes.len();
+        // One stiffness per distinct (material, angle).
+        let mut index: HashMap<(usize, u64), usize> = HashMap::new();
+        let mut stiffness = Vec::new();
+        let mut cell_stiffness = Vec::with_capacity(mesh.cells.len());
+        for (c, cell) in mesh.cells.iter().enumerate() {
+            let base = materials
+                .get(cell.material)
+                .ok_or(AssemblyError::Material {
+                    cell: c,
+                    material: cell.material,
+                    count: materials.len(),
+                })?;
+            let key = (cell.material, cell.ply_angle_deg.to_bits());
+            let id = match index.get(&key) {
+                Some(&id) => id,
+                None => {
+                    let s = if cell.ply_angle_deg == 0.0 {
+                        *base
+                    } else {
+                        base.rotated_about_z(cell.ply_angle_deg.to_radians(), coupling)?
+                    };
+                    stiffness.push(s);
+                    index.insert(key, stiffness.len() - 1);
+                    stiffness.len() - 1
+                }
+            };
+            cell_stiffness.push(id);
+        }
+        let mut groups = Vec::new();
+        for (kind, rule) in [
+            (ElementKind::Hex20, hex20_rule),
+            (ElementKind::Hex8, hex8_rule),
+        ] {
+            let cells: Vec<usize> = (0..mesh.cells.len())
+                .filter(|&c| mesh.cells[c].kind == kind)
+                .collect();
+            if cells.is_empty() {
+                continue;
+            }
+            let coords = cells
+                .iter()
+                .flat_map(|&c| mesh.cell_coordinates(c))
+                .collect();
+            let material_of = cells.iter().map(|&c| cell_stiffness[c]).collect();
+            groups.push(Group {
+                table: ShapeTable::new(kind, rule)?,
+                cells,
+                coords,
+                material_of,
+            });
+        }
+        let dofs = mesh.cell_dofs();
+        let pattern = Arc::new(SymmetricPattern::from_dof_lists(n, &dofs)?);
+        let maps = dofs
+            .iter()
+            .map(|d| pattern.scatter_map(d))
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(Self {
+            n,
+            groups,
+            stiffness,
+            dofs,
+            maps,
+            pattern,
+            kinematics,
+        })
+    }
+
+    /// Number of DOFs.
+    pub fn n(&self) -> usize {
+        self.n
+    }
+
+    /// The sparsity pattern of the tangent.
+    pub fn pattern(&self) -> &Arc<SymmetricPattern> {
+        &self.pattern
+    }
+
+    /// A zero tangent on the pattern.
+    pub fn new_tangent(&self) -> SymmetricMatrix {
+        SymmetricMatrix::zeros(self.pattern.clone())
+    }
+
+    /// Internal forces (and energy) at displacements `u`; the tangent into `tangent` (zeroed
+    /// first) when given. Elements run in parallel on the current rayon pool; the scatter runs
+    /// in cell order, so results do not depend on the thread count.
+    pub fn assemble(
+        &self,
+        u: &[f64],
+        tangent: Option<&mut SymmetricMatrix>,
+    ) -> Result<Assembly, AssemblyError> {
+        if u.len() != self.n {
+            return Err(AssemblyError::Length {
+                what: "displacements",
+                expected: self.n,
+                got: u.len(),
+            });
+        }
+        let mut internal = vec![0.0; self.n];
+        let mut energy = 0.0;
+        let mut k = tangent;
+        if let Some(k) = k.as_deref_mut() {
+            k.set_zero();
+        }
+        for g in &self.groups {
+            let nn = g.table.nodes();
+            let nd = g.table.dofs();
+            let disp: Vec<[f64; 3]> = g
+                .cells
+                .iter()
+                .flat_map(|&c| {
+                    self.dofs[c]
+                        .chunks_exact(3)
+                        .map(|d| [u[d[0]], u[d[1]], u[d[2]]])
+                })
+                .collect();
+            debug_assert_eq!(disp.len(), g.cells.len() * nn);
+            let input = BatchInput {
+                coords: &g.coords,
+                disp: &disp,
+                materials: &self.stiffness,
+                material_of: &g.material_of,
+            };
+            let mut out = BatchOutput::new(&g.table, g.cells.len(), k.is_some());
+            evaluate_batch(&g.table, &input, self.kinematics, &mut out)
+                .map_err(|e| relocate(e, &g.cells))?;
+            for (i, &c) in g.cells.iter().enumerate() {
+                for (a, &d) in self.dofs[c].iter().enumerate() {
+                    internal[d] += out.forces[i * nd + a];
+                }
+                energy += out.energy[i];
+                if let Some(k) = k.as_deref_mut() {
+                    k.scatter_add_mapped(
+                        &self.maps[c],
+                        &out.tangents[i * nd * nd..(i + 1) * nd * nd],
+                    )?;
+                }
+            }
+        }
+        Ok(Assembly { internal, energy })
+    }
+
+    /// The residual r = f_int − f_ext(λ) with zeros at constrained DOFs, the reactions
+    /// (f_int − f_ext at constrained DOFs, zero elsewhere), and the tangent with identity rows
+    /// and columns at constrained DOFs when given.
+    pub fn residual(
+        &self,
+        u: &[f64],
+        lambda: f64,
+        constraints: &Constraints,
+        tangent: Option<&mut SymmetricMatrix>,
+    ) -> Result<(Vec<f64>, Vec<f64>, f64), AssemblyError> {
+        if constraints.n() != self.n {
+            return Err(AssemblyError::Length {
+                what: "constraints",
+                expected: self.n,
+                got: constraints.n(),
+            });
+        }
+        let mut k = tangent;
+        let a = self.assemble(u, k.as_deref_mut())?;
+        let mut f = vec![0.0; self.n];
+        constraints.external(lambda, &mut f);
+        let mut r: Vec<f64> = a.internal.iter().zip(&f).map(|(i, e)| i - e).collect();
+        let mut reactions = vec![0.0; self.n];
+        let mut fixed = vec![false; self.n];
+        for (d, _) in constraints.prescribed() {
+            fixed[d] = true;
+            reactions[d] = r[d];
+            r[d] = 0.0;
+        }
+        if let Some(k) = k {
+            let (cp, ri) = (
+                self.pattern.col_ptr().to_vec(),
+                self.pattern.row_idx().to_vec(),
+            );
+            let vals = k.values_mut();
+            for j in 0..self.n {
+                for p in cp[j]..cp[j + 1] {
+                    let i = ri[p];
+                    if fixed[i] || fixed[j] {
+                        vals[p] = if i == j { 1.0 } else { 0.0 };
+                    }
+                }
+            }
+        }
+        Ok((r, reactions, a.energy))
+    }
+}

@@ -1,0 +1,111 @@
+//! Fixed and prescribed DOFs and nodal loads, scaled by the load factor λ.
+
+use crate::AssemblyError;
+use std::collections::BTreeMap;
+
+/// Constraints and loads of a model with `n` DOFs (3 per node, node-major).
+///
+/// At load factor λ: prescribed DOF d has value λ·value(d) (fixed DOFs value 0), the external
+/// force is λ·f (nodal loads added with [`add_load`](Self::add_load)) plus the fixed part
+/// `dead` (loads held at full value whatever λ, e.g. the thesis's perturbation load before it
+/// is removed; set to zero to remove it).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Constraints {
+    n: usize,
+    prescribed: BTreeMap<usize, f64>,
+    loads: Vec<f64>,
+    dead: Vec<f64>,
+}
+
+impl Constraints {
+    /// No constraints and no loads on `n` DOFs.
+    pub fn new(n: usize) -> Self {
+        Self {
+            n,
+            prescribed: BTreeMap::new(),
+            loads: vec![0.0; n],
+            dead: vec![0.0; n],
+        }
+    }
+
+    /// Number of DOFs.
+    pub fn n(&self) -> usize {
+        self.n
+    }
+
+    /// Prescribes DOF `dof` to λ·`value` (0 = fixed). A later call overrides.
+    pub fn prescribe(&mut self, dof: usize, value: f64) -> Result<(), AssemblyError> {
+        if dof >= self.n || !value.is_finite() {
+            return Err(AssemblyError::BadDof {
+                what: "prescribed DOF",
+                dof,
+                n: self.n,
+                value,
+            });
+        }
+        self.prescribed.insert(dof, value);
+        Ok(())
+    }
+
+    /// Fixes DOF `r` (0 = x, 1 = y, 2 = z) of every node in `nodes`.
+    pub fn fix_nodes(&mut self, nodes: &[usize], r: usize) -> Result<(), AssemblyError> {
+        for &n in nodes {
+            self.prescribe(3 * n + r, 0.0)?;
+        }
+        Ok(())
+    }
+
+    /// Adds a nodal force to DOF `dof`, scaled by λ.
+    pub fn add_load(&mut self, dof: usize, value: f64) -> Result<(), AssemblyError> {
+        if dof >= self.n || !value.is_finite() {
+            return Err(AssemblyError::BadDof {
+                what: "load",
+                dof,
+                n: self.n,
+                value,
+            });
+        }
+        self.loads[dof] += value;
+        Ok(())
+    }
+
+    /// Sets the λ-independent (dead) force at DOF `dof` (0 removes it).
+    pub fn set_dead_load(&mut self, dof: usize, value: f64) -> Result<(), AssemblyError> {
+        if dof >= self.n || !value.is_finite() {
+            return Err(AssemblyError::BadDof {
+                what: "dead load",
+                dof,
+                n: self.n,
+                value,
+            });
+        }
+        self.dead[dof] = value;
+        Ok(())
+    }
+
+    /// Whether DOF `d` is constrained.
+    pub fn is_constrained(&self, d: usize) -> bool {
+        self.prescribed.contains_key(&d)
+    }
+
+    /// Constrained DOFs and their unit values.
+    pub fn prescribed(&self) -> impl Iterator<Item = (usize, f64)> + '_ {
+        self.prescribed.iter().map(|(&d, &v)| (d, v))
+    }
+
+    /// Sets the constrained entries of `u` to their values at load factor λ.
+    pub fn apply(&self, u: &mut [f64], lambda: f64) {
+        for (&d, &v) in &self.prescribed {
+            if let Some(x) = u.get_mut(d) {
+                *x = lambda * v;
+            }
+        }
+    }
+
+    /// External force at load factor λ into `f`.
+    pub fn external(&self, lambda: f64, f: &mut [f64]) {
+        for ((fi, l), d) in f.iter_mut().zip(&self.loads).zip(&self.dead) {
+            *fi = lambda * l + d;
+        }
+    }
+}

@@ -1,0 +1,25 @@
+//! Assembly for nonlin3d (thesis §2.2–2.3): constraints, residual r(u, λ) = f_int(u) − λ·f_ext
+//! and tangent K(u) = ∂f_int/∂u over all cells, in parallel and deterministically.
+//!
+//! | item | what it is |
+//! |---|---|
+//! | [`Constraints`] | fixed and prescribed DOFs (values scaled by the load factor λ), nodal loads |
+//! | [`Assembler`] | per-cell materials (ply rotation), shape tables, pattern, scatter maps; `assemble` |
+//!
+//! Constraints are imposed by prescription: before each Newton solve the constrained entries of
+//! u are set to their targets, so their increments are zero; the tangent gets identity rows
+//! and columns there and the residual zeros. The internal force at a constrained DOF minus the
+//! external load there is its reaction.
+#![deny(missing_docs)]
+#![cfg_attr(
+    not(test),
+    warn(clippy::unwrap_used, clippy::expect_used, clippy::panic)
+)]
+
+mod assembler;
+mod constraints;
+mod error;
+
+pub use assembler::{Assembler, Assembly};
+pub use constraints::Constraints;
+pub use error::AssemblyError;

@@ -1,0 +1,24 @@
+//! Newton–Raphson path following for nonlin3d (thesis §2.1, §4.4).
+//!
+//! | item | what it is |
+//! |---|---|
+//! | [`NonlinearProblem`] | residual r(u, λ) and tangent K(u) of any model |
+//! | [`StructuralProblem`] | the finite element model: [`Assembler`](nonlin3d_assembly::Assembler) + [`Constraints`](nonlin3d_assembly::Constraints) |
+//! | [`NewtonSettings`], [`solve_increment`] | one load level: full or modified Newton, line search, convergence records |
+//! | [`Stepping`], [`follow_path`] | load stepping to a list of targets with cutback and regrowth |
+//! | [`IncrementReport`], [`Termination`] | what happened, iteration by iteration, with the inertia |
+#![deny(missing_docs)]
+#![cfg_attr(
+    not(test),
+    warn(clippy::unwrap_used, clippy::expect_used, clippy::panic)
+)]
+
+mod error;
+mod path;
+mod problem;
+mod solve;
+
+pub use error::NewtonError;
+pub use path::{PathReport, Stepping, follow_path};
+pub use problem::{NonlinearProblem, StructuralProblem};
+pub use solve::{IncrementReport, IterationRecord, NewtonSettings, Termination, solve_increment};

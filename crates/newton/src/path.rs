@@ -1,0 +1,113 @@
+//! Load stepping to a list of load-factor targets with cutback and regrowth.
+
+use crate::{IncrementReport, NewtonError, NewtonSettings, NonlinearProblem, solve_increment};
+
+/// Increment control.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Stepping {
+    /// First increment Δλ.
+    pub initial: f64,
+    /// Smallest increment before giving up.
+    pub min: f64,
+    /// Largest increment.
+    pub max: f64,
+    /// Growth factor after an increment that converged in at most `easy` iterations.
+    pub grow: f64,
+    /// Iterations counted as easy.
+    pub easy: usize,
+    /// Cutback factor after a failed attempt.
+    pub cutback: f64,
+}
+
+impl Default for Stepping {
+    fn default() -> Self {
+        Self {
+            initial: 0.25,
+            min: 1e-4,
+            max: 1.0,
+            grow: 1.5,
+            easy: 4,
+            cutback: 0.5,
+        }
+    }
+}
+
+/// The path: every attempt (converged or not) and the state at each target.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct PathReport {
+    /// All attempts in order.
+    pub attempts: Vec<IncrementReport>,
+    /// (λ, u) at each target reached.
+    pub states: Vec<(f64, Vec<f64>)>,
+}
+
+/// Follows the equilibrium path from λ = 0 (`u` the starting state, updated to the last
+/// converged one) through `targets` in order.
+pub fn follow_path(
+    problem: &mut dyn NonlinearProblem,
+    u: &mut Vec<f64>,
+    targets: &[f64],
+    settings: &NewtonSettings,
+    stepping: &Stepping,
+) -> Result<PathReport, NewtonError> {
+    let ok = |v: f64| v.is_finite() && v > 0.0;
+    if !(ok(stepping.initial)
+        && ok(stepping.min)
+        && stepping.max >= stepping.min
+        && stepping.cutback > 0.0
+        && stepping.cutback < 1.0
+        && stepping.grow >= 1.0)
+    {
+        return Err(NewtonError::Setting {
+            name: "stepping",
+            reason: format!("{stepping:?}"),
+        });
+    }
+    let mut solver = settings.solver.build();
+    solver.analyze(&problem.pattern())?;
+    let mut k = nonlin3d_solver::SymmetricMatrix::zeros(problem.pattern());
+    let mut report = PathReport::default();
+    let mut lambda = 0.0;
+    let mut step = stepping.initial.min(stepping.max);
+    let mut cutbacks = 0;
+    for &target in targets {
+        while (target - lambda).abs() > 1e-12 * target.abs().max(1.0) {
+            let dir = (target - lambda).signum();
+            let delta = step.min((target - lambda).abs());
+            let mut trial = u.clone();
+            let attempt = solve_increment(
+                problem,
+                &mut trial,
+                lambda + dir * delta,
+                settings,
+                solver.as_mut(),
+                &mut k,
+            )?;
+            let converged = attempt.converged();
+            let iterations = attempt.iterations.len();
+            let reason = format!("{:?}", attempt.termination);
+            report.attempts.push(attempt);
+            if converged {
+                *u = trial;
+                lambda += dir * delta;
+                if iterations <= stepping.easy {
+                    step = (step * stepping.grow).min(stepping.max);
+                }
+            } else {
+                cutbacks += 1;
+                step *= stepping.cutback;
+                if step < stepping.min {
+                    return Err(NewtonError::Cutback {
+                        target,
+                        reached: lambda,
+                        cutbacks,
+                        last_step: delta,
+                        reason,
+                    });
+                }
+            }
+        }
+        report.states.push((target, u.clone()));
+    }
+    Ok(report)
+}
