@@ -41,6 +41,30 @@ pub struct PathReport {
     pub states: Vec<(f64, Vec<f64>)>,
 }
 
+impl PathReport {
+    /// Converged increments where the count of negative pivots changed from the previous one:
+    /// (λ before, λ after, pivots before, pivots after). On a symmetric tangent a change marks a
+    /// bifurcation or limit point between the two load factors (Sylvester's law of inertia).
+    pub fn inertia_changes(&self) -> Vec<(f64, f64, usize, usize)> {
+        let mut out = Vec::new();
+        let mut last: Option<(f64, usize)> = None;
+        for a in self.attempts.iter().filter(|a| a.converged()) {
+            // The first factorisation of an increment is at the start state (λ set, previous u);
+            // the last one is closest to the converged state.
+            let Some(p) = a.negative_pivots() else {
+                continue;
+            };
+            if let Some((l0, p0)) = last
+                && p0 != p
+            {
+                out.push((l0, a.lambda, p0, p));
+            }
+            last = Some((a.lambda, p));
+        }
+        out
+    }
+}
+
 /// Follows the equilibrium path from λ = 0 (`u` the starting state, updated to the last
 /// converged one) through `targets` in order.
 pub fn follow_path(

@@ -1,0 +1,242 @@
+//! Newton path following on finite element models (issue: assembly and Newton): determinism,
+//! convergence rate, robustness to large steps, modified Newton, and bifurcation detection.
+
+use nonlin3d::assembly::{Assembler, Constraints};
+use nonlin3d::element::{ElementKind, IntegrationRule, Kinematics};
+use nonlin3d::laminate::{ShearCoupling, materials};
+use nonlin3d::mesh::{
+    BoxParams, Mesh, ThroughWidthParams, structured_box, through_width_delamination,
+};
+use nonlin3d::newton::{NewtonError, NewtonSettings, Stepping, StructuralProblem, follow_path};
+
+/// Cantilever 30 × 5 × 4 mm (6 × 2 × 2 Hex20), clamped at x = 0, tip load `p` (N) along z.
+fn cantilever(p: f64) -> (Mesh, StructuralProblem) {
+    let mesh = structured_box(&BoxParams::new(
+        ElementKind::Hex20,
+        [6, 2, 2],
+        [30e-3, 5e-3, 4e-3],
+    ))
+    .unwrap();
+    let steel = materials::steel().stiffness().unwrap();
+    let assembler = Assembler::new(
+        &mesh,
+        &[steel],
+        ShearCoupling::Exact,
+        IntegrationRule::Gauss2,
+        IntegrationRule::Gauss2,
+        Kinematics::Nonlinear,
+    )
+    .unwrap();
+    let mut c = Constraints::new(assembler.n());
+    for r in 0..3 {
+        c.fix_nodes(&mesh.node_sets["x0"], r).unwrap();
+    }
+    let tip = &mesh.node_sets["x1"];
+    for &n in tip {
+        c.add_load(3 * n + 2, p / tip.len() as f64).unwrap();
+    }
+    let problem = StructuralProblem::new(assembler, c).unwrap();
+    (mesh, problem)
+}
+
+#[test]
+fn assembly_is_bitwise_identical_on_1_and_2_threads() {
+    let (_, problem) = cantilever(-1000.0);
+    let u: Vec<f64> = (0..problem.assembler.n())
+        .map(|i| 1e-5 * ((i * 37 % 101) as f64 / 101.0 - 0.5))
+        .collect();
+    let mut results = Vec::new();
+    for threads in [1, 2] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        let mut k = problem.assembler.new_tangent();
+        let a = pool
+            .install(|| problem.assembler.assemble(&u, Some(&mut k)))
+            .unwrap();
+        results.push((a, k));
+    }
+    assert!(
+        results[0].0 == results[1].0,
+        "internal forces differ between 1 and 2 threads"
+    );
+    assert!(
+        results[0].1 == results[1].1,
+        "tangents differ between 1 and 2 threads"
+    );
+}
+
+#[test]
+fn full_newton_converges_quadratically() {
+    let (_, mut problem) = cantilever(-3000.0);
+    let mut u = vec![0.0; problem.assembler.n()];
+    // One step to the full load from rest: several iterations, the last ones quadratic.
+    let settings = NewtonSettings {
+        force_tolerance: 1e-9,
+        relative_tolerance: 0.0,
+        line_search: false,
+        ..NewtonSettings::default()
+    };
+    let path = follow_path(
+        &mut problem,
+        &mut u,
+        &[1.0],
+        &settings,
+        &Stepping {
+            initial: 1.0,
+            ..Stepping::default()
+        },
+    )
+    .unwrap();
+    let a = &path.attempts[0];
+    assert!(a.converged());
+    let r: Vec<f64> = std::iter::once(a.initial_residual)
+        .chain(a.iterations.iter().map(|i| i.residual))
+        .collect();
+    eprintln!("residual history: {r:?}");
+    // Order estimate p = log(r_{k+1}/r_k) / log(r_k/r_{k−1}) over the last three residuals above
+    // the round-off floor (100 × the final residual, where the iteration stagnates at ~1e-9 N):
+    // 2 for Newton; accept ≥ 1.7.
+    let floor = 100.0 * r.last().copied().unwrap_or(0.0);
+    let useful: Vec<f64> = r.iter().copied().filter(|&x| x > floor).collect();
+    assert!(useful.len() >= 3, "{r:?}");
+    let n = useful.len();
+    let p = (useful[n - 1] / useful[n - 2]).ln() / (useful[n - 2] / useful[n - 3]).ln();
+    eprintln!("convergence order {p:.2}");
+    assert!(p > 1.7, "convergence order {p} from {useful:?}");
+}
+
+#[test]
+fn modified_newton_converges_to_the_same_state() {
+    let (_, mut full) = cantilever(-2000.0);
+    let (_, mut modified) = cantilever(-2000.0);
+    let (mut u1, mut u2) = (
+        vec![0.0; full.assembler.n()],
+        vec![0.0; modified.assembler.n()],
+    );
+    let tight = NewtonSettings {
+        force_tolerance: 1e-7,
+        relative_tolerance: 0.0,
+        ..NewtonSettings::default()
+    };
+    follow_path(&mut full, &mut u1, &[1.0], &tight, &Stepping::default()).unwrap();
+    let m = NewtonSettings {
+        refactor_every: 4,
+        max_iterations: 60,
+        ..tight
+    };
+    let path = follow_path(&mut modified, &mut u2, &[1.0], &m, &Stepping::default()).unwrap();
+    let scale = u1.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    let diff = u1
+        .iter()
+        .zip(&u2)
+        .fold(0.0f64, |a, (p, q)| a.max((p - q).abs()));
+    // Both converged to 1e-7 N on a stiffness of ~1e8 N/m: displacements agree to ~1e-15 m
+    // absolute; assert 1e-9 relative.
+    assert!(diff < 1e-9 * scale, "{diff:e} vs {scale:e}");
+    // Modified Newton reuses factorisations: some iterations have no pivot record.
+    assert!(
+        path.attempts
+            .iter()
+            .flat_map(|a| &a.iterations)
+            .any(|i| i.negative_pivots.is_none())
+    );
+}
+
+#[test]
+fn a_huge_single_step_converges_by_cutback_or_fails_located_never_nan() {
+    // 60 kN on the tip: the linear deflection is three times the span.
+    let (_, mut problem) = cantilever(-60_000.0);
+    let mut u = vec![0.0; problem.assembler.n()];
+    let stepping = Stepping {
+        initial: 1.0,
+        min: 1e-3,
+        ..Stepping::default()
+    };
+    match follow_path(
+        &mut problem,
+        &mut u,
+        &[1.0],
+        &NewtonSettings::default(),
+        &stepping,
+    ) {
+        Ok(path) => {
+            assert!(u.iter().all(|x| x.is_finite()));
+            let cutbacks = path.attempts.iter().filter(|a| !a.converged()).count();
+            eprintln!(
+                "converged after {cutbacks} cutbacks in {} attempts",
+                path.attempts.len()
+            );
+        }
+        Err(NewtonError::Cutback {
+            reached, target, ..
+        }) => {
+            assert!(reached < target && reached.is_finite());
+        }
+        Err(e) => panic!("unexpected error {e}"),
+    }
+    assert!(u.iter().all(|x| x.is_finite()));
+}
+
+/// Thesis §3.2 through-width model under compression, perfect geometry: the trivial path's
+/// tangent loses positive definiteness (one negative pivot appears) at the sublaminate's
+/// buckling strain, which for a clamped column of length ℓ = 2a and thickness h in plane strain
+/// is ε_c = π²h²/(3ℓ²). The base's compliance makes the ends less than clamped, so the detected
+/// strain lies somewhat below; the issue asks for 10 %.
+#[test]
+fn through_width_bifurcation_from_inertia_matches_the_clamped_column() {
+    let p = ThroughWidthParams {
+        outside: 8,
+        ..ThroughWidthParams::example()
+    };
+    let (mesh, _) = through_width_delamination(&p).unwrap();
+    let steel = materials::steel().stiffness().unwrap();
+    let assembler = Assembler::new(
+        &mesh,
+        &[steel],
+        ShearCoupling::Exact,
+        IntegrationRule::Gauss2,
+        IntegrationRule::Gauss2,
+        Kinematics::Nonlinear,
+    )
+    .unwrap();
+    let mut c = Constraints::new(assembler.n());
+    let ell = 2.0 * p.a;
+    let eps_c = std::f64::consts::PI.powi(2) * p.h * p.h / (3.0 * ell * ell);
+    let eps_max = 1.5 * eps_c;
+    c.fix_nodes(&mesh.node_sets["x0"], 0).unwrap();
+    c.fix_nodes(&mesh.node_sets["y0"], 1).unwrap();
+    c.fix_nodes(&mesh.node_sets["y1"], 1).unwrap();
+    c.fix_nodes(&mesh.node_sets["z0"], 2).unwrap();
+    for &n in &mesh.node_sets["x1"] {
+        c.prescribe(3 * n, -eps_max * p.length).unwrap();
+    }
+    let mut problem = StructuralProblem::new(assembler, c).unwrap();
+    let mut u = vec![0.0; problem.assembler.n()];
+    let levels: Vec<f64> = (1..=30).map(|k| k as f64 / 30.0).collect();
+    let stepping = Stepping {
+        initial: 1.0 / 30.0,
+        max: 1.0 / 30.0,
+        ..Stepping::default()
+    };
+    let path = follow_path(
+        &mut problem,
+        &mut u,
+        &levels,
+        &NewtonSettings::default(),
+        &stepping,
+    )
+    .unwrap();
+    let changes = path.inertia_changes();
+    eprintln!("inertia changes (λ before, λ after, pivots): {changes:?}; ε_c = {eps_c:e}");
+    let &(l0, l1, p0, p1) = changes.first().expect("a bifurcation below 1.5 ε_c");
+    assert_eq!((p0, p1), (0, 1));
+    let detected = 0.5 * (l0 + l1) * eps_max;
+    let ratio = detected / eps_c;
+    eprintln!("detected ε_b = {detected:e} = {ratio:.3} ε_c");
+    assert!(
+        (0.9..1.1).contains(&ratio),
+        "bifurcation strain {detected:e} vs clamped column {eps_c:e}"
+    );
+}
