@@ -44,6 +44,6 @@ pub use error::MeshError;
 pub use front::{Front, FrontPoint};
 pub use generate::{BoxParams, graded_coordinates, structured_box};
 pub use inp_read::{InpModel, NodeRef, ReadBoundary, ReadCload, ReadStep, read_inp};
-pub use model::{Cell, Mesh};
+pub use model::{Cell, Imperfection, Mesh};
 pub use quality::{CellQuality, quality};
 pub use through_width::{ThroughWidthParams, through_width_delamination};

@@ -4,6 +4,48 @@ use crate::MeshError;
 use nonlin3d_element::ElementKind;
 use std::collections::BTreeMap;
 
+/// Initial imperfection shapes (unit maximum at the origin, zero on and outside the front).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Imperfection {
+    /// Eq. 5.3.1: ¼(1 + cos πx/a)(1 + cos πy/b) for |x| ≤ a, |y| ≤ b (rectangular fronts).
+    Cosine {
+        /// Half-length along x, m.
+        a: f64,
+        /// Half-width along y, m.
+        b: f64,
+    },
+    /// (1 − (x/a)² − (y/b)²)² inside the ellipse (elliptic fronts; zero slope at the front).
+    Bubble {
+        /// Semi-axis along x, m.
+        a: f64,
+        /// Semi-axis along y, m.
+        b: f64,
+    },
+    /// A through-width strip: ½(1 + cos πx/a) for |x| ≤ a, any y.
+    Strip {
+        /// Half-length along x, m.
+        a: f64,
+    },
+}
+
+impl Imperfection {
+    /// w₀ at (x, y).
+    pub fn value(&self, x: f64, y: f64) -> f64 {
+        use std::f64::consts::PI;
+        match *self {
+            Self::Cosine { a, b } if x.abs() <= a && y.abs() <= b => {
+                0.25 * (1.0 + (PI * x / a).cos()) * (1.0 + (PI * y / b).cos())
+            }
+            Self::Bubble { a, b } => {
+                let s = 1.0 - (x / a).powi(2) - (y / b).powi(2);
+                if s > 0.0 { s * s } else { 0.0 }
+            }
+            Self::Strip { a } if x.abs() <= a => 0.5 * (1.0 + (PI * x / a).cos()),
+            _ => 0.0,
+        }
+    }
+}
+
 /// One hexahedral cell.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Cell {
@@ -171,6 +213,39 @@ impl Mesh {
                 .collect();
             self.node_sets.insert(name.into(), set);
         }
+    }
+
+    /// Lifts the sublaminate by an initial imperfection w₀(x, y)·`amplitude` along z: every
+    /// node with z ≥ `plane` (within 1e-12 relative) except those in the node set `keep` (the
+    /// lower crack face) moves; `shape` gives w₀ with its maximum 1 and zero on and outside
+    /// the front, so bonded nodes stay where they are.
+    pub fn apply_imperfection(
+        &mut self,
+        plane: f64,
+        keep: &str,
+        shape: Imperfection,
+        amplitude: f64,
+    ) -> Result<(), MeshError> {
+        if !amplitude.is_finite() {
+            return Err(MeshError::Parameter {
+                name: "amplitude",
+                reason: format!("{amplitude} is not finite"),
+            });
+        }
+        let keep: std::collections::HashSet<usize> = self
+            .node_sets
+            .get(keep)
+            .into_iter()
+            .flatten()
+            .copied()
+            .collect();
+        let tol = 1e-12 * plane.abs().max(1e-3);
+        for (n, x) in self.nodes.iter_mut().enumerate() {
+            if x[2] >= plane - tol && !keep.contains(&n) {
+                x[2] += amplitude * shape.value(x[0], x[1]);
+            }
+        }
+        Ok(())
     }
 
     /// Global DOFs (3 per node, node-major) of each cell.

@@ -5,7 +5,7 @@
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum NewtonError {
-    /// Assembly failed (e.g. an element inverted): names the cell.
+    /// Assembly failed (e.g. an element inverted): names the cell; also invalid loads.
     #[error(transparent)]
     Assembly(#[from] nonlin3d_assembly::AssemblyError),
     /// A linear solve failed outside what cutback can cure (e.g. a pattern mismatch).

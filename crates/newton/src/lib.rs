@@ -6,6 +6,7 @@
 //! | [`StructuralProblem`] | the finite element model: [`Assembler`](nonlin3d_assembly::Assembler) + [`Constraints`](nonlin3d_assembly::Constraints) |
 //! | [`NewtonSettings`], [`solve_increment`] | one load level: full or modified Newton, line search, convergence records |
 //! | [`Stepping`], [`follow_path`] | load stepping to a list of targets with cutback and regrowth |
+//! | [`perturbed_path`] | the thesis's perturbation load, converged with the first level and then removed (§3.2) |
 //! | [`IncrementReport`], [`Termination`] | what happened, iteration by iteration, with the inertia |
 #![deny(missing_docs)]
 #![cfg_attr(
@@ -19,6 +20,6 @@ mod problem;
 mod solve;
 
 pub use error::NewtonError;
-pub use path::{PathReport, Stepping, follow_path};
+pub use path::{PathReport, Stepping, follow_path, follow_path_from, perturbed_path};
 pub use problem::{NonlinearProblem, StructuralProblem};
 pub use solve::{IncrementReport, IterationRecord, NewtonSettings, Termination, solve_increment};

@@ -74,6 +74,18 @@ pub fn follow_path(
     settings: &NewtonSettings,
     stepping: &Stepping,
 ) -> Result<PathReport, NewtonError> {
+    follow_path_from(problem, u, 0.0, targets, settings, stepping)
+}
+
+/// [`follow_path`] from a converged state `u` at load factor `start`.
+pub fn follow_path_from(
+    problem: &mut dyn NonlinearProblem,
+    u: &mut Vec<f64>,
+    start: f64,
+    targets: &[f64],
+    settings: &NewtonSettings,
+    stepping: &Stepping,
+) -> Result<PathReport, NewtonError> {
     let ok = |v: f64| v.is_finite() && v > 0.0;
     if !(ok(stepping.initial)
         && ok(stepping.min)
@@ -91,7 +103,7 @@ pub fn follow_path(
     solver.analyze(&problem.pattern())?;
     let mut k = nonlin3d_solver::SymmetricMatrix::zeros(problem.pattern());
     let mut report = PathReport::default();
-    let mut lambda = 0.0;
+    let mut lambda = start;
     let mut step = stepping.initial.min(stepping.max);
     let mut cutbacks = 0;
     for &target in targets {
@@ -133,5 +145,63 @@ pub fn follow_path(
         }
         report.states.push((target, u.clone()));
     }
+    Ok(report)
+}
+
+/// The thesis's way onto the postbuckled branch (§3.2): the transverse `perturbation` loads
+/// (DOF, force) act as dead loads while the path is followed to the first target; then they are
+/// removed all at once and the same load level is solved again without them; the path then
+/// continues through the remaining targets. Removing them fails like any increment would (a
+/// located [`NewtonError::Cutback`] naming the level) if the structure does not stay on the
+/// buckled branch at that level.
+pub fn perturbed_path(
+    problem: &mut crate::StructuralProblem,
+    u: &mut Vec<f64>,
+    perturbation: &[(usize, f64)],
+    targets: &[f64],
+    settings: &NewtonSettings,
+    stepping: &Stepping,
+) -> Result<PathReport, NewtonError> {
+    let Some((&first, rest)) = targets.split_first() else {
+        return Ok(PathReport::default());
+    };
+    for &(dof, f) in perturbation {
+        problem.constraints.set_dead_load(dof, f)?;
+    }
+    let mut report = follow_path(problem, u, &[first], settings, stepping)?;
+    for &(dof, _) in perturbation {
+        problem.constraints.set_dead_load(dof, 0.0)?;
+    }
+    let mut solver = settings.solver.build();
+    solver.analyze(&problem.pattern())?;
+    let mut k = nonlin3d_solver::SymmetricMatrix::zeros(problem.pattern());
+    let mut trial = u.clone();
+    let removed = solve_increment(
+        problem,
+        &mut trial,
+        first,
+        settings,
+        solver.as_mut(),
+        &mut k,
+    )?;
+    let ok = removed.converged();
+    let reason = format!("{:?}", removed.termination);
+    report.attempts.push(removed);
+    if !ok {
+        return Err(NewtonError::Cutback {
+            target: first,
+            reached: first,
+            cutbacks: 0,
+            last_step: 0.0,
+            reason: format!("removing the perturbation load: {reason}"),
+        });
+    }
+    *u = trial;
+    if let Some(state) = report.states.last_mut() {
+        state.1 = u.clone();
+    }
+    let more = follow_path_from(problem, u, first, rest, settings, stepping)?;
+    report.attempts.extend(more.attempts);
+    report.states.extend(more.states);
     Ok(report)
 }
