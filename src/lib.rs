@@ -11,6 +11,7 @@
 //! | [`assembly`] | `nonlin3d-assembly` | constraints, deterministic parallel assembly of residual and tangent, reactions (§2.2–2.3) |
 //! | [`newton`] | `nonlin3d-newton` | Newton–Raphson path following: line search, modified Newton, load stepping with cutback, inertia (§2.1, §4.4) |
 //! | [`solver`] | `nonlin3d-solver` | sparse patterns and matrices, RCM/AMD, profile LDLᵀ, faer Cholesky, inertia (§2.4) |
+//! | [`deck`] | this crate | solving an Abaqus/CalculiX deck: the `nonlin3d solve` command |
 //! | [`eigen_check`] | this crate | the element eigen-check the `nonlin3d` program runs (§2.5) |
 //!
 //! Substructuring, contact and VCCT come as
@@ -18,6 +19,7 @@
 #![deny(missing_docs)]
 #![warn(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
+pub mod deck;
 pub mod eigen_check;
 
 /// The README's code blocks, compiled and run as doc-tests.

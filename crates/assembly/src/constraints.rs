@@ -5,14 +5,15 @@ use std::collections::BTreeMap;
 
 /// Constraints and loads of a model with `n` DOFs (3 per node, node-major).
 ///
-/// At load factor λ: prescribed DOF d has value λ·value(d) (fixed DOFs value 0), the external
-/// force is λ·f (nodal loads added with [`add_load`](Self::add_load)) plus the fixed part
-/// `dead` (loads held at full value whatever λ, e.g. the thesis's perturbation load before it
-/// is removed; set to zero to remove it).
+/// At load factor λ: prescribed DOF d has value base(d) + λ·value(d) (fixed DOFs 0; `base` is
+/// 0 unless set with [`prescribe_ramp`](Self::prescribe_ramp)), the external force is λ·f (nodal
+/// loads added with [`add_load`](Self::add_load)) plus the fixed part `dead` (loads held at full
+/// value whatever λ, e.g. the thesis's perturbation load before it is removed, or the loads of
+/// earlier steps).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Constraints {
     n: usize,
-    prescribed: BTreeMap<usize, f64>,
+    prescribed: BTreeMap<usize, (f64, f64)>,
     loads: Vec<f64>,
     dead: Vec<f64>,
 }
@@ -43,7 +44,22 @@ impl Constraints {
                 value,
             });
         }
-        self.prescribed.insert(dof, value);
+        self.prescribed.insert(dof, (0.0, value));
+        Ok(())
+    }
+
+    /// Prescribes DOF `dof` to ramp from `from` (λ = 0) to `to` (λ = 1), as a step of an
+    /// Abaqus deck does from the previous step's value.
+    pub fn prescribe_ramp(&mut self, dof: usize, from: f64, to: f64) -> Result<(), AssemblyError> {
+        if dof >= self.n || !from.is_finite() || !to.is_finite() {
+            return Err(AssemblyError::BadDof {
+                what: "prescribed DOF",
+                dof,
+                n: self.n,
+                value: to,
+            });
+        }
+        self.prescribed.insert(dof, (from, to - from));
         Ok(())
     }
 
@@ -88,16 +104,16 @@ impl Constraints {
         self.prescribed.contains_key(&d)
     }
 
-    /// Constrained DOFs and their unit values.
+    /// Constrained DOFs and their values at λ = 1.
     pub fn prescribed(&self) -> impl Iterator<Item = (usize, f64)> + '_ {
-        self.prescribed.iter().map(|(&d, &v)| (d, v))
+        self.prescribed.iter().map(|(&d, &(b, v))| (d, b + v))
     }
 
     /// Sets the constrained entries of `u` to their values at load factor λ.
     pub fn apply(&self, u: &mut [f64], lambda: f64) {
-        for (&d, &v) in &self.prescribed {
+        for (&d, &(b, v)) in &self.prescribed {
             if let Some(x) = u.get_mut(d) {
-                *x = lambda * v;
+                *x = b + lambda * v;
             }
         }
     }
