@@ -7,7 +7,7 @@
 
 use clap::{Parser, Subcommand};
 use nonlin3d::newton::{NewtonSettings, Stepping};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 #[derive(Parser)]
