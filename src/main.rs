@@ -41,12 +41,7 @@ enum Command {
     },
 }
 
-fn solve(
-    deck: &PathBuf,
-    out: &PathBuf,
-    tolerance: f64,
-    increment: f64,
-) -> Result<(), nonlin3d::Error> {
+fn solve(deck: &Path, out: &Path, tolerance: f64, increment: f64) -> Result<(), nonlin3d::Error> {
     let text = std::fs::read_to_string(deck)
         .map_err(|e| nonlin3d::Error::Numerical(format!("reading {}: {e}", deck.display())))?;
     let model = nonlin3d::mesh::read_inp(&text)?;
