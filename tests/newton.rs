@@ -386,3 +386,48 @@ fn postbuckled_branch_by_perturbation_and_by_imperfection() {
         }
     }
 }
+
+#[test]
+fn displacement_criterion_adds_iterations_never_removes_them() {
+    let (_, mut a) = cantilever(-2000.0);
+    let (_, mut b) = cantilever(-2000.0);
+    let (mut ua, mut ub) = (vec![0.0; a.assembler.n()], vec![0.0; b.assembler.n()]);
+    let residual_only = NewtonSettings {
+        force_tolerance: 1e-2,
+        ..NewtonSettings::default()
+    };
+    let both = NewtonSettings {
+        displacement_tolerance: 1e-12,
+        ..residual_only.clone()
+    };
+    let pa = follow_path(
+        &mut a,
+        &mut ua,
+        &[1.0],
+        &residual_only,
+        &Stepping {
+            initial: 1.0,
+            ..Stepping::default()
+        },
+    )
+    .unwrap();
+    let pb = follow_path(
+        &mut b,
+        &mut ub,
+        &[1.0],
+        &both,
+        &Stepping {
+            initial: 1.0,
+            ..Stepping::default()
+        },
+    )
+    .unwrap();
+    let (na, nb) = (
+        pa.attempts[0].iterations.len(),
+        pb.attempts[0].iterations.len(),
+    );
+    assert!(nb > na, "{nb} vs {na} iterations");
+    let last = pb.attempts[0].iterations.last().unwrap();
+    let umax = ub.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    assert!(last.increment <= 1e-12 * umax);
+}

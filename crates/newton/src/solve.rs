@@ -19,6 +19,8 @@ pub struct NewtonSettings {
     pub refactor_every: usize,
     /// Linear solver.
     pub solver: SolverKind,
+    /// Also require ‖Δu‖∞ ≤ displacement_tolerance·‖u‖∞ of the last step (0 = residual only).
+    pub displacement_tolerance: f64,
 }
 
 impl Default for NewtonSettings {
@@ -30,6 +32,7 @@ impl Default for NewtonSettings {
             line_search: true,
             refactor_every: 1,
             solver: SolverKind::FaerLdlt,
+            displacement_tolerance: 0.0,
         }
     }
 }
@@ -204,7 +207,9 @@ pub fn solve_increment(
             report.termination = Termination::NonFinite;
             return Ok(report);
         }
-        if norm <= tolerance {
+        let step_small = settings.displacement_tolerance <= 0.0
+            || alpha * norm_inf(&du) <= settings.displacement_tolerance * norm_inf(u);
+        if norm <= tolerance && step_small {
             report.termination = Termination::Converged;
             return Ok(report);
         }
