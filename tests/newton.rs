@@ -1,9 +1,11 @@
 //! Newton path following on finite element models (issue: assembly and Newton): determinism,
 //! convergence rate, robustness to large steps, modified Newton, and bifurcation detection.
 
-use nonlin3d::assembly::{Assembler, Constraints};
-use nonlin3d::element::{ElementKind, IntegrationRule, Kinematics};
-use nonlin3d::laminate::{ShearCoupling, materials};
+mod common;
+
+use common::structural_problem;
+use nonlin3d::element::{ElementKind, IntegrationRule};
+use nonlin3d::laminate::materials;
 use nonlin3d::mesh::{
     BoxParams, Mesh, ThroughWidthParams, structured_box, through_width_delamination,
 };
@@ -18,24 +20,19 @@ fn cantilever(p: f64) -> (Mesh, StructuralProblem) {
     ))
     .unwrap();
     let steel = materials::steel().stiffness().unwrap();
-    let assembler = Assembler::new(
+    let mut problem = structural_problem(
         &mesh,
-        &[steel],
-        ShearCoupling::Exact,
+        steel,
         IntegrationRule::Gauss2,
-        IntegrationRule::Gauss2,
-        Kinematics::Nonlinear,
-    )
-    .unwrap();
-    let mut c = Constraints::new(assembler.n());
-    for r in 0..3 {
-        c.fix_nodes(&mesh.node_sets["x0"], r).unwrap();
-    }
+        &[("x0", 0), ("x0", 1), ("x0", 2)],
+    );
     let tip = &mesh.node_sets["x1"];
     for &n in tip {
-        c.add_load(3 * n + 2, p / tip.len() as f64).unwrap();
+        problem
+            .constraints
+            .add_load(3 * n + 2, p / tip.len() as f64)
+            .unwrap();
     }
-    let problem = StructuralProblem::new(assembler, c).unwrap();
     (mesh, problem)
 }
 
@@ -179,6 +176,40 @@ fn a_huge_single_step_converges_by_cutback_or_fails_located_never_nan() {
     assert!(u.iter().all(|x| x.is_finite()));
 }
 
+/// The through-width model of `p` (optionally with a strip imperfection of `imperfection` m),
+/// steel, u = 0 on x = 0, v = 0 on y = 0 and y = W, w = 0 on z = 0, u = −ε_max·L on x = L at
+/// λ = 1.
+fn compressed_through_width(
+    p: &ThroughWidthParams,
+    eps_max: f64,
+    imperfection: f64,
+) -> (Mesh, StructuralProblem) {
+    let (mut mesh, _) = through_width_delamination(p).unwrap();
+    if imperfection != 0.0 {
+        mesh.apply_imperfection(
+            p.base,
+            "crack_lower",
+            nonlin3d::mesh::Imperfection::Strip { a: p.a },
+            imperfection,
+        )
+        .unwrap();
+    }
+    let steel = materials::steel().stiffness().unwrap();
+    let mut problem = structural_problem(
+        &mesh,
+        steel,
+        IntegrationRule::Gauss2,
+        &[("x0", 0), ("y0", 1), ("y1", 1), ("z0", 2)],
+    );
+    for &n in &mesh.node_sets["x1"] {
+        problem
+            .constraints
+            .prescribe(3 * n, -eps_max * p.length)
+            .unwrap();
+    }
+    (mesh, problem)
+}
+
 /// Thesis §3.2 through-width model under compression, perfect geometry: the trivial path's
 /// tangent loses positive definiteness (one negative pivot appears) at the sublaminate's
 /// buckling strain, which for a clamped column of length ℓ = 2a and thickness h in plane strain
@@ -190,29 +221,10 @@ fn through_width_bifurcation_from_inertia_matches_the_clamped_column() {
         outside: 8,
         ..ThroughWidthParams::example()
     };
-    let (mesh, _) = through_width_delamination(&p).unwrap();
-    let steel = materials::steel().stiffness().unwrap();
-    let assembler = Assembler::new(
-        &mesh,
-        &[steel],
-        ShearCoupling::Exact,
-        IntegrationRule::Gauss2,
-        IntegrationRule::Gauss2,
-        Kinematics::Nonlinear,
-    )
-    .unwrap();
-    let mut c = Constraints::new(assembler.n());
     let ell = 2.0 * p.a;
     let eps_c = std::f64::consts::PI.powi(2) * p.h * p.h / (3.0 * ell * ell);
     let eps_max = 1.5 * eps_c;
-    c.fix_nodes(&mesh.node_sets["x0"], 0).unwrap();
-    c.fix_nodes(&mesh.node_sets["y0"], 1).unwrap();
-    c.fix_nodes(&mesh.node_sets["y1"], 1).unwrap();
-    c.fix_nodes(&mesh.node_sets["z0"], 2).unwrap();
-    for &n in &mesh.node_sets["x1"] {
-        c.prescribe(3 * n, -eps_max * p.length).unwrap();
-    }
-    let mut problem = StructuralProblem::new(assembler, c).unwrap();
+    let (_, mut problem) = compressed_through_width(&p, eps_max, 0.0);
     let mut u = vec![0.0; problem.assembler.n()];
     let levels: Vec<f64> = (1..=30).map(|k| k as f64 / 30.0).collect();
     let stepping = Stepping {
@@ -248,7 +260,6 @@ fn through_width_bifurcation_from_inertia_matches_the_clamped_column() {
 /// bifurcation strain found above (inextensional postbuckling; the base compliance shifts ε_b).
 #[test]
 fn postbuckled_branch_by_perturbation_and_by_imperfection() {
-    use nonlin3d::mesh::Imperfection;
     use nonlin3d::newton::perturbed_path;
     let p = ThroughWidthParams {
         outside: 8,
@@ -259,34 +270,7 @@ fn postbuckled_branch_by_perturbation_and_by_imperfection() {
     let eps_max = 1.6 * eps_c;
     let levels = [1.1, 1.2, 1.3, 1.45, 1.6].map(|f| f * eps_c / eps_max);
     let setup = |imperfection: f64| {
-        let (mut mesh, _) = through_width_delamination(&p).unwrap();
-        if imperfection != 0.0 {
-            mesh.apply_imperfection(
-                p.base,
-                "crack_lower",
-                Imperfection::Strip { a: p.a },
-                imperfection,
-            )
-            .unwrap();
-        }
-        let steel = materials::steel().stiffness().unwrap();
-        let assembler = Assembler::new(
-            &mesh,
-            &[steel],
-            ShearCoupling::Exact,
-            IntegrationRule::Gauss2,
-            IntegrationRule::Gauss2,
-            Kinematics::Nonlinear,
-        )
-        .unwrap();
-        let mut c = Constraints::new(assembler.n());
-        c.fix_nodes(&mesh.node_sets["x0"], 0).unwrap();
-        c.fix_nodes(&mesh.node_sets["y0"], 1).unwrap();
-        c.fix_nodes(&mesh.node_sets["y1"], 1).unwrap();
-        c.fix_nodes(&mesh.node_sets["z0"], 2).unwrap();
-        for &n in &mesh.node_sets["x1"] {
-            c.prescribe(3 * n, -eps_max * p.length).unwrap();
-        }
+        let (mesh, problem) = compressed_through_width(&p, eps_max, imperfection);
         // The sublaminate's top nodes on the symmetry plane x = 0 (where the deflection peaks).
         let top: Vec<usize> = (0..mesh.nodes.len())
             .filter(|&n| {
@@ -295,7 +279,7 @@ fn postbuckled_branch_by_perturbation_and_by_imperfection() {
             })
             .collect();
         assert!(!top.is_empty());
-        (StructuralProblem::new(assembler, c).unwrap(), top)
+        (problem, top)
     };
     let stepping = Stepping {
         initial: 0.1,

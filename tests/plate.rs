@@ -5,11 +5,13 @@
 //! deflection against eq. 4.1.1, w₀/h + 0.443 (w₀/h)³ = 0.217 P a²/(E h⁴) (ref. 43: exact in
 //! the linear range, approximate for large deflections).
 
-use nonlin3d::assembly::{Assembler, Constraints};
-use nonlin3d::element::{IntegrationRule, Kinematics};
-use nonlin3d::laminate::{ShearCoupling, materials};
+mod common;
+
+use common::structural_problem;
+use nonlin3d::element::IntegrationRule;
+use nonlin3d::laminate::materials;
 use nonlin3d::mesh::{EmbeddedParams, embedded_delamination};
-use nonlin3d::newton::{NewtonSettings, Stepping, StructuralProblem, follow_path};
+use nonlin3d::newton::{NewtonSettings, Stepping, follow_path};
 
 /// w₀/h from eq. 4.1.1 for a given load (Newton on the cubic).
 fn closed_form(load: f64, e: f64, h: f64, a: f64) -> f64 {
@@ -28,23 +30,19 @@ fn clamped_plate_centre_deflection_follows_eq_4_1_1() {
     let mesh = embedded_delamination(&p).unwrap();
     let steel = materials::steel();
     let e = steel.e11;
-    let assembler = Assembler::new(
+    let mut problem = structural_problem(
         &mesh,
-        &[steel.stiffness().unwrap()],
-        ShearCoupling::Exact,
+        steel.stiffness().unwrap(),
         IntegrationRule::Gauss2,
-        IntegrationRule::Gauss2,
-        Kinematics::Nonlinear,
-    )
-    .unwrap();
-    let mut c = Constraints::new(assembler.n());
-    c.fix_nodes(&mesh.node_sets["x0"], 0).unwrap();
-    c.fix_nodes(&mesh.node_sets["y0"], 1).unwrap();
-    c.fix_nodes(&mesh.node_sets["z0"], 2).unwrap();
+        &[("x0", 0), ("y0", 1), ("z0", 2)],
+    );
     // The load needed for w₀/h = 2 by eq. 4.1.1; a quarter of it on the quarter model.
     let p_max = (2.0 + 0.443 * 8.0) * e * h.powi(4) / (0.217 * a * a);
     let top = mesh.node_sets["center_top"][0];
-    c.add_load(3 * top + 2, 0.25 * p_max).unwrap();
+    problem
+        .constraints
+        .add_load(3 * top + 2, 0.25 * p_max)
+        .unwrap();
     // The plate's mid-plane deflection is read at its lower face (the upper crack face node on
     // the axis), free of the local indentation under the point load.
     let bottom = mesh.node_sets["crack_upper"]
@@ -52,7 +50,6 @@ fn clamped_plate_centre_deflection_follows_eq_4_1_1() {
         .copied()
         .find(|&n| mesh.nodes[n][0] == 0.0 && mesh.nodes[n][1] == 0.0)
         .unwrap();
-    let mut problem = StructuralProblem::new(assembler, c).unwrap();
     let mut u = vec![0.0; problem.assembler.n()];
     let ratios = [0.1, 0.25, 0.5, 1.0, 1.5, 2.0];
     let targets: Vec<f64> = ratios

@@ -134,3 +134,28 @@ pub fn clamped_box_stiffness(n: [usize; 3], h: [f64; 3]) -> SymmetricMatrix {
         .collect();
     mesh.stiffness(&material, IntegrationRule::Gauss2, &fixed)
 }
+
+/// A structural problem on `mesh` (one material for every cell, no ply rotation), nonlinear
+/// kinematics, Hex20 and Hex8 with `rule`, with DOF `r` fixed on each named node set.
+pub fn structural_problem(
+    mesh: &nonlin3d::mesh::Mesh,
+    material: Stiffness,
+    rule: IntegrationRule,
+    fixes: &[(&str, usize)],
+) -> nonlin3d::newton::StructuralProblem {
+    use nonlin3d::assembly::{Assembler, Constraints};
+    let assembler = Assembler::new(
+        mesh,
+        &[material],
+        nonlin3d::laminate::ShearCoupling::Exact,
+        rule,
+        rule,
+        nonlin3d::element::Kinematics::Nonlinear,
+    )
+    .unwrap();
+    let mut c = Constraints::new(assembler.n());
+    for &(set, r) in fixes {
+        c.fix_nodes(&mesh.node_sets[set], r).unwrap();
+    }
+    nonlin3d::newton::StructuralProblem::new(assembler, c).unwrap()
+}
