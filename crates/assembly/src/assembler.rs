@@ -2,8 +2,8 @@
 
 use crate::{AssemblyError, Constraints};
 use nonlin3d_element::{
-    BatchInput, BatchOutput, ElementError, ElementKind, IntegrationRule, Kinematics, ShapeTable,
-    evaluate_batch,
+    BatchInput, ElementError, ElementKind, IntegrationRule, Kinematics, ShapeTable,
+    evaluate_batch_with,
 };
 use nonlin3d_laminate::{ShearCoupling, Stiffness};
 use nonlin3d_mesh::Mesh;
@@ -11,12 +11,66 @@ use nonlin3d_solver::{SymmetricMatrix, SymmetricPattern};
 use std::collections::HashMap;
 use std::sync::Arc;
 
-/// Cells of one element kind: evaluated together by the batched kernel.
+/// Cells of one element kind and one colour: no two share a node, so their contributions can
+/// be added to the global arrays concurrently.
 struct Group {
     table: ShapeTable,
     cells: Vec<usize>,
     coords: Vec<[f64; 3]>,
     material_of: Vec<usize>,
+}
+
+/// Greedy colouring of `cells` (in order) so that no two cells of one colour share a node.
+fn colour(mesh: &Mesh, cells: &[usize]) -> Vec<Vec<usize>> {
+    let mut used: Vec<Vec<usize>> = vec![Vec::new(); mesh.nodes.len()];
+    let mut colours: Vec<Vec<usize>> = Vec::new();
+    for &c in cells {
+        let nodes = &mesh.cells[c].nodes;
+        let k = (0..)
+            .find(|k| nodes.iter().all(|&n| !used[n].contains(k)))
+            .unwrap_or(0);
+        for &n in nodes {
+            used[n].push(k);
+        }
+        if k == colours.len() {
+            colours.push(Vec::new());
+        }
+        colours[k].push(c);
+    }
+    colours
+}
+
+/// Shared write access to the global force vector and tangent values for the cells of one
+/// colour: they touch disjoint entries, so concurrent adds never alias.
+struct Disjoint {
+    forces: *mut f64,
+    forces_len: usize,
+    values: *mut f64,
+    values_len: usize,
+}
+
+// SAFETY: `Disjoint` is only used inside `Assembler::assemble` while the cells of a single
+// colour are evaluated; the colouring guarantees that no two of them share a node, hence no
+// two write the same force entry or (through their scatter maps, which address entries (i, j)
+// of their own DOFs only) the same tangent value. Each entry is therefore written by at most
+// one thread, and the pointers outlive the parallel section (they borrow `internal` and `k`,
+// which stay alive and unaliased until it ends).
+unsafe impl Sync for Disjoint {}
+
+impl Disjoint {
+    /// Adds `v` to force entry `i`.
+    fn add_force(&self, i: usize, v: f64) {
+        assert!(i < self.forces_len);
+        // SAFETY: in bounds (checked); exclusive per the type's invariant.
+        unsafe { *self.forces.add(i) += v };
+    }
+
+    /// Adds `v` to tangent value `p`.
+    fn add_value(&self, p: usize, v: f64) {
+        assert!(p < self.values_len);
+        // SAFETY: in bounds (checked); exclusive per the type's invariant.
+        unsafe { *self.values.add(p) += v };
+    }
 }
 
 /// Everything needed to assemble a mesh again and again: shape tables, per-cell stiffness
@@ -124,17 +178,21 @@ impl Assembler {
             if cells.is_empty() {
                 continue;
             }
-            let coords = cells
-                .iter()
-                .flat_map(|&c| mesh.cell_coordinates(c))
-                .collect();
-            let material_of = cells.iter().map(|&c| cell_stiffness[c]).collect();
-            groups.push(Group {
-                table: ShapeTable::new(kind, rule)?,
-                cells,
-                coords,
-                material_of,
-            });
+            let table = ShapeTable::new(kind, rule)?;
+            // One group per colour: the parallel scatter in `assemble` relies on it.
+            for cells in colour(mesh, &cells) {
+                let coords = cells
+                    .iter()
+                    .flat_map(|&c| mesh.cell_coordinates(c))
+                    .collect();
+                let material_of = cells.iter().map(|&c| cell_stiffness[c]).collect();
+                groups.push(Group {
+                    table: table.clone(),
+                    cells,
+                    coords,
+                    material_of,
+                });
+            }
         }
         let dofs = mesh.cell_dofs();
         let pattern = Arc::new(SymmetricPattern::from_dof_lists(n, &dofs)?);
@@ -189,8 +247,24 @@ impl Assembler {
         if let Some(k) = k.as_deref_mut() {
             k.set_zero();
         }
+        // Colour after colour; within a colour, cells in parallel writing straight into the
+        // global arrays (no two share an entry). Every entry receives its contributions in
+        // colour order, one per colour at most: the result does not depend on the threads.
+        let (values_ptr, values_len) = match k.as_deref_mut() {
+            Some(k) => {
+                let v = k.values_mut();
+                (v.as_mut_ptr(), v.len())
+            }
+            None => (std::ptr::null_mut(), 0),
+        };
+        let want_k = k.is_some();
+        let writer = Disjoint {
+            forces: internal.as_mut_ptr(),
+            forces_len: internal.len(),
+            values: values_ptr,
+            values_len,
+        };
         for g in &self.groups {
-            let nn = g.table.nodes();
             let nd = g.table.dofs();
             let disp: Vec<[f64; 3]> = g
                 .cells
@@ -201,28 +275,35 @@ impl Assembler {
                         .map(|d| [u[d[0]], u[d[1]], u[d[2]]])
                 })
                 .collect();
-            debug_assert_eq!(disp.len(), g.cells.len() * nn);
             let input = BatchInput {
                 coords: &g.coords,
                 disp: &disp,
                 materials: &self.stiffness,
                 material_of: &g.material_of,
             };
-            let mut out = BatchOutput::new(&g.table, g.cells.len(), k.is_some());
-            evaluate_batch(&g.table, &input, self.kinematics, &mut out)
-                .map_err(|e| relocate(e, &g.cells))?;
-            for (i, &c) in g.cells.iter().enumerate() {
-                for (a, &d) in self.dofs[c].iter().enumerate() {
-                    internal[d] += out.forces[i * nd + a];
-                }
-                energy += out.energy[i];
-                if let Some(k) = k.as_deref_mut() {
-                    k.scatter_add_mapped(
-                        &self.maps[c],
-                        &out.tangents[i * nd * nd..(i + 1) * nd * nd],
-                    )?;
-                }
-            }
+            let energies = evaluate_batch_with(
+                &g.table,
+                &input,
+                self.kinematics,
+                want_k,
+                || 0.0,
+                |e_sum, i, out| {
+                    let c = g.cells[i];
+                    for (a, &d) in self.dofs[c].iter().enumerate() {
+                        writer.add_force(d, out.forces[a]);
+                    }
+                    if want_k {
+                        for (p, v) in self.maps[c].iter().zip(&out.tangent[..nd * nd]) {
+                            if let Some(p) = *p {
+                                writer.add_value(p, *v);
+                            }
+                        }
+                    }
+                    *e_sum += out.energy;
+                },
+            )
+            .map_err(|e| relocate(e, &g.cells))?;
+            energy += energies.iter().sum::<f64>();
         }
         Ok(Assembly { internal, energy })
     }
@@ -272,5 +353,56 @@ impl Assembler {
             }
         }
         Ok((r, reactions, a.energy))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nonlin3d_mesh::{BoxParams, EmbeddedParams, embedded_delamination, structured_box};
+
+    /// The invariant the parallel scatter relies on: within a colour no two cells share a node,
+    /// and every cell is in exactly one colour.
+    #[test]
+    fn colours_never_share_a_node() {
+        let meshes = [
+            structured_box(&BoxParams::new(
+                ElementKind::Hex20,
+                [5, 4, 3],
+                [1.0, 1.0, 1.0],
+            ))
+            .unwrap(),
+            structured_box(&BoxParams::new(
+                ElementKind::Hex8,
+                [7, 2, 2],
+                [1.0, 1.0, 1.0],
+            ))
+            .unwrap(),
+            embedded_delamination(&EmbeddedParams {
+                slices: 4,
+                ..EmbeddedParams::thesis_reference()
+            })
+            .unwrap(),
+        ];
+        for mesh in &meshes {
+            let all: Vec<usize> = (0..mesh.cells.len()).collect();
+            let colours = colour(mesh, &all);
+            let mut seen = vec![0usize; mesh.cells.len()];
+            for cells in &colours {
+                let mut owner = std::collections::HashMap::new();
+                for &c in cells {
+                    seen[c] += 1;
+                    for &n in &mesh.cells[c].nodes {
+                        assert!(
+                            owner.insert(n, c).is_none(),
+                            "node {n} in two cells of one colour"
+                        );
+                    }
+                }
+            }
+            assert!(seen.iter().all(|&k| k == 1));
+            // A structured Hex mesh needs 8 colours (2 per direction); the swept model a few more.
+            assert!(colours.len() <= 16, "{} colours", colours.len());
+        }
     }
 }
