@@ -26,9 +26,11 @@ fn colour(mesh: &Mesh, cells: &[usize]) -> Vec<Vec<usize>> {
     let mut colours: Vec<Vec<usize>> = Vec::new();
     for &c in cells {
         let nodes = &mesh.cells[c].nodes;
-        let k = (0..)
+        // The smallest colour none of its nodes has; colours.len() is always free, since every
+        // colour recorded at a node is an existing one.
+        let k = (0..colours.len())
             .find(|k| nodes.iter().all(|&n| !used[n].contains(k)))
-            .unwrap_or(0);
+            .unwrap_or(colours.len());
         for &n in nodes {
             used[n].push(k);
         }
