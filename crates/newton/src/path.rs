@@ -17,6 +17,9 @@ pub struct Stepping {
     pub easy: usize,
     /// Cutback factor after a failed attempt.
     pub cutback: f64,
+    /// Start each increment from the secant extrapolation of the last two converged states
+    /// (u + (u − u_prev)·Δλ/Δλ_prev) instead of the last state.
+    pub secant_predictor: bool,
 }
 
 impl Default for Stepping {
@@ -28,6 +31,7 @@ impl Default for Stepping {
             grow: 1.5,
             easy: 4,
             cutback: 0.5,
+            secant_predictor: true,
         }
     }
 }
@@ -106,11 +110,19 @@ pub fn follow_path_from(
     let mut lambda = start;
     let mut step = stepping.initial.min(stepping.max);
     let mut cutbacks = 0;
+    // The previous converged state and its increment, for the secant predictor.
+    let mut previous: Option<(Vec<f64>, f64)> = None;
     for &target in targets {
         while (target - lambda).abs() > 1e-12 * target.abs().max(1.0) {
             let dir = (target - lambda).signum();
             let delta = step.min((target - lambda).abs());
             let mut trial = u.clone();
+            if let (true, Some((u_prev, d_prev))) = (stepping.secant_predictor, &previous) {
+                let f = dir * delta / d_prev;
+                for ((t, &a), &b) in trial.iter_mut().zip(u.iter()).zip(u_prev) {
+                    *t = a + f * (a - b);
+                }
+            }
             let attempt = solve_increment(
                 problem,
                 &mut trial,
@@ -124,7 +136,7 @@ pub fn follow_path_from(
             let reason = format!("{:?}", attempt.termination);
             report.attempts.push(attempt);
             if converged {
-                *u = trial;
+                previous = Some((std::mem::replace(u, trial), dir * delta));
                 lambda += dir * delta;
                 if iterations <= stepping.easy {
                     step = (step * stepping.grow).min(stepping.max);
