@@ -400,19 +400,8 @@ pub fn read_inp(text: &str) -> Result<InpModel, MeshError> {
                         let ortho = ty.starts_with("ORTHO");
                         need(if ortho { 9 } else { 21 })?;
                         let mut c = [[0.0; 6]; 6];
-                        // ORTHO: D1111 D1122 D2222 D1133 D2233 D3333 D1212 D1313 D2323.
                         let order: &[(usize, usize)] = if ortho {
-                            &[
-                                (0, 0),
-                                (0, 1),
-                                (1, 1),
-                                (0, 2),
-                                (1, 2),
-                                (2, 2),
-                                (3, 3),
-                                (5, 5),
-                                (4, 4),
-                            ]
+                            &crate::inp::ORTHO_ORDER
                         } else {
                             &crate::inp::ANISO_ORDER
                         };
