@@ -35,3 +35,4 @@ pub use nonlin3d_laminate as laminate;
 pub use nonlin3d_mesh as mesh;
 pub use nonlin3d_newton as newton;
 pub use nonlin3d_solver as solver;
+pub use nonlin3d_vcct as vcct;

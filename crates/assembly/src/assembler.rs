@@ -2,8 +2,8 @@
 
 use crate::{AssemblyError, Constraints};
 use nonlin3d_element::{
-    BatchInput, ElementError, ElementKind, IntegrationRule, Kinematics, ShapeTable,
-    evaluate_batch_with,
+    BatchInput, ElementError, ElementKind, ElementOutput, IntegrationRule, Kinematics, ShapeTable,
+    Workspace, evaluate, evaluate_batch_with,
 };
 use nonlin3d_laminate::{ShearCoupling, Stiffness};
 use nonlin3d_mesh::Mesh;
@@ -86,6 +86,8 @@ pub struct Assembler {
     maps: Vec<Vec<Option<usize>>>,
     pattern: Arc<SymmetricPattern>,
     kinematics: Kinematics,
+    /// (group, position in the group) of each cell.
+    place: Vec<(usize, usize)>,
 }
 
 /// One assembly: internal forces, strain energy, and the tangent if it was asked for.
@@ -99,7 +101,11 @@ pub struct Assembly {
 
 /// Re-attributes a batch error (group-local element index) to the mesh cell.
 fn relocate(err: ElementError, cells: &[usize]) -> ElementError {
-    let cell = |e: Option<usize>| e.and_then(|e| cells.get(e).copied());
+    relabel(err, |e| e.and_then(|e| cells.get(e).copied()))
+}
+
+/// Replaces the element index of an error by `cell(index)`.
+fn relabel(err: ElementError, cell: impl Fn(Option<usize>) -> Option<usize>) -> ElementError {
     match err {
         ElementError::NonPositiveJacobian {
             element,
@@ -196,6 +202,12 @@ impl Assembler {
                 });
             }
         }
+        let mut place = vec![(0, 0); mesh.cells.len()];
+        for (gi, g) in groups.iter().enumerate() {
+            for (i, &c) in g.cells.iter().enumerate() {
+                place[c] = (gi, i);
+            }
+        }
         let dofs = mesh.cell_dofs();
         let pattern = Arc::new(SymmetricPattern::from_dof_lists(n, &dofs)?);
         let maps = dofs
@@ -210,7 +222,59 @@ impl Assembler {
             maps,
             pattern,
             kinematics,
+            place,
         })
+    }
+
+    /// Internal forces of the listed cells alone, f = Σ_cells ∫ Bᵀ S dV, node-major over the
+    /// whole model, with `kinematics` (which may differ from the assembler's own): the forces a
+    /// part of the model exerts at its nodes, as VCCT needs for the cells above the
+    /// delamination plane (thesis §2.8: linear or nonlinear strain–displacement relations).
+    pub fn partial_internal(
+        &self,
+        cells: &[usize],
+        u: &[f64],
+        kinematics: Kinematics,
+    ) -> Result<Vec<f64>, AssemblyError> {
+        if u.len() != self.n {
+            return Err(AssemblyError::Length {
+                what: "displacements",
+                expected: self.n,
+                got: u.len(),
+            });
+        }
+        let mut f = vec![0.0; self.n];
+        for &c in cells {
+            let &(gi, i) = self.place.get(c).ok_or(AssemblyError::Length {
+                what: "cell index",
+                expected: self.place.len(),
+                got: c,
+            })?;
+            let g = &self.groups[gi];
+            let nn = g.table.nodes();
+            let coords = &g.coords[i * nn..(i + 1) * nn];
+            let disp: Vec<[f64; 3]> = self.dofs[c]
+                .chunks_exact(3)
+                .map(|d| [u[d[0]], u[d[1]], u[d[2]]])
+                .collect();
+            let mut out = ElementOutput::new(&g.table);
+            let mut ws = Workspace::new(&g.table);
+            evaluate(
+                &g.table,
+                coords,
+                &disp,
+                &self.stiffness[g.material_of[i]],
+                kinematics,
+                false,
+                &mut ws,
+                &mut out,
+            )
+            .map_err(|e| relabel(e, |_| Some(c)))?;
+            for (a, &d) in self.dofs[c].iter().enumerate() {
+                f[d] += out.forces[a];
+            }
+        }
+        Ok(f)
     }
 
     /// Number of DOFs.
@@ -406,5 +470,47 @@ mod tests {
             // A structured Hex mesh needs 8 colours (2 per direction); the swept model a few more.
             assert!(colours.len() <= 16, "{} colours", colours.len());
         }
+    }
+
+    /// The forces of all cells through `partial_internal` are the assembled internal forces,
+    /// and the two halves of a split cell list add up to them (to rounding: 1e-12 relative).
+    #[test]
+    fn partial_internal_adds_up_to_the_assembly() {
+        use nonlin3d_laminate::materials;
+        let mesh = structured_box(&BoxParams::new(
+            ElementKind::Hex20,
+            [3, 2, 2],
+            [2.0, 1.0, 1.0],
+        ))
+        .unwrap();
+        let steel = materials::steel().stiffness().unwrap();
+        let asm = Assembler::new(
+            &mesh,
+            &[steel],
+            ShearCoupling::Exact,
+            IntegrationRule::Gauss2,
+            IntegrationRule::Gauss2,
+            Kinematics::Nonlinear,
+        )
+        .unwrap();
+        let u: Vec<f64> = (0..asm.n())
+            .map(|d| 1e-3 * ((d * 7919) % 23) as f64 / 23.0)
+            .collect();
+        let full = asm.assemble(&u, None).unwrap().internal;
+        let all: Vec<usize> = (0..mesh.cells.len()).collect();
+        let (a, b) = all.split_at(5);
+        let fa = asm.partial_internal(a, &u, Kinematics::Nonlinear).unwrap();
+        let fb = asm.partial_internal(b, &u, Kinematics::Nonlinear).unwrap();
+        let scale = full.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+        for d in 0..asm.n() {
+            assert!((fa[d] + fb[d] - full[d]).abs() <= 1e-12 * scale, "dof {d}");
+        }
+        let lin = asm.partial_internal(&all, &u, Kinematics::Linear).unwrap();
+        assert!(
+            lin.iter()
+                .zip(&full)
+                .any(|(l, f)| (l - f).abs() > 1e-9 * scale)
+        );
+        assert!(asm.partial_internal(&[99], &u, Kinematics::Linear).is_err());
     }
 }

@@ -26,7 +26,7 @@
 
 use crate::MeshError;
 use crate::front::{CellsTouching, Front, FrontPoint};
-use crate::generate::graded_coordinates;
+use crate::generate::{graded_coordinates, graded_from_first};
 use crate::model::{Cell, Mesh};
 use nonlin3d_element::ElementKind;
 use std::collections::HashMap;
@@ -70,8 +70,9 @@ pub struct EmbeddedParams {
     pub radial_inside: usize,
     /// Radial elements between the front and the square boundary.
     pub radial_outside: usize,
-    /// Ratio of the element next to the front to the element farthest from it, on each side
-    /// (< 1 refines towards the front).
+    /// Inside the delamination: the element next to the front over the one farthest from it
+    /// (< 1 refines towards the front). Outside, the first element is as long as the last one
+    /// inside (the single-solution VCCT pairs them, §2.8) and the sizes grow geometrically.
     pub front_grading: f64,
     /// Core (first ring) radius as a fraction of a.
     pub core_fraction: f64,
@@ -258,7 +259,9 @@ type Layers = (Vec<f64>, Vec<(usize, f64)>, usize);
 fn radial_stations(p: &EmbeddedParams) -> Result<(Vec<f64>, usize), MeshError> {
     let rc = p.core_fraction * p.a;
     let inside = graded_coordinates(p.radial_inside, p.a - rc, p.front_grading)?;
-    let outside = graded_coordinates(p.radial_outside, p.w - p.a, 1.0 / p.front_grading)?;
+    // The ring ahead of the front as wide as the one behind it (VCCT pairs them, §2.8).
+    let behind = inside[inside.len() - 1] - inside[inside.len() - 2];
+    let outside = graded_from_first(p.radial_outside, p.w - p.a, behind)?;
     let mut rho: Vec<f64> = inside.iter().map(|d| rc + d).collect();
     let front = rho.len() - 1;
     rho.extend(outside.iter().skip(1).map(|d| p.a + d));

@@ -35,6 +35,36 @@ impl BoxParams {
     }
 }
 
+/// Node positions 0 = x_0 < … < x_n = length with geometric element sizes whose first element
+/// is `first` (the common ratio found by bisection). Used to continue a graded side of a
+/// delamination front with an element of the same length on the other side: the single-solution
+/// VCCT (thesis §2.8) pairs forces one element ahead with openings one element behind and
+/// assumes the two are equally long. With one element, or `first` ≥ `length`, the elements are uniform.
+pub fn graded_from_first(n: usize, length: f64, first: f64) -> Result<Vec<f64>, MeshError> {
+    if !(first.is_finite() && first > 0.0) {
+        return Err(MeshError::Parameter {
+            name: "first element",
+            reason: format!("{first} must be positive and finite"),
+        });
+    }
+    if n <= 1 || first >= length {
+        return graded_coordinates(n, length, 1.0);
+    }
+    // Σ_{k<n} first·q^k = length, increasing in q: bisect on log q.
+    let total = |q: f64| (0..n).map(|k| first * q.powi(k as i32)).sum::<f64>();
+    let (mut lo, mut hi) = (1e-6_f64, 1e6_f64);
+    for _ in 0..200 {
+        let mid = (lo * hi).sqrt();
+        if total(mid) < length {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let q = (lo * hi).sqrt();
+    graded_coordinates(n, length, q.powi(n as i32 - 1))
+}
+
 /// Node positions 0 = x_0 < … < x_n = length with geometric element sizes, last/first = `ratio`.
 pub fn graded_coordinates(n: usize, length: f64, ratio: f64) -> Result<Vec<f64>, MeshError> {
     if n == 0 {
@@ -205,5 +235,17 @@ mod tests {
             assert_eq!(m.face_sets["z0"].len(), 6);
             assert_eq!(m.face_sets["x1"].len(), 8);
         }
+    }
+
+    #[test]
+    fn graded_from_first_matches_the_first_element() {
+        for (n, len, first) in [(5, 10.0, 0.5), (3, 1.0, 0.6), (8, 75.0, 1.0)] {
+            let x = graded_from_first(n, len, first).unwrap();
+            assert_eq!(x.len(), n + 1);
+            assert!((x[1] - first).abs() < 1e-12 * len);
+            assert!((x[n] - len).abs() < 1e-12 * len);
+            assert!(x.windows(2).all(|w| w[1] > w[0]));
+        }
+        assert!(graded_from_first(3, 1.0, 0.0).is_err());
     }
 }

@@ -42,7 +42,7 @@ pub use embedded::{
 };
 pub use error::MeshError;
 pub use front::{Front, FrontPoint};
-pub use generate::{BoxParams, graded_coordinates, structured_box};
+pub use generate::{BoxParams, graded_coordinates, graded_from_first, structured_box};
 pub use inp_read::{InpModel, NodeRef, ReadBoundary, ReadCload, ReadStep, read_inp};
 pub use model::{Cell, Imperfection, Mesh};
 pub use quality::{CellQuality, quality};

@@ -5,7 +5,7 @@
 
 use crate::MeshError;
 use crate::front::{CellsTouching, Front, FrontPoint};
-use crate::generate::{graded_coordinates, grid_position};
+use crate::generate::{graded_coordinates, graded_from_first, grid_position};
 use crate::model::{Cell, Mesh};
 use nonlin3d_element::ElementKind;
 use std::collections::HashMap;
@@ -29,7 +29,9 @@ pub struct ThroughWidthParams {
     pub inside: usize,
     /// Elements along x beyond the front.
     pub outside: usize,
-    /// Element next to the front over the farthest one, on both sides (< 1 refines).
+    /// Inside the delamination: the element next to the front over the one farthest from it
+    /// (< 1 refines towards the front). Outside, the first element is as long as the last one
+    /// inside (the single-solution VCCT pairs them, §2.8) and the sizes grow geometrically.
     pub front_grading: f64,
     /// Elements across the width.
     pub across: usize,
@@ -74,7 +76,9 @@ pub fn through_width_delamination(p: &ThroughWidthParams) -> Result<(Mesh, Front
         });
     }
     let xin = graded_coordinates(p.inside, p.a, p.front_grading)?;
-    let xout = graded_coordinates(p.outside, p.length - p.a, 1.0 / p.front_grading)?;
+    // The element ahead of the front as long as the one behind it (VCCT, §2.8).
+    let behind = xin[xin.len() - 1] - xin[xin.len() - 2];
+    let xout = graded_from_first(p.outside, p.length - p.a, behind)?;
     let mut xs = xin.clone();
     xs.extend(xout.iter().skip(1).map(|d| p.a + d));
     let ys = graded_coordinates(p.across, p.width, 1.0)?;

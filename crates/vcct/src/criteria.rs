@@ -1,0 +1,232 @@
+//! Mixed-mode delamination criteria: the failure index along a front and the critical applied
+//! strain of a strain sweep.
+
+use crate::{FrontRelease, VcctError};
+
+/// A mixed-mode criterion; [`MixedMode::index`] is 1 at the onset of growth.
+///
+/// Negative G_I (overlapping faces, where contact would act) counts as 0 in every criterion.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum MixedMode {
+    /// Power law: (G_I/G_Ic)^α + (G_II/G_IIc)^β + (G_III/G_IIIc)^β.
+    PowerLaw {
+        /// Mode I toughness G_Ic, J/m².
+        g_ic: f64,
+        /// Mode II toughness G_IIc, J/m².
+        g_iic: f64,
+        /// Mode III toughness G_IIIc, J/m² (often taken = G_IIc).
+        g_iiic: f64,
+        /// Exponent α on mode I.
+        alpha: f64,
+        /// Exponent β on the shear modes.
+        beta: f64,
+    },
+    /// Benzeggagh–Kenane (1996): G_c = G_Ic + (G_IIc − G_Ic)·(G_shear/G_T)^η with
+    /// G_shear = G_II + G_III; index G_T / G_c.
+    BenzeggaghKenane {
+        /// Mode I toughness G_Ic, J/m².
+        g_ic: f64,
+        /// Mode II toughness G_IIc, J/m².
+        g_iic: f64,
+        /// The B–K exponent η.
+        eta: f64,
+    },
+}
+
+impl MixedMode {
+    /// Checks that toughnesses and exponents are positive and finite.
+    pub fn validate(&self) -> Result<(), VcctError> {
+        let vals: &[(&'static str, f64)] = match self {
+            Self::PowerLaw {
+                g_ic,
+                g_iic,
+                g_iiic,
+                alpha,
+                beta,
+            } => &[
+                ("G_Ic", *g_ic),
+                ("G_IIc", *g_iic),
+                ("G_IIIc", *g_iiic),
+                ("alpha", *alpha),
+                ("beta", *beta),
+            ],
+            Self::BenzeggaghKenane { g_ic, g_iic, eta } => {
+                &[("G_Ic", *g_ic), ("G_IIc", *g_iic), ("eta", *eta)]
+            }
+        };
+        for &(name, v) in vals {
+            if !(v > 0.0 && v.is_finite()) {
+                return Err(VcctError::Criterion { name, value: v });
+            }
+        }
+        Ok(())
+    }
+
+    /// The failure index of one front point (≥ 1: growth predicted).
+    pub fn index(&self, r: &FrontRelease) -> f64 {
+        let g_i = r.g_i.max(0.0);
+        let (g_ii, g_iii) = (r.g_ii.abs(), r.g_iii.abs());
+        match *self {
+            Self::PowerLaw {
+                g_ic,
+                g_iic,
+                g_iiic,
+                alpha,
+                beta,
+            } => (g_i / g_ic).powf(alpha) + (g_ii / g_iic).powf(beta) + (g_iii / g_iiic).powf(beta),
+            Self::BenzeggaghKenane { g_ic, g_iic, eta } => {
+                let shear = g_ii + g_iii;
+                let total = g_i + shear;
+                if total <= 0.0 {
+                    return 0.0;
+                }
+                let gc = g_ic + (g_iic - g_ic) * (shear / total).powf(eta);
+                total / gc
+            }
+        }
+    }
+
+    /// Failure indices along a front.
+    pub fn indices(&self, rates: &[FrontRelease]) -> Vec<f64> {
+        rates.iter().map(|r| self.index(r)).collect()
+    }
+}
+
+/// Where and at which applied strain a strain sweep first reaches a failure index of 1.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CriticalStrain {
+    /// The applied strain at onset (interpolated).
+    pub strain: f64,
+    /// Index of the front point that reaches 1 first (in the sweep's front tables).
+    pub point: usize,
+    /// S of that point (m).
+    pub s: f64,
+}
+
+/// The critical applied strain of a sweep: `levels` are (applied strain, front table) in the
+/// order applied (|strain| growing). The largest index over the front is followed from level to
+/// level; between the two levels where it first crosses 1, √index is interpolated linearly in
+/// strain (G grows with the square of the load where the response is linear, so √index is
+/// linear there). `None` if the index stays below 1; the first level if it is already ≥ 1
+/// there.
+pub fn critical_strain(
+    criterion: &MixedMode,
+    levels: &[(f64, Vec<FrontRelease>)],
+) -> Result<Option<CriticalStrain>, VcctError> {
+    criterion.validate()?;
+    let peak = |rates: &[FrontRelease]| -> Option<(usize, f64)> {
+        criterion
+            .indices(rates)
+            .into_iter()
+            .enumerate()
+            .max_by(|a, b| a.1.total_cmp(&b.1))
+    };
+    let mut last: Option<(f64, f64)> = None;
+    for (strain, rates) in levels {
+        let Some((i, f)) = peak(rates) else {
+            continue;
+        };
+        if f >= 1.0 {
+            let at = match last {
+                None => *strain,
+                Some((e0, f0)) => {
+                    let (r0, r1) = (f0.sqrt(), f.sqrt());
+                    e0 + (strain - e0) * (1.0 - r0) / (r1 - r0)
+                }
+            };
+            return Ok(Some(CriticalStrain {
+                strain: at,
+                point: i,
+                s: rates[i].s,
+            }));
+        }
+        last = Some((*strain, f));
+    }
+    Ok(None)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
+    fn point(g_i: f64, g_ii: f64, g_iii: f64) -> FrontRelease {
+        FrontRelease {
+            node: 0,
+            s: 0.0,
+            theta_deg: 0.0,
+            x: 0.0,
+            y: 0.0,
+            delta_a: 1.0,
+            area: 1.0,
+            g_i,
+            g_ii,
+            g_iii,
+            g_t: g_i + g_ii + g_iii,
+            opening: 1.0,
+        }
+    }
+
+    #[test]
+    fn criteria_reduce_to_the_pure_mode_toughness() {
+        let pl = MixedMode::PowerLaw {
+            g_ic: 200.0,
+            g_iic: 800.0,
+            g_iiic: 800.0,
+            alpha: 1.0,
+            beta: 2.0,
+        };
+        let bk = MixedMode::BenzeggaghKenane {
+            g_ic: 200.0,
+            g_iic: 800.0,
+            eta: 2.1,
+        };
+        for c in [pl, bk] {
+            assert_relative_eq!(c.index(&point(200.0, 0.0, 0.0)), 1.0, epsilon = 1e-14);
+            assert_relative_eq!(c.index(&point(0.0, 800.0, 0.0)), 1.0, epsilon = 1e-14);
+            // Overlap (G_I < 0) does not drive growth.
+            assert_relative_eq!(c.index(&point(-50.0, 0.0, 0.0)), 0.0);
+        }
+        // B–K at mode mixity ½: G_c = 200 + 600·0.5^2.1.
+        let gc = 200.0 + 600.0 * 0.5_f64.powf(2.1);
+        assert_relative_eq!(
+            bk.index(&point(100.0, 100.0, 0.0)),
+            200.0 / gc,
+            epsilon = 1e-14
+        );
+        assert!(matches!(
+            MixedMode::BenzeggaghKenane {
+                g_ic: 0.0,
+                g_iic: 1.0,
+                eta: 1.0
+            }
+            .validate(),
+            Err(VcctError::Criterion { name: "G_Ic", .. })
+        ));
+    }
+
+    /// G ∝ ε² gives √index ∝ ε: the interpolation recovers the onset exactly.
+    #[test]
+    fn critical_strain_is_exact_for_quadratic_growth() {
+        let c = MixedMode::PowerLaw {
+            g_ic: 100.0,
+            g_iic: 100.0,
+            g_iiic: 100.0,
+            alpha: 1.0,
+            beta: 1.0,
+        };
+        // G_I = 100·(ε/ε*)², ε* = −0.0037.
+        let star = -0.0037;
+        let levels: Vec<(f64, Vec<FrontRelease>)> = (1..=5)
+            .map(|k| {
+                let e = -0.001 * k as f64;
+                let g = 100.0 * (e / star) * (e / star);
+                (e, vec![point(0.5 * g, 0.0, 0.0), point(g, 0.0, 0.0)])
+            })
+            .collect();
+        let hit = critical_strain(&c, &levels).unwrap().unwrap();
+        assert_relative_eq!(hit.strain, star, epsilon = 1e-15);
+        assert_eq!(hit.point, 1);
+        assert!(critical_strain(&c, &levels[..3]).unwrap().is_none());
+    }
+}

@@ -1,0 +1,35 @@
+//! Virtual crack closure for nonlin3d (thesis §2.8): strain-energy release rates G_I, G_II,
+//! G_III and G_T at each corner node of a delamination front from one solution, and
+//! mixed-mode growth criteria.
+//!
+//! | item | what it is | thesis |
+//! |---|---|---|
+//! | [`release_rates`] | G per mode at the front corners: eq. 2.8.1 weighting, eq. 2.8.2 local frame | §2.8 |
+//! | [`cells_above`] | the cells whose internal forces give the forces at c and d | §2.8 |
+//! | [`closure_energy`] | Σ G_T·area, the VCCT estimate of −ΔU | — |
+//! | [`MixedMode`] | power law and Benzeggagh–Kenane failure indices | — |
+//! | [`critical_strain`] | onset strain of a strain sweep by interpolation | — |
+//!
+//! The front topology (c, d ahead; a, a′, b, b′ behind), local frames and S come with the mesh
+//! ([`nonlin3d_mesh::Front`]); the forces of the cells above the plane from the assembly
+//! (`Assembler::partial_internal`, linear or nonlinear strain–displacement relations). This
+//! crate is pure arithmetic on those arrays.
+//!
+//! ```
+//! use nonlin3d_vcct::{MixedMode, FrontRelease};
+//! let bk = MixedMode::BenzeggaghKenane { g_ic: 200.0, g_iic: 800.0, eta: 2.0 };
+//! bk.validate().unwrap();
+//! ```
+#![deny(missing_docs)]
+#![cfg_attr(
+    not(test),
+    warn(clippy::unwrap_used, clippy::expect_used, clippy::panic)
+)]
+
+mod criteria;
+mod error;
+mod release;
+
+pub use criteria::{CriticalStrain, MixedMode, critical_strain};
+pub use error::VcctError;
+pub use release::{FrontRelease, cells_above, closure_energy, release_rates};
