@@ -22,6 +22,20 @@ pub enum Error {
     /// A linear solve failed (zero pivot, bad input).
     #[error(transparent)]
     Solver(#[from] nonlin3d_solver::SolverError),
+    /// VCCT failed (degenerate front, bad input).
+    #[error(transparent)]
+    Vcct(#[from] nonlin3d_vcct::VcctError),
+    /// A scene that cannot be parsed or describes an impossible model; names the field.
+    #[error("scene: {0}")]
+    Scene(String),
+    /// Reading or writing a file.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file or directory.
+        path: std::path::PathBuf,
+        /// What the system said.
+        source: std::io::Error,
+    },
     /// A numerical step produced no answer (named).
     #[error("{0}")]
     Numerical(String),

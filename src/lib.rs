@@ -11,16 +11,34 @@
 //! | [`assembly`] | `nonlin3d-assembly` | constraints, deterministic parallel assembly of residual and tangent, reactions (§2.2–2.3) |
 //! | [`newton`] | `nonlin3d-newton` | Newton–Raphson path following: line search, modified Newton, load stepping with cutback, inertia (§2.1, §4.4) |
 //! | [`solver`] | `nonlin3d-solver` | sparse patterns and matrices, RCM/AMD, profile LDLᵀ, faer Cholesky, inertia (§2.4) |
+//! | [`vcct`] | `nonlin3d-vcct` | G_I, G_II, G_III along the front by virtual crack closure, mixed-mode criteria (§2.8) |
+//! | [`scene`] | this crate | `Scene`: the serde/TOML description of an analysis (docs/SCENES.md) |
+//! | [`analysis`] | this crate | the pipeline scene → mesh → constraints → Newton (perturbation, strain sweep) → VCCT (§3.2, ch. 5) |
+//! | [`results`], [`report`], [`plot`] | this crate | `results.json`, front CSVs, VTU/PVD series, SVG plots |
+//! | [`export`] | this crate | a scene as a CalculiX deck: the `nonlin3d export` command |
 //! | [`deck`] | this crate | solving an Abaqus/CalculiX deck: the `nonlin3d solve` command |
-//! | [`eigen_check`] | this crate | the element eigen-check the `nonlin3d` program runs (§2.5) |
+//! | [`eigen_check`] | this crate | the element eigen-check (§2.5): `nonlin3d eigen-check` |
 //!
-//! Substructuring, contact and VCCT come as
-//! their own crates in later releases.
+//! Substructuring and contact come as their own crates in later releases.
+//!
+//! ```no_run
+//! // The thesis's reference case end to end (what `nonlin3d run` does without a scene).
+//! let scene = nonlin3d::Scene::thesis_reference()?;
+//! let results = nonlin3d::analysis::run(&scene, &mut |_| {})?;
+//! print!("{}", nonlin3d::report::table(&results));
+//! # Ok::<(), nonlin3d::Error>(())
+//! ```
 #![deny(missing_docs)]
 #![warn(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
+pub mod analysis;
 pub mod deck;
 pub mod eigen_check;
+pub mod export;
+pub mod plot;
+pub mod report;
+pub mod results;
+pub mod scene;
 
 /// The README's code blocks, compiled and run as doc-tests.
 #[cfg(doctest)]
@@ -36,3 +54,5 @@ pub use nonlin3d_mesh as mesh;
 pub use nonlin3d_newton as newton;
 pub use nonlin3d_solver as solver;
 pub use nonlin3d_vcct as vcct;
+pub use results::Results;
+pub use scene::Scene;

@@ -1,6 +1,10 @@
 //! The `nonlin3d` command-line program.
 //!
-//! - `nonlin3d` or `nonlin3d eigen-check`: the element eigen-check of thesis §2.5.
+//! - `nonlin3d` or `nonlin3d run [SCENE.toml] [--out DIR]`: runs a scene (docs/SCENES.md); with
+//!   none, the thesis's reference case (30 mm circle, ε = −0.001 … −0.005). Prints a table,
+//!   writes `DIR/results.json`, `front_K.csv`, `model.pvd` + `model_K.vtu`, SVG plots.
+//! - `nonlin3d export SCENE.toml --inp FILE`: the scene as a CalculiX deck.
+//! - `nonlin3d eigen-check`: the element eigen-check of thesis §2.5.
 //! - `nonlin3d solve DECK.inp --out DIR`: solves an Abaqus/CalculiX deck (the subset
 //!   documented in `nonlin3d_mesh::read_inp`; linear or NLGEOM static steps) and writes
 //!   `DIR/displacements.csv`, `DIR/step-K/displacements.csv` and `DIR/summary.json`.
@@ -23,6 +27,25 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Run a scene (default: the thesis's 30 mm circular delamination, Fig. 5.1.3).
+    Run {
+        /// The scene (TOML); omitted: the built-in reference scene.
+        scene: Option<PathBuf>,
+        /// Output directory.
+        #[arg(long, default_value = "nonlin3d-out")]
+        out: PathBuf,
+        /// No progress bar.
+        #[arg(long)]
+        quiet: bool,
+    },
+    /// Write a scene as an Abaqus/CalculiX deck.
+    Export {
+        /// The scene (TOML).
+        scene: PathBuf,
+        /// The deck to write.
+        #[arg(long)]
+        inp: PathBuf,
+    },
     /// Zero-energy modes of distorted Hex20/Hex8 elements under each rule (thesis §2.5).
     EigenCheck,
     /// Solve an Abaqus/CalculiX .inp deck (static steps, NLGEOM or linear).
@@ -68,10 +91,76 @@ fn solve(deck: &Path, out: &Path, tolerance: f64, increment: f64) -> Result<(), 
     Ok(())
 }
 
+fn read_scene(path: Option<&Path>) -> Result<nonlin3d::Scene, nonlin3d::Error> {
+    match path {
+        None => nonlin3d::Scene::thesis_reference(),
+        Some(p) => {
+            let text = std::fs::read_to_string(p).map_err(|source| nonlin3d::Error::Io {
+                path: p.to_path_buf(),
+                source,
+            })?;
+            nonlin3d::Scene::from_toml(&text)
+                .map_err(|e| nonlin3d::Error::Scene(format!("{}: {e}", p.display())))
+        }
+    }
+}
+
+fn run(scene: Option<&Path>, out: &Path, quiet: bool) -> Result<(), nonlin3d::Error> {
+    use indicatif::{ProgressBar, ProgressStyle};
+    use nonlin3d::analysis::Progress;
+    let scene = read_scene(scene)?;
+    println!("{}", scene.title);
+    let bar = if quiet {
+        ProgressBar::hidden()
+    } else {
+        ProgressBar::new(0)
+    };
+    bar.set_style(
+        ProgressStyle::with_template(
+            "{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} levels {msg}",
+        )
+        .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    bar.set_message("building the model");
+    let mut results = nonlin3d::analysis::run(&scene, &mut |p| match p {
+        Progress::Built {
+            nodes,
+            dofs,
+            levels,
+        } => {
+            bar.set_length(levels as u64);
+            bar.set_message(format!("{nodes} nodes, {dofs} DOFs"));
+        }
+        Progress::Level { index, value } => {
+            bar.set_position(index as u64 + 1);
+            bar.set_message(format!("level {value} converged"));
+        }
+    })?;
+    bar.finish_and_clear();
+    nonlin3d::report::write_all(&mut results, out)?;
+    print!("{}", nonlin3d::report::table(&results));
+    println!("results in {}", out.display());
+    Ok(())
+}
+
+fn export(scene: &Path, inp: &Path) -> Result<(), nonlin3d::Error> {
+    let scene = read_scene(Some(scene))?;
+    let text = nonlin3d::export::deck(&scene)?;
+    std::fs::write(inp, text).map_err(|source| nonlin3d::Error::Io {
+        path: inp.to_path_buf(),
+        source,
+    })?;
+    println!("wrote {}", inp.display());
+    Ok(())
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
-        None | Some(Command::EigenCheck) => nonlin3d::eigen_check::run()
+        None => run(None, Path::new("nonlin3d-out"), false),
+        Some(Command::Run { scene, out, quiet }) => run(scene.as_deref(), &out, quiet),
+        Some(Command::Export { scene, inp }) => export(&scene, &inp),
+        Some(Command::EigenCheck) => nonlin3d::eigen_check::run()
             .map(|rows| print!("{}", nonlin3d::eigen_check::report(&rows))),
         Some(Command::Solve {
             deck,

@@ -20,6 +20,8 @@ mod problem;
 mod solve;
 
 pub use error::NewtonError;
-pub use path::{PathReport, Stepping, follow_path, follow_path_from, perturbed_path};
+pub use path::{
+    PathReport, Stepping, follow_path, follow_path_from, perturbed_path, perturbed_step,
+};
 pub use problem::{NonlinearProblem, StructuralProblem};
 pub use solve::{IncrementReport, IterationRecord, NewtonSettings, Termination, solve_increment};

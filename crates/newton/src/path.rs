@@ -217,3 +217,64 @@ pub fn perturbed_path(
     report.states.extend(more.states);
     Ok(report)
 }
+
+/// The §3.2 protocol over one step: from `u` converged at load factor `from` (a stable state,
+/// e.g. the last level before the trivial path lost stability), the `perturbation` dead loads
+/// (DOF, force) act while the path is followed to `to` (with cutback, so the response bends
+/// smoothly onto a branch instead of snapping); then they are removed all at once as in the
+/// thesis — or, if that does not converge, in four parts (as the thesis did once, §4.2). `u` is
+/// updated only on success; errors name the stage.
+pub fn perturbed_step(
+    problem: &mut crate::StructuralProblem,
+    u: &mut Vec<f64>,
+    from: f64,
+    to: f64,
+    perturbation: &[(usize, f64)],
+    settings: &NewtonSettings,
+    stepping: &Stepping,
+) -> Result<Vec<IncrementReport>, NewtonError> {
+    let set = |problem: &mut crate::StructuralProblem, scale: f64| {
+        perturbation
+            .iter()
+            .try_for_each(|&(dof, f)| problem.constraints.set_dead_load(dof, scale * f))
+    };
+    let fail = |stage: &str, r: &IncrementReport| NewtonError::Cutback {
+        target: to,
+        reached: to,
+        cutbacks: 0,
+        last_step: 0.0,
+        reason: format!("{stage}: {:?}", r.termination),
+    };
+    let mut trial = u.clone();
+    set(problem, 1.0)?;
+    let loaded = follow_path_from(problem, &mut trial, from, &[to], settings, stepping);
+    let mut attempts = match loaded {
+        Ok(report) => report.attempts,
+        Err(e) => {
+            set(problem, 0.0)?;
+            return Err(e);
+        }
+    };
+    let mut solver = settings.solver.build();
+    solver.analyze(&problem.pattern())?;
+    let mut k = nonlin3d_solver::SymmetricMatrix::zeros(problem.pattern());
+    let loaded = trial.clone();
+    set(problem, 0.0)?;
+    let r = solve_increment(problem, &mut trial, to, settings, solver.as_mut(), &mut k)?;
+    let ok = r.converged();
+    attempts.push(r);
+    if !ok {
+        trial = loaded;
+        for part in (0..4).rev() {
+            set(problem, part as f64 / 4.0)?;
+            let r = solve_increment(problem, &mut trial, to, settings, solver.as_mut(), &mut k)?;
+            if !r.converged() {
+                set(problem, 0.0)?;
+                return Err(fail("removing the perturbation load in parts", &r));
+            }
+            attempts.push(r);
+        }
+    }
+    *u = trial;
+    Ok(attempts)
+}

@@ -1,0 +1,518 @@
+//! The analysis pipeline (thesis §3.2, chapter 5): scene → mesh → constraints → Newton with the
+//! perturbation load and the strain sweep → VCCT at each level → [`Results`].
+//!
+//! Each stage is callable alone: [`build_model`], [`build_problem`], [`solve_level`],
+//! [`front_table`]; [`run`] strings them together and times them.
+
+use crate::scene::{ForceKinematics, Geometry, NewtonName, Scene, Shape};
+use crate::{Error, results::*};
+use nonlin3d_assembly::{Assembler, Constraints};
+use nonlin3d_element::Kinematics;
+use nonlin3d_laminate::{ShearCoupling, Stiffness};
+use nonlin3d_mesh::{
+    EllipticMap, EmbeddedParams, Front, Imperfection, Mesh, PlyLayout, ThroughWidthParams,
+    embedded_delamination_with_front, through_width_delamination,
+};
+use nonlin3d_newton::{
+    IncrementReport, NewtonSettings, Stepping, StructuralProblem, follow_path_from, perturbed_step,
+};
+use nonlin3d_vcct::{FrontRelease, cells_above, release_rates};
+use std::time::Instant;
+
+/// Which boundary conditions a model gets (thesis §3.2).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ModelKind {
+    /// u = 0 on x = 0, v = 0 on y = 0, w = 0 on z = 0, u = W·ε on x = W.
+    Embedded,
+    /// As embedded, y = 0 free (one node fixed in y against the rigid motion).
+    Edge,
+    /// As embedded plus v = 0 on y = W (plane strain).
+    ThroughWidth,
+    /// u = 0 on x = 0, v = 0 on y = 0, w = 0 on z = 0; the central transverse load.
+    Plate,
+}
+
+/// The finite element model of a scene.
+#[derive(Debug, Clone)]
+pub struct Model {
+    /// The mesh (SI units).
+    pub mesh: Mesh,
+    /// The delamination front.
+    pub front: Front,
+    /// Materials as indexed by the cells.
+    pub materials: Vec<Stiffness>,
+    /// Boundary-condition family.
+    pub kind: ModelKind,
+    /// x of the loaded end (u = x_end·ε there), m.
+    pub x_end: f64,
+    /// Sublaminate thickness h, m.
+    pub h: f64,
+    /// Smallest in-plane dimension of the delamination (for the perturbation size), m.
+    pub a_min: f64,
+}
+
+/// Builds the mesh and front of a scene (with its imperfection, if any).
+pub fn build_model(scene: &Scene) -> Result<Model, Error> {
+    scene.validate()?;
+    let mm = 1e-3;
+    let c = &scene.mesh;
+    let kind = c
+        .element
+        .map_or(nonlin3d_element::ElementKind::Hex20, |e| e.kind());
+    let materials = scene.stiffnesses()?;
+    let embedded = |shape: Shape, a: f64, b: f64, h: f64, base: f64, w: f64| {
+        let d = EmbeddedParams::thesis_reference();
+        let plies = scene.layup.as_ref().map(|l| PlyLayout {
+            ply_thickness: l.ply_mm * mm,
+            sublaminate: l.sublaminate.clone(),
+            base_below: l.base_below.clone(),
+        });
+        EmbeddedParams {
+            kind,
+            a: a * mm,
+            b: b * mm,
+            h: h * mm,
+            base: base * mm,
+            w: w * mm,
+            slices: c.slices.unwrap_or(d.slices),
+            radial_inside: c.inside.unwrap_or(d.radial_inside),
+            radial_outside: c.outside.unwrap_or(d.radial_outside),
+            front_grading: c.front_grading.unwrap_or(d.front_grading),
+            sub_layers: c.sub_layers.unwrap_or(d.sub_layers),
+            base_layers: c.base_layers.unwrap_or(d.base_layers),
+            map: match shape {
+                Shape::Ellipse => EllipticMap::Conformal,
+                Shape::Rectangle => EllipticMap::Rectangle,
+            },
+            plies,
+            ..d
+        }
+    };
+    let (mut mesh, front, model_kind, x_end, h, a_min) = match &scene.geometry {
+        Geometry::Embedded {
+            shape,
+            a_mm,
+            b_mm,
+            h_mm,
+            base_mm,
+            w_mm,
+        }
+        | Geometry::Edge {
+            shape,
+            a_mm,
+            b_mm,
+            h_mm,
+            base_mm,
+            w_mm,
+        } => {
+            let p = embedded(*shape, *a_mm, *b_mm, *h_mm, *base_mm, *w_mm);
+            let (m, f) = embedded_delamination_with_front(&p)?;
+            let k = if matches!(scene.geometry, Geometry::Edge { .. }) {
+                ModelKind::Edge
+            } else {
+                ModelKind::Embedded
+            };
+            (m, f, k, p.w, p.h, p.a.min(p.b))
+        }
+        Geometry::Plate {
+            a_mm,
+            h_mm,
+            base_mm,
+            w_mm,
+        } => {
+            let p = embedded(Shape::Ellipse, *a_mm, *a_mm, *h_mm, *base_mm, *w_mm);
+            let (m, f) = embedded_delamination_with_front(&p)?;
+            (m, f, ModelKind::Plate, p.w, p.h, p.a)
+        }
+        Geometry::ThroughWidth {
+            a_mm,
+            length_mm,
+            width_mm,
+            h_mm,
+            base_mm,
+        } => {
+            if scene.layup.is_some() {
+                return Err(Error::Scene(
+                    "layup: ply-level layers are available for embedded, edge and plate \
+                     models only"
+                        .into(),
+                ));
+            }
+            let d = ThroughWidthParams::example();
+            let p = ThroughWidthParams {
+                kind,
+                a: a_mm * mm,
+                length: length_mm * mm,
+                width: width_mm * mm,
+                h: h_mm * mm,
+                base: base_mm * mm,
+                inside: c.inside.unwrap_or(d.inside),
+                outside: c.outside.unwrap_or(d.outside),
+                front_grading: c.front_grading.unwrap_or(d.front_grading),
+                across: c.across.unwrap_or(d.across),
+                sub_layers: c.sub_layers.unwrap_or(d.sub_layers),
+                base_layers: c.base_layers.unwrap_or(d.base_layers),
+                base_grading: d.base_grading,
+            };
+            let (m, f) = through_width_delamination(&p)?;
+            (m, f, ModelKind::ThroughWidth, p.length, p.h, p.a)
+        }
+    };
+    let amp = scene.loads.imperfection_mm * mm;
+    if amp != 0.0 {
+        let base = match &scene.geometry {
+            Geometry::Embedded { base_mm, .. }
+            | Geometry::Edge { base_mm, .. }
+            | Geometry::Plate { base_mm, .. }
+            | Geometry::ThroughWidth { base_mm, .. } => base_mm * mm,
+        };
+        let shape = match &scene.geometry {
+            Geometry::Embedded { a_mm, b_mm, .. } | Geometry::Edge { a_mm, b_mm, .. } => {
+                Imperfection::Cosine {
+                    a: a_mm * mm,
+                    b: b_mm * mm,
+                }
+            }
+            Geometry::ThroughWidth { a_mm, .. } => Imperfection::Strip { a: a_mm * mm },
+            Geometry::Plate { a_mm, .. } => Imperfection::Cosine {
+                a: a_mm * mm,
+                b: a_mm * mm,
+            },
+        };
+        mesh.apply_imperfection(base, "crack_lower", shape, amp)?;
+    }
+    Ok(Model {
+        mesh,
+        front,
+        materials,
+        kind: model_kind,
+        x_end,
+        h,
+        a_min,
+    })
+}
+
+/// The load factors of the levels: strains (or loads) divided by the largest in magnitude,
+/// and that reference value.
+pub fn load_factors(scene: &Scene) -> (Vec<f64>, f64) {
+    let values = if matches!(scene.geometry, Geometry::Plate { .. }) {
+        &scene.loads.transverse_n
+    } else {
+        &scene.loads.strains
+    };
+    let reference = values
+        .iter()
+        .copied()
+        .max_by(|a, b| a.abs().total_cmp(&b.abs()))
+        .unwrap_or(1.0);
+    (values.iter().map(|v| v / reference).collect(), reference)
+}
+
+fn node_set<'m>(mesh: &'m Mesh, name: &str) -> Result<&'m [usize], Error> {
+    mesh.node_sets
+        .get(name)
+        .map(Vec::as_slice)
+        .ok_or_else(|| Error::Numerical(format!("the model has no node set '{name}'")))
+}
+
+/// The assembler and constraints of a model (§3.2): supports, the prescribed end
+/// displacement u = x_end·ε_ref·λ (or the plate's load P_ref·λ/4 on the quarter model).
+pub fn build_problem(scene: &Scene, model: &Model) -> Result<StructuralProblem, Error> {
+    let rule = scene.analysis.integration.rule();
+    let assembler = Assembler::new(
+        &model.mesh,
+        &model.materials,
+        ShearCoupling::Exact,
+        rule,
+        rule,
+        Kinematics::Nonlinear,
+    )?;
+    let mut c = Constraints::new(assembler.n());
+    let mesh = &model.mesh;
+    c.fix_nodes(node_set(mesh, "x0")?, 0)?;
+    c.fix_nodes(node_set(mesh, "z0")?, 2)?;
+    match model.kind {
+        ModelKind::Edge => {
+            // y = 0 is free; one node far from the delamination holds the rigid motion in y.
+            let x1 = node_set(mesh, "x1")?;
+            let corner = x1
+                .iter()
+                .copied()
+                .filter(|&n| mesh.nodes[n][2] == 0.0)
+                .max_by(|&a, &b| mesh.nodes[a][1].total_cmp(&mesh.nodes[b][1]))
+                .ok_or_else(|| Error::Numerical("no node on x = W, z = 0".into()))?;
+            c.fix_nodes(&[corner], 1)?;
+        }
+        ModelKind::ThroughWidth => {
+            c.fix_nodes(node_set(mesh, "y0")?, 1)?;
+            c.fix_nodes(node_set(mesh, "y1")?, 1)?;
+        }
+        ModelKind::Embedded | ModelKind::Plate => c.fix_nodes(node_set(mesh, "y0")?, 1)?,
+    }
+    let (_, reference) = load_factors(scene);
+    if model.kind == ModelKind::Plate {
+        let top = node_set(mesh, "center_top")?[0];
+        c.add_load(3 * top + 2, 0.25 * reference)?;
+    } else {
+        for &n in node_set(mesh, "x1")? {
+            c.prescribe(3 * n, model.x_end * reference)?;
+        }
+    }
+    Ok(StructuralProblem::new(assembler, c)?)
+}
+
+/// The perturbation force on the quarter model (N): the scene's, or one that deflects the
+/// sublaminate, clamped at the front, by h/4 in the linear range (eq. 4.1.1 inverted,
+/// P = 0.217⁻¹·(h/4)·E·h³/a² with E = 1/S11 of the sublaminate material), over 4.
+pub fn perturbation_force(scene: &Scene, model: &Model) -> Result<f64, Error> {
+    if let Some(p) = scene.loads.perturbation_n {
+        return Ok(p);
+    }
+    let c = model
+        .materials
+        .last()
+        .map(|s| s.matrix())
+        .ok_or_else(|| Error::Numerical("no material".into()))?;
+    let s = c
+        .try_inverse()
+        .ok_or_else(|| Error::Numerical("singular material stiffness".into()))?;
+    let e = 1.0 / s[(0, 0)];
+    let h = model.h;
+    Ok(0.25 * (0.25 * h) * e * h.powi(3) / (0.217 * model.a_min * model.a_min))
+}
+
+/// Newton and stepping settings of a scene.
+pub fn settings(scene: &Scene) -> (NewtonSettings, Stepping) {
+    let a = &scene.analysis;
+    let newton = NewtonSettings {
+        force_tolerance: a.tolerance_n,
+        refactor_every: match a.newton {
+            NewtonName::Full => 1,
+            NewtonName::Modified => a.refactor_every,
+        },
+        max_iterations: match a.newton {
+            NewtonName::Full => 25,
+            NewtonName::Modified => 60,
+        },
+        ..NewtonSettings::default()
+    };
+    let stepping = Stepping {
+        initial: a.max_increment,
+        max: a.max_increment,
+        ..Stepping::default()
+    };
+    (newton, stepping)
+}
+
+/// Solves one level: from the converged state `u` at load factor `from` to `to`. If the
+/// converged state is unstable (negative pivots: the trivial path past a bifurcation) and a
+/// `perturbation` is given, the step is redone from `from` by the §3.2 protocol
+/// ([`perturbed_step`]: perturbation on along the step, removed at `to`) to land on the buckled
+/// branch. Returns the attempts and whether the perturbation was applied.
+///
+/// The thesis applied the perturbation at the first level and left it to the analyst to pick
+/// that level above the buckling strain; here the change of inertia picks the level, so a
+/// sweep may start below buckling (Fig. 5.1.1's flat part) and still find the branch.
+pub fn solve_level(
+    problem: &mut StructuralProblem,
+    u: &mut Vec<f64>,
+    from: f64,
+    to: f64,
+    perturbation: Option<(usize, f64)>,
+    newton: &NewtonSettings,
+    stepping: &Stepping,
+) -> Result<(Vec<IncrementReport>, bool), Error> {
+    let stepping = Stepping {
+        initial: stepping.initial.min((to - from).abs().max(stepping.min)),
+        ..stepping.clone()
+    };
+    let start = u.clone();
+    let mut attempts = follow_path_from(problem, u, from, &[to], newton, &stepping)?.attempts;
+    let unstable = attempts
+        .iter()
+        .rev()
+        .find(|a| a.converged())
+        .and_then(IncrementReport::negative_pivots)
+        .is_some_and(|p| p > 0);
+    let mut perturbed = false;
+    if let (true, Some((dof, f))) = (unstable, perturbation) {
+        *u = start;
+        attempts.extend(perturbed_step(
+            problem,
+            u,
+            from,
+            to,
+            &[(dof, f)],
+            newton,
+            &stepping,
+        )?);
+        perturbed = true;
+    }
+    Ok((attempts, perturbed))
+}
+
+/// G along the front at state `u`.
+pub fn front_table(
+    scene: &Scene,
+    model: &Model,
+    problem: &StructuralProblem,
+    u: &[f64],
+) -> Result<Vec<FrontRelease>, Error> {
+    let kin = match scene.analysis.vcct_forces {
+        ForceKinematics::Nonlinear => Kinematics::Nonlinear,
+        ForceKinematics::Linear => Kinematics::Linear,
+    };
+    let f = problem
+        .assembler
+        .partial_internal(&cells_above(&model.front), u, kin)?;
+    Ok(release_rates(&model.front, &model.mesh.nodes, u, &f)?)
+}
+
+/// Deflections at a state: w at the sublaminate centre top, and the largest opening
+/// w(upper) − w(lower) over the crack faces (the sublaminate's deflection off the base).
+pub fn deflections(model: &Model, u: &[f64]) -> (f64, f64) {
+    let mesh = &model.mesh;
+    let centre = mesh
+        .node_sets
+        .get("center_top")
+        .and_then(|s| s.first())
+        .map_or(0.0, |&n| u[3 * n + 2]);
+    let (up, low) = (
+        mesh.node_sets.get("crack_upper"),
+        mesh.node_sets.get("crack_lower"),
+    );
+    let peak = match (up, low) {
+        (Some(up), Some(low)) => up
+            .iter()
+            .zip(low)
+            .map(|(&a, &b)| u[3 * a + 2] - u[3 * b + 2])
+            .fold(0.0_f64, |m, d| if d.abs() > m.abs() { d } else { m }),
+        _ => 0.0,
+    };
+    (centre, peak)
+}
+
+/// What [`run`] reports as it goes.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Progress {
+    /// The model is built: nodes, cells, DOFs, levels to solve.
+    Built {
+        /// Nodes.
+        nodes: usize,
+        /// DOFs.
+        dofs: usize,
+        /// Levels.
+        levels: usize,
+    },
+    /// Level `index` (0-based) converged at `value` (strain or load).
+    Level {
+        /// Index.
+        index: usize,
+        /// Applied strain (or load, N).
+        value: f64,
+    },
+}
+
+/// Runs a scene end to end; `progress` is told after the model is built and after each level.
+pub fn run(scene: &Scene, progress: &mut dyn FnMut(Progress)) -> Result<Results, Error> {
+    let t0 = Instant::now();
+    let model = build_model(scene)?;
+    let t_mesh = t0.elapsed().as_secs_f64();
+    let t1 = Instant::now();
+    let mut problem = build_problem(scene, &model)?;
+    let t_setup = t1.elapsed().as_secs_f64();
+    let (factors, reference) = load_factors(scene);
+    progress(Progress::Built {
+        nodes: model.mesh.nodes.len(),
+        dofs: problem.assembler.n(),
+        levels: factors.len(),
+    });
+    let (newton, stepping) = settings(scene);
+    let plate = model.kind == ModelKind::Plate;
+    let perturbation = if plate {
+        None
+    } else {
+        let p = perturbation_force(scene, &model)?;
+        let top = node_set(&model.mesh, "center_top")?[0];
+        (p != 0.0).then_some((3 * top + 2, p))
+    };
+    let mut u = vec![0.0; problem.assembler.n()];
+    let mut levels = Vec::with_capacity(factors.len());
+    let (mut t_solve, mut t_vcct) = (0.0, 0.0);
+    let mut from = 0.0;
+    let mut perturbed_at = None;
+    for (k, &lambda) in factors.iter().enumerate() {
+        let t = Instant::now();
+        let pert = if perturbed_at.is_none() {
+            perturbation
+        } else {
+            None
+        };
+        let (attempts, perturbed) =
+            solve_level(&mut problem, &mut u, from, lambda, pert, &newton, &stepping).map_err(
+                |e| {
+                    Error::Numerical(format!(
+                        "level {k} ({} {}): {e}",
+                        if plate { "load" } else { "strain" },
+                        lambda * reference
+                    ))
+                },
+            )?;
+        if perturbed {
+            perturbed_at = Some(lambda * reference);
+        }
+        t_solve += t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        let front = front_table(scene, &model, &problem, &u)?;
+        t_vcct += t.elapsed().as_secs_f64();
+        let (centre, peak) = deflections(&model, &u);
+        levels.push(LevelResult::new(
+            lambda * reference,
+            centre,
+            peak,
+            &attempts,
+            &front,
+            u.clone(),
+        ));
+        progress(Progress::Level {
+            index: k,
+            value: lambda * reference,
+        });
+        from = lambda;
+    }
+    let critical = match &scene.criterion {
+        Some(c) if !plate => {
+            let sweep: Vec<(f64, Vec<FrontRelease>)> = levels
+                .iter()
+                .map(|l| (l.value, l.front.iter().map(FrontRow::release).collect()))
+                .collect();
+            nonlin3d_vcct::critical_strain(&c.criterion(), &sweep)?.map(|c| Critical {
+                strain: c.strain,
+                s_mm: c.s * 1e3,
+            })
+        }
+        _ => None,
+    };
+    Ok(Results {
+        title: scene.title.clone(),
+        quantity: if plate { "load_n" } else { "strain" }.into(),
+        model: ModelSummary {
+            nodes: model.mesh.nodes.len(),
+            cells: model.mesh.cells.len(),
+            dofs: problem.assembler.n(),
+            front_points: levels.first().map_or(0, |l| l.front.len()),
+            perturbation_n: perturbation.map(|p| p.1),
+            perturbed_at,
+        },
+        levels,
+        critical,
+        timings: Timings {
+            mesh_s: t_mesh,
+            setup_s: t_setup,
+            solve_s: t_solve,
+            vcct_s: t_vcct,
+            output_s: 0.0,
+        },
+        model_data: Some(model),
+    })
+}

@@ -1,0 +1,108 @@
+//! A scene as an Abaqus/CalculiX deck (`nonlin3d export`): the same mesh, materials, supports,
+//! the perturbation step, its removal, and one NLGEOM step per strain (or load) level, so
+//! CalculiX can run the analysis unchanged (§3.2 protocol as deck steps).
+
+use crate::Error;
+use crate::analysis::{Model, ModelKind, build_model, load_factors, perturbation_force};
+use crate::scene::Scene;
+use nonlin3d_mesh::inp::{
+    InpBoundary, InpCload, InpDeck, InpElastic, InpMaterial, InpStep, inp_string,
+};
+
+fn boundary(nset: &str, dof: u8, value: f64) -> InpBoundary {
+    InpBoundary {
+        nset: nset.into(),
+        first: dof,
+        last: dof,
+        value,
+    }
+}
+
+/// The deck text of a scene. Steps: (1) supports, the first level and the perturbation force;
+/// (2) the perturbation removed (CalculiX ramps it to zero within the step at fixed strain);
+/// (3…) the remaining levels. For a plate, one step per load.
+pub fn deck(scene: &Scene) -> Result<String, Error> {
+    let model = build_model(scene)?;
+    deck_of(scene, &model)
+}
+
+/// [`deck`] for an already built model.
+pub fn deck_of(scene: &Scene, model: &Model) -> Result<String, Error> {
+    let mut mesh = model.mesh.clone();
+    let materials: Vec<InpMaterial> = model
+        .materials
+        .iter()
+        .enumerate()
+        .map(|(k, s)| InpMaterial {
+            name: format!("MAT{k}"),
+            elastic: InpElastic::Anisotropic(Box::new(*s)),
+        })
+        .collect();
+    let mut supports = vec![boundary("x0", 1, 0.0), boundary("z0", 3, 0.0)];
+    match model.kind {
+        ModelKind::Edge => {
+            let x1 = mesh.node_sets.get("x1").cloned().unwrap_or_default();
+            let corner = x1
+                .iter()
+                .copied()
+                .filter(|&n| mesh.nodes[n][2] == 0.0)
+                .max_by(|&a, &b| mesh.nodes[a][1].total_cmp(&mesh.nodes[b][1]))
+                .ok_or_else(|| Error::Numerical("no node on x = W, z = 0".into()))?;
+            mesh.node_sets.insert("vfix".into(), vec![corner]);
+            supports.push(boundary("vfix", 2, 0.0));
+        }
+        ModelKind::ThroughWidth => {
+            supports.push(boundary("y0", 2, 0.0));
+            supports.push(boundary("y1", 2, 0.0));
+        }
+        ModelKind::Embedded | ModelKind::Plate => supports.push(boundary("y0", 2, 0.0)),
+    }
+    let (factors, reference) = load_factors(scene);
+    let top = mesh
+        .node_sets
+        .get("center_top")
+        .and_then(|s| s.first().copied())
+        .ok_or_else(|| Error::Numerical("the model has no node set 'center_top'".into()))?;
+    let inc = scene.analysis.max_increment.min(1.0);
+    let step = |boundaries: Vec<InpBoundary>, cloads: Vec<InpCload>| InpStep {
+        nlgeom: true,
+        increment: inc,
+        period: 1.0,
+        boundaries,
+        cloads,
+    };
+    let load = |value: f64| InpCload {
+        node: top,
+        dof: 3,
+        value,
+    };
+    let mut steps = Vec::new();
+    if model.kind == ModelKind::Plate {
+        for (k, f) in factors.iter().enumerate() {
+            let b = if k == 0 { supports.clone() } else { Vec::new() };
+            steps.push(step(b, vec![load(0.25 * f * reference)]));
+        }
+    } else {
+        let p = perturbation_force(scene, model)?;
+        for (k, f) in factors.iter().enumerate() {
+            let end = boundary("x1", 1, model.x_end * f * reference);
+            if k == 0 {
+                let mut b = supports.clone();
+                b.push(end);
+                let cl = if p != 0.0 { vec![load(p)] } else { Vec::new() };
+                steps.push(step(b, cl));
+                if p != 0.0 {
+                    steps.push(step(Vec::new(), vec![load(0.0)]));
+                }
+            } else {
+                steps.push(step(vec![end], Vec::new()));
+            }
+        }
+    }
+    Ok(inp_string(&InpDeck {
+        heading: scene.title.clone(),
+        mesh: &mesh,
+        materials: &materials,
+        steps,
+    })?)
+}

@@ -1,0 +1,128 @@
+//! Writing a run's outputs: `results.json`, `front_K.csv` per level, a VTU/PVD series of the
+//! deformed model, SVG plots, and the short table the command line prints.
+
+use crate::Error;
+use crate::results::Results;
+use nonlin3d_mesh::vtu::{Field, write_pvd, write_vtu};
+use std::fmt::Write as _;
+use std::path::Path;
+use std::time::Instant;
+
+fn io(path: &Path) -> impl FnOnce(std::io::Error) -> Error + '_ {
+    move |source| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    }
+}
+
+/// The CSV of one level's front table.
+pub fn front_csv(results: &Results, level: usize) -> String {
+    let mut s = String::from(
+        "s_mm,theta_deg,x_mm,y_mm,delta_a_mm,g_i,g_ii,g_iii,g_t,open,opening_mm,area_mm2,node\n",
+    );
+    if let Some(l) = results.levels.get(level) {
+        for r in &l.front {
+            let _ = writeln!(
+                s,
+                "{},{},{},{},{},{:e},{:e},{:e},{:e},{},{:e},{:e},{}",
+                r.s_mm,
+                r.theta_deg,
+                r.x_mm,
+                r.y_mm,
+                r.delta_a_mm,
+                r.g_i,
+                r.g_ii,
+                r.g_iii,
+                r.g_t,
+                r.open,
+                r.opening_mm,
+                r.area_mm2,
+                r.node
+            );
+        }
+    }
+    s
+}
+
+/// Writes everything into `dir` (created if needed) and records the time in
+/// `results.timings.output_s`.
+pub fn write_all(results: &mut Results, dir: &Path) -> Result<(), Error> {
+    let t = Instant::now();
+    std::fs::create_dir_all(dir).map_err(io(dir))?;
+    for k in 0..results.levels.len() {
+        let p = dir.join(format!("front_{k}.csv"));
+        std::fs::write(&p, front_csv(results, k)).map_err(io(&p))?;
+    }
+    if let Some(model) = &results.model_data {
+        let mut steps = Vec::new();
+        for (k, l) in results.levels.iter().enumerate() {
+            let name = format!("model_{k}.vtu");
+            write_vtu(
+                &dir.join(&name),
+                &model.mesh,
+                &[Field {
+                    name: "displacement",
+                    components: 3,
+                    values: &l.displacements,
+                }],
+                &[],
+            )?;
+            steps.push((l.value.abs(), name));
+        }
+        write_pvd(&dir.join("model.pvd"), &steps)?;
+    }
+    crate::plot::release_rate_plot(results, &dir.join("g_i.svg"), "G_I", |r| r.g_i)?;
+    crate::plot::release_rate_plot(results, &dir.join("g_ii.svg"), "G_II", |r| r.g_ii)?;
+    crate::plot::release_rate_plot(results, &dir.join("g_t.svg"), "G_T", |r| r.g_t)?;
+    crate::plot::deflection_plot(results, &dir.join("deflection.svg"))?;
+    results.timings.output_s = t.elapsed().as_secs_f64();
+    let p = dir.join("results.json");
+    let json =
+        serde_json::to_string_pretty(results).map_err(|e| Error::Numerical(e.to_string()))?;
+    std::fs::write(&p, json).map_err(io(&p))?;
+    Ok(())
+}
+
+/// The short table: per level the applied value, deflections, peak G_I and G_II and where.
+pub fn table(results: &Results) -> String {
+    let mut s = String::new();
+    let head = if results.quantity == "strain" {
+        "strain"
+    } else {
+        "P (N)"
+    };
+    let _ = writeln!(
+        s,
+        "{head:>9} | centre w (mm) | peak w (mm) | G_I max (J/m²) at S (mm) | G_II max (J/m²) at S (mm) | iterations"
+    );
+    for l in &results.levels {
+        let gi = l.peak(|r| r.g_i);
+        let gii = l.peak(|r| r.g_ii);
+        let _ = writeln!(
+            s,
+            "{:>9.5} | {:>13.4} | {:>11.4} | {:>13.2} at {:>7.2} | {:>14.2} at {:>7.2} | {:>10}",
+            l.value,
+            l.centre_deflection_mm,
+            l.peak_deflection_mm,
+            gi.map_or(f64::NAN, |r| r.g_i),
+            gi.map_or(f64::NAN, |r| r.s_mm),
+            gii.map_or(f64::NAN, |r| r.g_ii),
+            gii.map_or(f64::NAN, |r| r.s_mm),
+            l.convergence.iterations
+        );
+    }
+    if let Some(c) = results.critical {
+        let _ = writeln!(
+            s,
+            "growth onset by the criterion at strain {:.5}, S = {:.2} mm",
+            c.strain, c.s_mm
+        );
+    }
+    let t = &results.timings;
+    let _ = writeln!(
+        s,
+        "{} nodes, {} DOFs; mesh {:.2} s, setup {:.2} s, solve {:.2} s, VCCT {:.3} s",
+        results.model.nodes, results.model.dofs, t.mesh_s, t.setup_s, t.solve_s, t.vcct_s
+    );
+    s
+}

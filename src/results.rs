@@ -1,0 +1,209 @@
+//! What an analysis returns; serialised as `results.json` (schema in docs/SCENES.md).
+
+use crate::analysis::Model;
+use nonlin3d_newton::IncrementReport;
+use nonlin3d_vcct::FrontRelease;
+use serde::Serialize;
+
+/// One front corner node in a results table (lengths in mm, G in J/m²).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct FrontRow {
+    /// Perimeter coordinate S, mm.
+    pub s_mm: f64,
+    /// θ, degrees.
+    pub theta_deg: f64,
+    /// x, mm.
+    pub x_mm: f64,
+    /// y, mm.
+    pub y_mm: f64,
+    /// Δa, mm.
+    pub delta_a_mm: f64,
+    /// G_I, J/m² (negative: overlap).
+    pub g_i: f64,
+    /// G_II, J/m².
+    pub g_ii: f64,
+    /// G_III, J/m².
+    pub g_iii: f64,
+    /// G_T, J/m².
+    pub g_t: f64,
+    /// Faces open behind this point (false: overlapping; the thesis's dashed stretches).
+    pub open: bool,
+    /// Opening one element behind the front, mm.
+    pub opening_mm: f64,
+    /// Closure area, mm².
+    pub area_mm2: f64,
+    /// Front node (0-based mesh index).
+    pub node: usize,
+}
+
+impl FrontRow {
+    /// From a VCCT result.
+    pub fn new(r: &FrontRelease) -> Self {
+        Self {
+            s_mm: r.s * 1e3,
+            theta_deg: r.theta_deg,
+            x_mm: r.x * 1e3,
+            y_mm: r.y * 1e3,
+            delta_a_mm: r.delta_a * 1e3,
+            g_i: r.g_i,
+            g_ii: r.g_ii,
+            g_iii: r.g_iii,
+            g_t: r.g_t,
+            open: r.open(),
+            opening_mm: r.opening * 1e3,
+            area_mm2: r.area * 1e6,
+            node: r.node,
+        }
+    }
+
+    /// Back to SI (for criteria).
+    pub fn release(&self) -> FrontRelease {
+        FrontRelease {
+            node: self.node,
+            s: self.s_mm * 1e-3,
+            theta_deg: self.theta_deg,
+            x: self.x_mm * 1e-3,
+            y: self.y_mm * 1e-3,
+            delta_a: self.delta_a_mm * 1e-3,
+            area: self.area_mm2 * 1e-6,
+            g_i: self.g_i,
+            g_ii: self.g_ii,
+            g_iii: self.g_iii,
+            g_t: self.g_t,
+            opening: self.opening_mm * 1e-3,
+        }
+    }
+}
+
+/// Convergence of one level.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Convergence {
+    /// Attempts (converged or cut back), including the perturbation removal.
+    pub attempts: usize,
+    /// Converged increments.
+    pub increments: usize,
+    /// Newton iterations over all attempts.
+    pub iterations: usize,
+    /// Final residual ‖r‖∞, N.
+    pub residual_n: f64,
+    /// Negative pivots of the last factorisation (0: stable equilibrium on this branch).
+    pub negative_pivots: Option<usize>,
+}
+
+/// One strain (or load) level.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct LevelResult {
+    /// Applied strain ε_x (or, for the plate, the load P in N).
+    pub value: f64,
+    /// w at the top of the sublaminate centre, mm.
+    pub centre_deflection_mm: f64,
+    /// Largest transverse separation of the crack faces, mm (the sublaminate's deflection off
+    /// the base; Fig. 5.1.1).
+    pub peak_deflection_mm: f64,
+    /// Convergence data.
+    pub convergence: Convergence,
+    /// The front table.
+    pub front: Vec<FrontRow>,
+    /// Nodal displacements (node-major, m): for VTU output, not serialised.
+    #[serde(skip)]
+    pub displacements: Vec<f64>,
+}
+
+impl LevelResult {
+    /// Assembles a level's record.
+    pub fn new(
+        value: f64,
+        centre: f64,
+        peak: f64,
+        attempts: &[IncrementReport],
+        front: &[FrontRelease],
+        displacements: Vec<f64>,
+    ) -> Self {
+        let converged: Vec<&IncrementReport> = attempts.iter().filter(|a| a.converged()).collect();
+        let last = attempts.last();
+        Self {
+            value,
+            centre_deflection_mm: centre * 1e3,
+            peak_deflection_mm: peak * 1e3,
+            convergence: Convergence {
+                attempts: attempts.len(),
+                increments: converged.len(),
+                iterations: attempts.iter().map(|a| a.iterations.len()).sum(),
+                residual_n: last
+                    .and_then(|a| a.iterations.last().map(|i| i.residual))
+                    .or(last.map(|a| a.initial_residual))
+                    .unwrap_or(0.0),
+                negative_pivots: converged.last().and_then(|a| a.negative_pivots()),
+            },
+            front: front.iter().map(FrontRow::new).collect(),
+            displacements,
+        }
+    }
+
+    /// The front row with the largest value of `g`.
+    pub fn peak(&self, g: impl Fn(&FrontRow) -> f64) -> Option<&FrontRow> {
+        self.front.iter().max_by(|a, b| g(a).total_cmp(&g(b)))
+    }
+}
+
+/// Model size.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ModelSummary {
+    /// Nodes.
+    pub nodes: usize,
+    /// Cells.
+    pub cells: usize,
+    /// DOFs.
+    pub dofs: usize,
+    /// Front corner nodes.
+    pub front_points: usize,
+    /// Perturbation force available on the quarter model, N.
+    pub perturbation_n: Option<f64>,
+    /// The level (strain) at which the perturbation was applied: the first whose trivial state
+    /// had negative pivots. None: the path never lost stability.
+    pub perturbed_at: Option<f64>,
+}
+
+/// Wall-clock seconds per stage.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Timings {
+    /// Mesh generation.
+    pub mesh_s: f64,
+    /// Assembler (pattern, colouring, materials) and constraints.
+    pub setup_s: f64,
+    /// Newton over all levels.
+    pub solve_s: f64,
+    /// VCCT over all levels.
+    pub vcct_s: f64,
+    /// Writing outputs (filled in by the writer).
+    pub output_s: f64,
+}
+
+/// Onset of growth by the scene's criterion.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Critical {
+    /// Critical applied strain (interpolated).
+    pub strain: f64,
+    /// Where: S, mm.
+    pub s_mm: f64,
+}
+
+/// Everything a run produces.
+#[derive(Debug, Clone, Serialize)]
+pub struct Results {
+    /// The scene's title.
+    pub title: String,
+    /// What `value` of each level is: `strain` or `load_n`.
+    pub quantity: String,
+    /// Model size.
+    pub model: ModelSummary,
+    /// Per level.
+    pub levels: Vec<LevelResult>,
+    /// Critical strain by the scene's criterion, if one was given and reached.
+    pub critical: Option<Critical>,
+    /// Stage timings.
+    pub timings: Timings,
+    /// The model (mesh and front), for VTU output; not serialised.
+    #[serde(skip)]
+    pub model_data: Option<Model>,
+}

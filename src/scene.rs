@@ -1,0 +1,642 @@
+//! `Scene`: a serde/TOML description of one delamination analysis (docs/SCENES.md).
+//!
+//! Lengths are written in mm and moduli in GPa, the unit in each field's name (`a_mm`,
+//! `e11_gpa`); everything is converted to SI when the model is built. Unknown fields are
+//! errors, so a typo is caught rather than silently ignored.
+
+use crate::Error;
+use nonlin3d_element::{ElementKind, IntegrationRule};
+use nonlin3d_laminate::{Orthotropic, PlyStack, ShearCoupling, Stiffness, materials};
+use nonlin3d_vcct::MixedMode;
+use serde::{Deserialize, Serialize};
+
+/// The thesis's reference case (§4.3, §5.1): the scene `nonlin3d run` runs without arguments.
+pub const DEFAULT_SCENE: &str = include_str!("../examples/scenes/fig_5_1_3_circle_30mm.toml");
+
+/// One analysis: geometry, material, mesh, loads, options.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scene {
+    /// A line for reports.
+    pub title: String,
+    /// The delamination model.
+    pub geometry: Geometry,
+    /// The material.
+    pub material: MaterialSpec,
+    /// Ply-level modelling of the sublaminate (and base plies below it), chapter 7.
+    #[serde(default)]
+    pub layup: Option<Layup>,
+    /// Mesh controls (defaults per geometry).
+    #[serde(default)]
+    pub mesh: MeshControls,
+    /// Applied strains or transverse loads.
+    pub loads: Loads,
+    /// Solution options.
+    #[serde(default)]
+    pub analysis: AnalysisOptions,
+    /// A growth criterion to evaluate along the front (optional).
+    #[serde(default)]
+    pub criterion: Option<CriterionSpec>,
+}
+
+/// Planform of an embedded or edge delamination.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum Shape {
+    /// Ellipse (circle when a = b), conformal map eq. 3.1.1.
+    #[default]
+    Ellipse,
+    /// Rectangle 2a × 2b (Fig. 3.1.3).
+    Rectangle,
+}
+
+/// The delamination model (thesis Fig. 3.2.1–3.2.3 and §4.1). `a_mm` is the semi-axis along
+/// x (the load direction), `b_mm` along y; `h_mm` the sublaminate, `base_mm` the base laminate
+/// (H), `w_mm` the quarter model's size W.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "kebab-case", deny_unknown_fields)]
+pub enum Geometry {
+    /// Embedded delamination, quarter model (u = 0 on x = 0, v = 0 on y = 0, w = 0 on z = 0).
+    Embedded {
+        /// Planform.
+        #[serde(default)]
+        shape: Shape,
+        /// Semi-axis along x, mm.
+        a_mm: f64,
+        /// Semi-axis along y, mm.
+        b_mm: f64,
+        /// Sublaminate thickness h, mm.
+        h_mm: f64,
+        /// Base laminate thickness H, mm.
+        base_mm: f64,
+        /// Quarter-model size W, mm.
+        w_mm: f64,
+    },
+    /// Edge delamination (§5.5): as embedded, with y = 0 a free edge.
+    Edge {
+        /// Planform.
+        #[serde(default)]
+        shape: Shape,
+        /// Semi-axis along x, mm.
+        a_mm: f64,
+        /// Depth from the edge along y, mm.
+        b_mm: f64,
+        /// Sublaminate thickness h, mm.
+        h_mm: f64,
+        /// Base laminate thickness H, mm.
+        base_mm: f64,
+        /// Model size W, mm.
+        w_mm: f64,
+    },
+    /// Through-width delamination (Fig. 3.2.3), plane strain.
+    ThroughWidth {
+        /// Half-length a (delaminated for 0 ≤ x < a), mm.
+        a_mm: f64,
+        /// Model length L along x, mm.
+        length_mm: f64,
+        /// Width along y, mm.
+        width_mm: f64,
+        /// Sublaminate thickness h, mm.
+        h_mm: f64,
+        /// Base laminate thickness H, mm.
+        base_mm: f64,
+    },
+    /// The transversely loaded plate of §4.1: a circular debond of radius a under a central
+    /// transverse load.
+    Plate {
+        /// Debond radius a, mm.
+        a_mm: f64,
+        /// Plate (sublaminate) thickness h, mm.
+        h_mm: f64,
+        /// Base thickness H, mm.
+        base_mm: f64,
+        /// Quarter-model size W, mm.
+        w_mm: f64,
+    },
+}
+
+/// Homogenisation of the material into one effective solid.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum Homogenize {
+    /// Use the material as given (ply axes = global axes).
+    #[default]
+    None,
+    /// The homogeneous quasi-isotropic laminate of chapter 5: eq. 2.9.1, the volume average of
+    /// (±45/0/90)s plies of this material.
+    QuasiIsotropic,
+}
+
+/// The material (constants in GPa).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "kebab-case", deny_unknown_fields)]
+pub enum MaterialSpec {
+    /// A material of the thesis's Table 1 or a metal: `generic-graphite-epoxy`, `im7-8551-7`,
+    /// `steel`, `aluminium`.
+    Named {
+        /// Its name.
+        name: String,
+        /// Homogenisation.
+        #[serde(default)]
+        homogenize: Homogenize,
+    },
+    /// Isotropic: E (GPa), ν.
+    Isotropic {
+        /// Young's modulus, GPa.
+        e_gpa: f64,
+        /// Poisson ratio.
+        nu: f64,
+    },
+    /// Orthotropic engineering constants in ply axes.
+    Orthotropic {
+        /// E11, GPa.
+        e11_gpa: f64,
+        /// E22, GPa.
+        e22_gpa: f64,
+        /// E33, GPa.
+        e33_gpa: f64,
+        /// ν12.
+        nu12: f64,
+        /// ν13.
+        nu13: f64,
+        /// ν23.
+        nu23: f64,
+        /// G12, GPa.
+        g12_gpa: f64,
+        /// G13, GPa.
+        g13_gpa: f64,
+        /// G23, GPa.
+        g23_gpa: f64,
+        /// Homogenisation.
+        #[serde(default)]
+        homogenize: Homogenize,
+    },
+}
+
+/// Ply-level layers: one element per ply in the sublaminate and in `base_below`; the rest of
+/// the base homogeneous quasi-isotropic (eq. 2.9.1) of the same ply material.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Layup {
+    /// Ply thickness, mm.
+    pub ply_mm: f64,
+    /// Sublaminate ply angles (degrees), from the delamination plane up.
+    pub sublaminate: Vec<f64>,
+    /// Base ply angles modelled ply by ply, from the delamination plane down.
+    #[serde(default)]
+    pub base_below: Vec<f64>,
+}
+
+/// Mesh controls; unset fields take the generator's defaults (thesis reference mesh).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct MeshControls {
+    /// `hex20` (default) or `hex8`.
+    #[serde(default)]
+    pub element: Option<ElementName>,
+    /// Slices through the 90° sweep (even), embedded/edge/plate.
+    #[serde(default)]
+    pub slices: Option<usize>,
+    /// Elements between the centre and the front (along x for through-width).
+    #[serde(default)]
+    pub inside: Option<usize>,
+    /// Elements between the front and the boundary.
+    #[serde(default)]
+    pub outside: Option<usize>,
+    /// Size of the element next to the front over the one farthest inside (< 1 refines).
+    #[serde(default)]
+    pub front_grading: Option<f64>,
+    /// Elements through the sublaminate.
+    #[serde(default)]
+    pub sub_layers: Option<usize>,
+    /// Elements through the base.
+    #[serde(default)]
+    pub base_layers: Option<usize>,
+    /// Elements across the width (through-width only).
+    #[serde(default)]
+    pub across: Option<usize>,
+}
+
+/// Element names in scenes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ElementName {
+    /// 20-node brick.
+    Hex20,
+    /// 8-node brick.
+    Hex8,
+}
+
+impl ElementName {
+    /// The element kind.
+    pub fn kind(self) -> ElementKind {
+        match self {
+            Self::Hex20 => ElementKind::Hex20,
+            Self::Hex8 => ElementKind::Hex8,
+        }
+    }
+}
+
+/// Loads: a strain sweep (embedded, edge, through-width) or transverse loads (plate).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct Loads {
+    /// Applied axial strains ε_x (compression negative), in the order applied: u = W·ε on x = W.
+    #[serde(default)]
+    pub strains: Vec<f64>,
+    /// Transverse perturbation force (N, on the quarter model) at the sublaminate centre,
+    /// converged with the first strain and then removed at once (§3.2). Unset: a force that
+    /// would deflect the clamped sublaminate by h/4 in the linear range (eq. 4.1.1). 0: none.
+    #[serde(default)]
+    pub perturbation_n: Option<f64>,
+    /// Initial imperfection amplitude (mm) of the sublaminate, eq. 5.3.1 shape; instead of or
+    /// besides the perturbation.
+    #[serde(default)]
+    pub imperfection_mm: f64,
+    /// Plate: central transverse loads P (N, on the whole plate), in order.
+    #[serde(default)]
+    pub transverse_n: Vec<f64>,
+}
+
+/// Integration rule names in scenes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum RuleName {
+    /// 2×2×2 Gauss (the thesis's choice for Hex20).
+    #[default]
+    Gauss2,
+    /// 3×3×3 Gauss.
+    Gauss3,
+    /// Selective-reduced (Hex8 only).
+    SelectiveReduced,
+}
+
+impl RuleName {
+    /// The rule.
+    pub fn rule(self) -> IntegrationRule {
+        match self {
+            Self::Gauss2 => IntegrationRule::Gauss2,
+            Self::Gauss3 => IntegrationRule::Gauss3,
+            Self::SelectiveReduced => IntegrationRule::SelectiveReduced,
+        }
+    }
+}
+
+/// Newton variants.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum NewtonName {
+    /// Full Newton–Raphson (tangent every iteration).
+    #[default]
+    Full,
+    /// Modified Newton–Raphson (tangent every `refactor_every` iterations).
+    Modified,
+}
+
+/// Which strain–displacement relations give the VCCT forces (§2.8).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum ForceKinematics {
+    /// Nonlinear (consistent with the solution; the default, no linear substructure here).
+    #[default]
+    Nonlinear,
+    /// Linear (the thesis's recommendation where the front lies in a linear substructure).
+    Linear,
+}
+
+/// Solution options.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AnalysisOptions {
+    /// Integration rule.
+    #[serde(default)]
+    pub integration: RuleName,
+    /// Residual tolerance in N (§4.4: 1e-4 N).
+    #[serde(default = "default_tolerance")]
+    pub tolerance_n: f64,
+    /// Full or modified Newton.
+    #[serde(default)]
+    pub newton: NewtonName,
+    /// Iterations between refactorisations for modified Newton.
+    #[serde(default = "default_refactor")]
+    pub refactor_every: usize,
+    /// VCCT force kinematics.
+    #[serde(default)]
+    pub vcct_forces: ForceKinematics,
+    /// Largest load increment as a fraction of the largest strain (or load).
+    #[serde(default = "default_max_increment")]
+    pub max_increment: f64,
+}
+
+fn default_tolerance() -> f64 {
+    1e-4
+}
+fn default_refactor() -> usize {
+    4
+}
+fn default_max_increment() -> f64 {
+    0.25
+}
+
+impl Default for AnalysisOptions {
+    fn default() -> Self {
+        Self {
+            integration: RuleName::Gauss2,
+            tolerance_n: default_tolerance(),
+            newton: NewtonName::Full,
+            refactor_every: default_refactor(),
+            vcct_forces: ForceKinematics::Nonlinear,
+            max_increment: default_max_increment(),
+        }
+    }
+}
+
+/// A mixed-mode growth criterion (toughnesses in J/m²).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "kebab-case", deny_unknown_fields)]
+pub enum CriterionSpec {
+    /// (G_I/G_Ic)^α + ((G_II)/G_IIc)^β + (G_III/G_IIIc)^β = 1.
+    PowerLaw {
+        /// G_Ic.
+        g_ic: f64,
+        /// G_IIc.
+        g_iic: f64,
+        /// G_IIIc (defaults to G_IIc).
+        #[serde(default)]
+        g_iiic: Option<f64>,
+        /// α.
+        #[serde(default = "one")]
+        alpha: f64,
+        /// β.
+        #[serde(default = "one")]
+        beta: f64,
+    },
+    /// Benzeggagh–Kenane.
+    BenzeggaghKenane {
+        /// G_Ic.
+        g_ic: f64,
+        /// G_IIc.
+        g_iic: f64,
+        /// η.
+        eta: f64,
+    },
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+impl CriterionSpec {
+    /// The criterion.
+    pub fn criterion(&self) -> MixedMode {
+        match *self {
+            Self::PowerLaw {
+                g_ic,
+                g_iic,
+                g_iiic,
+                alpha,
+                beta,
+            } => MixedMode::PowerLaw {
+                g_ic,
+                g_iic,
+                g_iiic: g_iiic.unwrap_or(g_iic),
+                alpha,
+                beta,
+            },
+            Self::BenzeggaghKenane { g_ic, g_iic, eta } => {
+                MixedMode::BenzeggaghKenane { g_ic, g_iic, eta }
+            }
+        }
+    }
+}
+
+impl Scene {
+    /// Parses a TOML scene; errors name the line and field.
+    pub fn from_toml(text: &str) -> Result<Self, Error> {
+        let s: Self = toml::from_str(text).map_err(|e| Error::Scene(e.to_string()))?;
+        s.validate()?;
+        Ok(s)
+    }
+
+    /// The TOML text of this scene.
+    pub fn to_toml(&self) -> Result<String, Error> {
+        toml::to_string_pretty(self).map_err(|e| Error::Scene(e.to_string()))
+    }
+
+    /// The thesis's reference scene ([`DEFAULT_SCENE`]).
+    pub fn thesis_reference() -> Result<Self, Error> {
+        Self::from_toml(DEFAULT_SCENE)
+    }
+
+    /// Checks what the type system cannot: positive sizes, loads present, sensible options.
+    pub fn validate(&self) -> Result<(), Error> {
+        let bad = |m: String| Err(Error::Scene(m));
+        let positive = |name: &str, v: f64| -> Result<(), Error> {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err(Error::Scene(format!("{name} = {v}: must be positive")))
+            }
+        };
+        match &self.geometry {
+            Geometry::Embedded {
+                a_mm,
+                b_mm,
+                h_mm,
+                base_mm,
+                w_mm,
+                ..
+            }
+            | Geometry::Edge {
+                a_mm,
+                b_mm,
+                h_mm,
+                base_mm,
+                w_mm,
+                ..
+            } => {
+                for (n, v) in [
+                    ("geometry.a_mm", *a_mm),
+                    ("geometry.b_mm", *b_mm),
+                    ("geometry.h_mm", *h_mm),
+                    ("geometry.base_mm", *base_mm),
+                    ("geometry.w_mm", *w_mm),
+                ] {
+                    positive(n, v)?;
+                }
+                if self.loads.strains.is_empty() {
+                    return bad("loads.strains: at least one strain level".into());
+                }
+            }
+            Geometry::ThroughWidth {
+                a_mm,
+                length_mm,
+                width_mm,
+                h_mm,
+                base_mm,
+            } => {
+                for (n, v) in [
+                    ("geometry.a_mm", *a_mm),
+                    ("geometry.length_mm", *length_mm),
+                    ("geometry.width_mm", *width_mm),
+                    ("geometry.h_mm", *h_mm),
+                    ("geometry.base_mm", *base_mm),
+                ] {
+                    positive(n, v)?;
+                }
+                if self.loads.strains.is_empty() {
+                    return bad("loads.strains: at least one strain level".into());
+                }
+            }
+            Geometry::Plate {
+                a_mm,
+                h_mm,
+                base_mm,
+                w_mm,
+            } => {
+                for (n, v) in [
+                    ("geometry.a_mm", *a_mm),
+                    ("geometry.h_mm", *h_mm),
+                    ("geometry.base_mm", *base_mm),
+                    ("geometry.w_mm", *w_mm),
+                ] {
+                    positive(n, v)?;
+                }
+                if self.loads.transverse_n.is_empty() {
+                    return bad("loads.transverse_n: at least one load for a plate".into());
+                }
+            }
+        }
+        for (k, e) in self.loads.strains.iter().enumerate() {
+            if !e.is_finite() || *e == 0.0 {
+                return bad(format!(
+                    "loads.strains[{k}] = {e}: must be finite and non-zero"
+                ));
+            }
+        }
+        for (k, p) in self.loads.transverse_n.iter().enumerate() {
+            if !p.is_finite() || *p == 0.0 {
+                return bad(format!(
+                    "loads.transverse_n[{k}] = {p}: must be finite and non-zero"
+                ));
+            }
+        }
+        if let Some(p) = self.loads.perturbation_n
+            && !p.is_finite()
+        {
+            return bad(format!("loads.perturbation_n = {p}: must be finite"));
+        }
+        if !self.loads.imperfection_mm.is_finite() {
+            return bad("loads.imperfection_mm: must be finite".into());
+        }
+        let a = &self.analysis;
+        positive("analysis.tolerance_n", a.tolerance_n)?;
+        positive("analysis.max_increment", a.max_increment)?;
+        if a.refactor_every == 0 {
+            return bad("analysis.refactor_every: must be ≥ 1".into());
+        }
+        if let Some(c) = &self.criterion {
+            c.criterion()
+                .validate()
+                .map_err(|e| Error::Scene(format!("criterion: {e}")))?;
+        }
+        Ok(())
+    }
+
+    /// The material's ply-axis constants (before homogenisation), and whether it is to be
+    /// homogenised quasi-isotropically.
+    pub fn ply_material(&self) -> Result<(Orthotropic, Homogenize), Error> {
+        let gpa = 1e9;
+        Ok(match &self.material {
+            MaterialSpec::Named { name, homogenize } => {
+                let m = match name.as_str() {
+                    "generic-graphite-epoxy" => materials::generic_graphite_epoxy(),
+                    "im7-8551-7" => materials::im7_8551_7(),
+                    "steel" => materials::steel(),
+                    "aluminium" | "aluminum" => materials::aluminium(),
+                    other => {
+                        return Err(Error::Scene(format!(
+                            "material.name = '{other}': one of generic-graphite-epoxy, \
+                             im7-8551-7, steel, aluminium"
+                        )));
+                    }
+                };
+                (m, *homogenize)
+            }
+            MaterialSpec::Isotropic { e_gpa, nu } => {
+                (Orthotropic::isotropic(e_gpa * gpa, *nu), Homogenize::None)
+            }
+            MaterialSpec::Orthotropic {
+                e11_gpa,
+                e22_gpa,
+                e33_gpa,
+                nu12,
+                nu13,
+                nu23,
+                g12_gpa,
+                g13_gpa,
+                g23_gpa,
+                homogenize,
+            } => (
+                Orthotropic {
+                    e11: e11_gpa * gpa,
+                    e22: e22_gpa * gpa,
+                    e33: e33_gpa * gpa,
+                    nu12: *nu12,
+                    nu13: *nu13,
+                    nu23: *nu23,
+                    g12: g12_gpa * gpa,
+                    g13: g13_gpa * gpa,
+                    g23: g23_gpa * gpa,
+                },
+                *homogenize,
+            ),
+        })
+    }
+
+    /// Materials indexed as the mesh's cells use them: [homogeneous] without a layup;
+    /// [homogenised base, ply material] with one (the mesh generator's convention).
+    pub fn stiffnesses(&self) -> Result<Vec<Stiffness>, Error> {
+        let (ply, homogenize) = self.ply_material()?;
+        let qi = || -> Result<Stiffness, Error> {
+            Ok(PlyStack::quasi_isotropic(ply, 1.0)?.average_stiffness(ShearCoupling::Exact)?)
+        };
+        Ok(match (&self.layup, homogenize) {
+            (None, Homogenize::None) => vec![ply.stiffness()?],
+            (None, Homogenize::QuasiIsotropic) => vec![qi()?],
+            (Some(_), _) => vec![qi()?, ply.stiffness()?],
+        })
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_default_scene_parses_and_round_trips() {
+        let s = Scene::thesis_reference().unwrap();
+        let again = Scene::from_toml(&s.to_toml().unwrap()).unwrap();
+        assert_eq!(s, again);
+        assert_eq!(s.loads.strains.len(), 5);
+        assert_eq!(s.stiffnesses().unwrap().len(), 1);
+    }
+
+    #[test]
+    fn mistakes_are_named() {
+        let s = DEFAULT_SCENE.replace("a_mm", "aa_mm");
+        let e = Scene::from_toml(&s).unwrap_err().to_string();
+        assert!(e.contains("aa_mm"), "{e}");
+        let s = DEFAULT_SCENE.replace("h_mm = 0.4", "h_mm = -0.4");
+        let e = Scene::from_toml(&s).unwrap_err().to_string();
+        assert!(e.contains("geometry.h_mm"), "{e}");
+        let s = DEFAULT_SCENE.replace("generic-graphite-epoxy", "unobtainium");
+        let e = Scene::from_toml(&s)
+            .unwrap()
+            .stiffnesses()
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("unobtainium"), "{e}");
+    }
+}
