@@ -337,6 +337,14 @@ pub fn solve_level(
     let mut perturbed = false;
     if let (true, Some((dof, f))) = (unstable, perturbation) {
         *u = start;
+        // Through the bifurcation in eighths of the step, so the perturbed (imperfect) path is
+        // followed continuously onto the branch the perturbation favours.
+        let eighth = ((to - from) / 8.0).abs().max(stepping.min);
+        let fine = Stepping {
+            initial: eighth,
+            max: eighth,
+            ..stepping.clone()
+        };
         attempts.extend(perturbed_step(
             problem,
             u,
@@ -344,7 +352,7 @@ pub fn solve_level(
             to,
             &[(dof, f)],
             newton,
-            &stepping,
+            &fine,
         )?);
         perturbed = true;
     }
