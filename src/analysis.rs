@@ -474,6 +474,15 @@ pub fn run(scene: &Scene, progress: &mut dyn FnMut(Progress)) -> Result<Results,
         let front = front_table(scene, &model, &problem, &u)?;
         t_vcct += t.elapsed().as_secs_f64();
         let (centre, peak) = deflections(&model, &u);
+        if !plate && peak < -0.01 * model.h {
+            return Err(Error::Numerical(format!(
+                "level {k} (strain {}): the sublaminate buckled into the base (largest crack-face \
+                 separation {:.4} mm); without contact this branch is not physical — raise \
+                 loads.perturbation_n or lower analysis.max_increment",
+                lambda * reference,
+                peak * 1e3
+            )));
+        }
         levels.push(LevelResult::new(
             lambda * reference,
             centre,
