@@ -9,7 +9,7 @@ use nonlin3d_assembly::{Assembler, Constraints};
 use nonlin3d_element::{IntegrationRule, Kinematics};
 use nonlin3d_laminate::{ShearCoupling, materials};
 use nonlin3d_mesh::{Imperfection, ThroughWidthParams, through_width_delamination};
-use nonlin3d_newton::{NewtonSettings, StructuralProblem, Stepping, follow_path};
+use nonlin3d_newton::{NewtonSettings, Stepping, StructuralProblem, follow_path};
 use nonlin3d_vcct::{cells_above, release_rates};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -17,7 +17,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let p = ThroughWidthParams::example();
     let (mut mesh, front) = through_width_delamination(&p)?;
     // A strip imperfection of 5 % of h selects the outward branch (eq. 5.3.1 in one direction).
-    mesh.apply_imperfection(p.base, "crack_lower", Imperfection::Strip { a: p.a }, 0.05 * p.h)?;
+    mesh.apply_imperfection(
+        p.base,
+        "crack_lower",
+        Imperfection::Strip { a: p.a },
+        0.05 * p.h,
+    )?;
 
     // 2. Assembly: one material, Hex20 2×2×2, total Lagrangian.
     let alu = materials::aluminium().stiffness()?;
@@ -49,13 +54,22 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         max: 1.0 / 24.0,
         ..Stepping::default()
     };
-    let path = follow_path(&mut problem, &mut u, &levels, &NewtonSettings::default(), &stepping)?;
+    let path = follow_path(
+        &mut problem,
+        &mut u,
+        &levels,
+        &NewtonSettings::default(),
+        &stepping,
+    )?;
 
     // 4. VCCT at each converged level: forces of the cells above the plane (linear relations,
     //    §2.8's recommendation), openings behind the front.
     let above = cells_above(&front);
     // The sublaminate's lift at x = 0 (upper crack face minus lower).
-    let (up, low) = (&mesh.node_sets["crack_upper"], &mesh.node_sets["crack_lower"]);
+    let (up, low) = (
+        &mesh.node_sets["crack_upper"],
+        &mesh.node_sets["crack_lower"],
+    );
     let centre = (0..up.len())
         .min_by(|&i, &j| mesh.nodes[up[i]][0].total_cmp(&mesh.nodes[up[j]][0]))
         .ok_or("no crack face")?;

@@ -18,9 +18,14 @@ fn boundary(nset: &str, dof: u8, value: f64) -> InpBoundary {
     }
 }
 
-/// The deck text of a scene. Steps: (1) supports, the first level and the perturbation force;
-/// (2) the perturbation removed (CalculiX ramps it to zero within the step at fixed strain);
-/// (3…) the remaining levels. For a plate, one step per load.
+/// The deck text of a scene. For each strain level two NLGEOM steps: the strain with the
+/// perturbation force on, then the force removed at that strain (CalculiX ramps it to zero
+/// within the step); the second step's state is the level's answer. Re-applying the force at
+/// every level stands in for nonlin3d's inertia check (which applies it at the first level
+/// whose trivial state is unstable): below buckling the removal returns to the flat state,
+/// above it the sublaminate stays on the buckled branch. A plate gets one step per load.
+/// Hex20 cells become C3D20R under the 2×2×2 rule (CalculiX's reduced rule is the same
+/// 2×2×2 Gauss rule) and C3D20 under 3×3×3.
 pub fn deck(scene: &Scene) -> Result<String, Error> {
     let model = build_model(scene)?;
     deck_of(scene, &model)
@@ -85,24 +90,23 @@ pub fn deck_of(scene: &Scene, model: &Model) -> Result<String, Error> {
     } else {
         let p = perturbation_force(scene, model)?;
         for (k, f) in factors.iter().enumerate() {
-            let end = boundary("x1", 1, model.x_end * f * reference);
-            if k == 0 {
-                let mut b = supports.clone();
-                b.push(end);
-                let cl = if p != 0.0 { vec![load(p)] } else { Vec::new() };
-                steps.push(step(b, cl));
-                if p != 0.0 {
-                    steps.push(step(Vec::new(), vec![load(0.0)]));
-                }
-            } else {
-                steps.push(step(vec![end], Vec::new()));
+            let mut b = if k == 0 { supports.clone() } else { Vec::new() };
+            b.push(boundary("x1", 1, model.x_end * f * reference));
+            let cl = if p != 0.0 { vec![load(p)] } else { Vec::new() };
+            steps.push(step(b, cl));
+            if p != 0.0 {
+                steps.push(step(Vec::new(), vec![load(0.0)]));
             }
         }
     }
-    Ok(inp_string(&InpDeck {
+    let text = inp_string(&InpDeck {
         heading: scene.title.clone(),
         mesh: &mesh,
         materials: &materials,
         steps,
-    })?)
+    })?;
+    Ok(match scene.analysis.integration {
+        crate::scene::RuleName::Gauss2 => text.replace("TYPE=C3D20,", "TYPE=C3D20R,"),
+        _ => text,
+    })
 }

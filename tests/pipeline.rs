@@ -1,0 +1,162 @@
+//! The facade end to end: scenes, the `nonlin3d` program's `run` and `export`, outputs, and
+//! failures that must be reported rather than returned as results.
+
+use nonlin3d::Scene;
+use nonlin3d::scene::DEFAULT_SCENE;
+use std::path::Path;
+use std::process::Command;
+
+/// The reference scene on 4 slices with two strains: about a second.
+fn coarse_text() -> String {
+    DEFAULT_SCENE.replace("slices = 8", "slices = 4").replace(
+        "strains = [-0.001, -0.002, -0.003, -0.004, -0.005]",
+        "strains = [-0.001, -0.003]",
+    )
+}
+
+fn tmp(name: &str) -> std::path::PathBuf {
+    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// `nonlin3d run SCENE --out DIR` writes the documented files; results.json parses and holds
+/// per level the strain, deflection, convergence and a front table; the CSVs have one row per
+/// front corner; the PVD lists one VTU per level; the SVGs are SVG.
+#[test]
+fn run_writes_every_output() {
+    let dir = tmp("run");
+    let scene = dir.join("coarse.toml");
+    std::fs::write(&scene, coarse_text()).unwrap();
+    let out = dir.join("out");
+    let status = Command::new(env!("CARGO_BIN_EXE_nonlin3d"))
+        .args(["run", "--quiet", "--out"])
+        .arg(&out)
+        .arg(&scene)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&status.stdout);
+    assert!(
+        status.status.success(),
+        "{stdout}\n{}",
+        String::from_utf8_lossy(&status.stderr)
+    );
+    assert!(stdout.contains("G_I max"), "{stdout}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("results.json")).unwrap()).unwrap();
+    let levels = json["levels"].as_array().unwrap();
+    assert_eq!(levels.len(), 2);
+    assert_eq!(levels[1]["value"].as_f64(), Some(-0.003));
+    assert!(levels[1]["peak_deflection_mm"].as_f64().unwrap() > 0.2);
+    assert_eq!(
+        levels[1]["convergence"]["negative_pivots"].as_u64(),
+        Some(0)
+    );
+    let front = levels[1]["front"].as_array().unwrap();
+    assert_eq!(front.len(), 5, "4 slices: 5 corner nodes");
+    for key in ["s_mm", "theta_deg", "g_i", "g_ii", "g_iii", "g_t", "open"] {
+        assert!(front[0].get(key).is_some(), "front row lacks {key}");
+    }
+    assert!(json["timings"]["solve_s"].as_f64().unwrap() > 0.0);
+    let csv = std::fs::read_to_string(out.join("front_1.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 1 + 5);
+    let pvd = std::fs::read_to_string(out.join("model.pvd")).unwrap();
+    assert_eq!(pvd.matches("model_").count(), 2);
+    for k in 0..2 {
+        let vtu = std::fs::read_to_string(out.join(format!("model_{k}.vtu"))).unwrap();
+        assert!(vtu.contains("Name=\"displacement\""));
+    }
+    for f in ["g_i.svg", "g_ii.svg", "g_t.svg", "deflection.svg"] {
+        let svg = std::fs::read_to_string(out.join(f)).unwrap();
+        assert!(svg.starts_with("<svg") && svg.contains("<polyline"), "{f}");
+    }
+}
+
+/// `nonlin3d export` writes a deck our own reader accepts: two NLGEOM steps per level (the
+/// perturbation on, then removed), the mesh's nodes and cells, C3D20R for the 2×2×2 rule.
+#[test]
+fn export_writes_a_readable_deck() {
+    let dir = tmp("export");
+    let scene = dir.join("coarse.toml");
+    std::fs::write(&scene, coarse_text()).unwrap();
+    let inp = dir.join("coarse.inp");
+    let status = Command::new(env!("CARGO_BIN_EXE_nonlin3d"))
+        .arg("export")
+        .arg(&scene)
+        .arg("--inp")
+        .arg(&inp)
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let text = std::fs::read_to_string(&inp).unwrap();
+    let deck = nonlin3d::mesh::read_inp(&text).unwrap();
+    let model =
+        nonlin3d::analysis::build_model(&Scene::from_toml(&coarse_text()).unwrap()).unwrap();
+    assert_eq!(deck.node_ids.len(), model.mesh.nodes.len());
+    assert_eq!(deck.element_ids.len(), model.mesh.cells.len());
+    assert!(deck.reduced.iter().all(|&r| r));
+    assert_eq!(deck.steps.len(), 4);
+    assert!(deck.steps.iter().all(|s| s.nlgeom));
+    assert!(text.contains("TYPE=C3D20R"));
+}
+
+/// A perturbation pushing the sublaminate into the base lands on a branch that is not
+/// physical without contact: the run says so, naming the level, instead of returning it.
+#[test]
+fn buckling_into_the_base_is_an_error_not_a_result() {
+    let text = coarse_text().replace("[loads]", "[loads]\nperturbation_n = -2.0");
+    let scene = Scene::from_toml(&text).unwrap();
+    let err = nonlin3d::analysis::run(&scene, &mut |_| {})
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("buckled into the base"), "{err}");
+    assert!(err.contains("level 1"), "{err}");
+}
+
+/// Scene mistakes come back as errors that name the field, never as panics; a missing scene
+/// file names the path.
+#[test]
+fn scene_errors_are_named() {
+    for (from, to, expect) in [
+        (
+            "strains = [-0.001, -0.003]",
+            "strains = []",
+            "loads.strains",
+        ),
+        ("slices = 4", "slices = 4\nbogus = 1", "bogus"),
+        ("kind = \"embedded\"", "kind = \"spherical\"", "spherical"),
+        (
+            "tolerance_n = 1e-4",
+            "tolerance_n = 0.0",
+            "analysis.tolerance_n",
+        ),
+    ] {
+        let text = coarse_text().replace(from, to);
+        let err = Scene::from_toml(&text).unwrap_err().to_string();
+        assert!(err.contains(expect), "{from} → {to}: {err}");
+    }
+    let out = Command::new(env!("CARGO_BIN_EXE_nonlin3d"))
+        .args(["run", "/nonexistent/scene.toml", "--quiet"])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("/nonexistent/scene.toml"));
+}
+
+/// Every committed example scene parses and builds its model (the thesis cases of
+/// docs/SCENES.md); the default scene is one of them.
+#[test]
+fn example_scenes_parse_and_build() {
+    let mut count = 0;
+    for entry in std::fs::read_dir("examples/scenes").unwrap() {
+        let path = entry.unwrap().path();
+        let text = std::fs::read_to_string(&path).unwrap();
+        let scene = Scene::from_toml(&text).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        let model = nonlin3d::analysis::build_model(&scene)
+            .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        assert!(!model.front.points.is_empty());
+        count += 1;
+    }
+    assert!(count >= 7);
+}
