@@ -326,6 +326,28 @@ pub struct AnalysisOptions {
     /// Largest load increment as a fraction of the largest strain (or load).
     #[serde(default = "default_max_increment")]
     pub max_increment: f64,
+    /// Linear solver.
+    #[serde(default)]
+    pub solver: SolverName,
+    /// Threads for the factorisation with `solver = "faer"` (1: sequential, bitwise
+    /// reproducible; 0: all cores).
+    #[serde(default = "default_threads")]
+    pub threads: usize,
+}
+
+/// Linear solver names in scenes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum SolverName {
+    /// faer's supernodal/simplicial LDLᵀ with AMD ordering.
+    #[default]
+    Faer,
+    /// The thesis's profile (skyline) LDLᵀ with RCM ordering.
+    Profile,
+}
+
+fn default_threads() -> usize {
+    1
 }
 
 fn default_tolerance() -> f64 {
@@ -347,6 +369,8 @@ impl Default for AnalysisOptions {
             refactor_every: default_refactor(),
             vcct_forces: ForceKinematics::Nonlinear,
             max_increment: default_max_increment(),
+            solver: SolverName::Faer,
+            threads: default_threads(),
         }
     }
 }

@@ -53,6 +53,10 @@ pub enum SolverKind {
     FaerLdlt,
     /// [`crate::FaerSolver`] LLᵀ with AMD: positive definite matrices only.
     FaerLlt,
+    /// [`crate::FaerSolver`] LDLᵀ with AMD, numeric phase on this many rayon threads. Faster
+    /// from about 10 k DOF on two cores; the sums are split differently from the sequential
+    /// solver, so results agree with it to rounding, not bitwise.
+    FaerLdltThreads(usize),
 }
 
 impl SolverKind {
@@ -62,6 +66,9 @@ impl SolverKind {
             Self::Profile => Box::new(crate::ProfileLdlt::new()),
             Self::FaerLdlt => Box::new(crate::FaerSolver::new(crate::FaerMode::Ldlt)),
             Self::FaerLlt => Box::new(crate::FaerSolver::new(crate::FaerMode::Llt)),
+            Self::FaerLdltThreads(n) => {
+                Box::new(crate::FaerSolver::new(crate::FaerMode::Ldlt).with_threads(n))
+            }
         }
     }
 }
