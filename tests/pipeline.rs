@@ -160,3 +160,22 @@ fn example_scenes_parse_and_build() {
     }
     assert!(count >= 7);
 }
+
+/// A mixed-mode criterion in the scene gives the critical strain of the sweep: Benzeggagh–Kenane
+/// with G_Ic = 100, G_IIc = 500 J/m², η = 2. At −0.003 (G_I ≈ 46, G_II ≈ 23 J/m² on 4 slices)
+/// the index is below 1, at −0.005 above, so the onset lies between them (measured −0.00373),
+/// at S = 0 where G_I peaks.
+#[test]
+fn criterion_gives_the_critical_strain() {
+    let text = coarse_text().replace(
+        "strains = [-0.001, -0.003]",
+        "strains = [-0.001, -0.003, -0.005]",
+    ) + "\n[criterion]\nkind = \"benzeggagh-kenane\"\ng_ic = 100.0\ng_iic = 500.0\neta = 2.0\n";
+    let scene = Scene::from_toml(&text).unwrap();
+    let r = nonlin3d::analysis::run(&scene, &mut |_| {}).unwrap();
+    let c = r.critical.expect("onset within the sweep");
+    eprintln!("critical strain {} at S = {} mm", c.strain, c.s_mm);
+    assert!(c.strain < -0.003 && c.strain > -0.005, "{}", c.strain);
+    assert_eq!(c.s_mm, 0.0);
+    assert!(nonlin3d::report::table(&r).contains("growth onset"));
+}
