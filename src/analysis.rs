@@ -2,7 +2,7 @@
 //! perturbation load and the strain sweep → VCCT at each level → [`Results`].
 //!
 //! Each stage is callable alone: [`build_model`], [`build_problem`], [`solve_level`],
-//! [`front_table`]; [`run`] strings them together and times them.
+//! [`front_table`]; [`run`] (or [`Analysis::run`]) strings them together and times them.
 
 use crate::scene::{ForceKinematics, Geometry, NewtonName, Scene, Shape, SolverName};
 use crate::{Error, results::*};
@@ -506,6 +506,14 @@ pub fn run(scene: &Scene, progress: &mut dyn FnMut(Progress)) -> Result<Results,
         });
         from = lambda;
     }
+    if let Some(c) = &scene.criterion {
+        let criterion = c.criterion();
+        for l in &mut levels {
+            for row in &mut l.front {
+                row.failure_index = Some(criterion.index(&row.release()));
+            }
+        }
+    }
     let critical = match &scene.criterion {
         Some(c) if !plate => {
             let sweep: Vec<(f64, Vec<FrontRelease>)> = levels
@@ -541,4 +549,53 @@ pub fn run(scene: &Scene, progress: &mut dyn FnMut(Progress)) -> Result<Results,
         },
         model_data: Some(model),
     })
+}
+
+/// A scene ready to run, stage by stage or all at once: `Analysis::new(scene)?.run()`.
+#[derive(Debug, Clone)]
+pub struct Analysis {
+    scene: Scene,
+}
+
+impl Analysis {
+    /// Validates `scene`.
+    pub fn new(scene: Scene) -> Result<Self, Error> {
+        scene.validate()?;
+        Ok(Self { scene })
+    }
+
+    /// The scene.
+    pub fn scene(&self) -> &Scene {
+        &self.scene
+    }
+
+    /// Stage 1: the mesh and front ([`build_model`]).
+    pub fn model(&self) -> Result<Model, Error> {
+        build_model(&self.scene)
+    }
+
+    /// Stage 2: assembler and constraints for a model ([`build_problem`]).
+    pub fn problem(&self, model: &Model) -> Result<StructuralProblem, Error> {
+        build_problem(&self.scene, model)
+    }
+
+    /// Stage 4: G along the front of `model` at state `u` ([`front_table`]).
+    pub fn front_table(
+        &self,
+        model: &Model,
+        problem: &StructuralProblem,
+        u: &[f64],
+    ) -> Result<Vec<FrontRelease>, Error> {
+        front_table(&self.scene, model, problem, u)
+    }
+
+    /// All stages ([`run`]), silently.
+    pub fn run(&self) -> Result<Results, Error> {
+        run(&self.scene, &mut |_| {})
+    }
+
+    /// All stages, reporting [`Progress`].
+    pub fn run_with(&self, progress: &mut dyn FnMut(Progress)) -> Result<Results, Error> {
+        run(&self.scene, progress)
+    }
 }

@@ -24,7 +24,7 @@
 //! ```no_run
 //! // The thesis's reference case end to end (what `nonlin3d run` does without a scene).
 //! let scene = nonlin3d::Scene::thesis_reference()?;
-//! let results = nonlin3d::analysis::run(&scene, &mut |_| {})?;
+//! let results = nonlin3d::Analysis::new(scene)?.run()?;
 //! print!("{}", nonlin3d::report::table(&results));
 //! # Ok::<(), nonlin3d::Error>(())
 //! ```
@@ -46,6 +46,7 @@ pub mod scene;
 pub struct ReadmeDoctests;
 mod error;
 
+pub use analysis::Analysis;
 pub use error::Error;
 pub use nonlin3d_assembly as assembly;
 pub use nonlin3d_element as element;

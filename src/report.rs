@@ -18,13 +18,13 @@ fn io(path: &Path) -> impl FnOnce(std::io::Error) -> Error + '_ {
 /// The CSV of one level's front table.
 pub fn front_csv(results: &Results, level: usize) -> String {
     let mut s = String::from(
-        "s_mm,theta_deg,x_mm,y_mm,delta_a_mm,g_i,g_ii,g_iii,g_t,open,opening_mm,area_mm2,node\n",
+        "s_mm,theta_deg,x_mm,y_mm,delta_a_mm,g_i,g_ii,g_iii,g_t,open,opening_mm,area_mm2,node,failure_index\n",
     );
     if let Some(l) = results.levels.get(level) {
         for r in &l.front {
             let _ = writeln!(
                 s,
-                "{},{},{},{},{},{:e},{:e},{:e},{:e},{},{:e},{:e},{}",
+                "{},{},{},{},{},{:e},{:e},{:e},{:e},{},{:e},{:e},{},{}",
                 r.s_mm,
                 r.theta_deg,
                 r.x_mm,
@@ -37,7 +37,8 @@ pub fn front_csv(results: &Results, level: usize) -> String {
                 r.open,
                 r.opening_mm,
                 r.area_mm2,
-                r.node
+                r.node,
+                r.failure_index.map_or(String::new(), |f| format!("{f:e}"))
             );
         }
     }

@@ -34,6 +34,8 @@ pub struct FrontRow {
     pub area_mm2: f64,
     /// Front node (0-based mesh index).
     pub node: usize,
+    /// Failure index of the scene's mixed-mode criterion (≥ 1: growth), if one was given.
+    pub failure_index: Option<f64>,
 }
 
 impl FrontRow {
@@ -53,6 +55,7 @@ impl FrontRow {
             opening_mm: r.opening * 1e3,
             area_mm2: r.area * 1e6,
             node: r.node,
+            failure_index: None,
         }
     }
 

@@ -618,8 +618,8 @@ impl Scene {
         })
     }
 
-    /// Materials indexed as the mesh's cells use them: [homogeneous] without a layup;
-    /// [homogenised base, ply material] with one (the mesh generator's convention).
+    /// Materials indexed as the mesh's cells use them: `[homogeneous]` without a layup;
+    /// `[homogenised base, ply material]` with one (the mesh generator's convention).
     pub fn stiffnesses(&self) -> Result<Vec<Stiffness>, Error> {
         let (ply, homogenize) = self.ply_material()?;
         let qi = || -> Result<Stiffness, Error> {

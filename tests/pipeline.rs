@@ -178,4 +178,12 @@ fn criterion_gives_the_critical_strain() {
     assert!(c.strain < -0.003 && c.strain > -0.005, "{}", c.strain);
     assert_eq!(c.s_mm, 0.0);
     assert!(nonlin3d::report::table(&r).contains("growth onset"));
+    let last = r.levels.last().unwrap();
+    assert!(last.front[0].failure_index.unwrap() >= 1.0);
+    assert!(
+        r.levels[0]
+            .front
+            .iter()
+            .all(|f| f.failure_index.unwrap() < 1.0)
+    );
 }

@@ -277,6 +277,50 @@ impl Assembler {
         Ok(f)
     }
 
+    /// Rebuilds the sparsity pattern for the ties of `constraints`: a cell that holds a slave
+    /// DOF couples its DOFs with the slave's masters too, the entries K′ = TᵀKT needs when
+    /// [`residual`](Self::residual) folds the slave onto them. Tangents made before this call
+    /// no longer fit ([`new_tangent`](Self::new_tangent) again).
+    pub fn tie(&mut self, constraints: &Constraints) -> Result<(), AssemblyError> {
+        let masters: HashMap<usize, Vec<usize>> = constraints
+            .ties()
+            .iter()
+            .map(|t| (t.slave, t.masters.iter().map(|m| m.0).collect()))
+            .collect();
+        let lists: Vec<Vec<usize>> = self
+            .dofs
+            .iter()
+            .map(|d| {
+                let mut l = d.clone();
+                for x in d {
+                    if let Some(m) = masters.get(x) {
+                        l.extend(m);
+                    }
+                }
+                l.sort_unstable();
+                l.dedup();
+                l
+            })
+            .collect();
+        // Ties whose slave no cell holds still need their masters coupled to each other.
+        let mut all = lists;
+        all.extend(constraints.ties().iter().map(|t| {
+            let mut l: Vec<usize> = t.masters.iter().map(|m| m.0).collect();
+            l.push(t.slave);
+            l.sort_unstable();
+            l.dedup();
+            l
+        }));
+        let pattern = Arc::new(SymmetricPattern::from_dof_lists(self.n, &all)?);
+        self.maps = self
+            .dofs
+            .iter()
+            .map(|d| pattern.scatter_map(d))
+            .collect::<Result<Vec<_>, _>>()?;
+        self.pattern = pattern;
+        Ok(())
+    }
+
     /// Number of DOFs.
     pub fn n(&self) -> usize {
         self.n
@@ -397,6 +441,9 @@ impl Assembler {
         constraints.external(lambda, &mut f);
         let mut r: Vec<f64> = a.internal.iter().zip(&f).map(|(i, e)| i - e).collect();
         let mut reactions = vec![0.0; self.n];
+        if !constraints.ties().is_empty() {
+            fold_ties(constraints, &mut r, &mut reactions, k.as_deref_mut())?;
+        }
         let mut fixed = vec![false; self.n];
         for (d, _) in constraints.prescribed() {
             fixed[d] = true;
@@ -420,6 +467,84 @@ impl Assembler {
         }
         Ok((r, reactions, a.energy))
     }
+}
+
+/// Folds each tie's slave onto its masters (K′ = TᵀKT, r′ = Tᵀr for u_s = Σ c_k u_{m_k}),
+/// slave by slave: r_m += c·r_s; K_{m j} += c·K_{s j} (twice on the diagonal m = j, which stands
+/// for both triangles); K_{m m′} += c c′ K_ss; then the slave's row and column become the
+/// identity and its residual (the force the tie carries) its reaction.
+fn fold_ties(
+    constraints: &Constraints,
+    r: &mut [f64],
+    reactions: &mut [f64],
+    k: Option<&mut SymmetricMatrix>,
+) -> Result<(), AssemblyError> {
+    for t in constraints.ties() {
+        let rs = r[t.slave];
+        for &(m, c) in &t.masters {
+            r[m] += c * rs;
+        }
+        reactions[t.slave] = rs;
+        r[t.slave] = 0.0;
+    }
+    let Some(k) = k else {
+        return Ok(());
+    };
+    let pattern = k.pattern().clone();
+    let (cp, ri) = (pattern.col_ptr(), pattern.row_idx());
+    let slave_of: HashMap<usize, usize> = constraints
+        .ties()
+        .iter()
+        .enumerate()
+        .map(|(i, t)| (t.slave, i))
+        .collect();
+    // Stored positions of every slave's row/column: (position, the other index).
+    let mut entries: Vec<Vec<(usize, usize)>> = vec![Vec::new(); constraints.ties().len()];
+    for j in 0..pattern.n() {
+        for p in cp[j]..cp[j + 1] {
+            let i = ri[p];
+            if let Some(&t) = slave_of.get(&i) {
+                entries[t].push((p, j));
+            }
+            if i != j
+                && let Some(&t) = slave_of.get(&j)
+            {
+                entries[t].push((p, i));
+            }
+        }
+    }
+    for (t, tie) in constraints.ties().iter().enumerate() {
+        let s = tie.slave;
+        let missing = |i: usize, j: usize| AssemblyError::Tie {
+            slave: s,
+            reason: format!(
+                "the tangent has no entry ({i}, {j}): build the problem after adding ties \
+                 (Assembler::tie; StructuralProblem::new calls it)"
+            ),
+        };
+        // Current values of row s (other slaves' folds may have added to it).
+        let row: Vec<(usize, f64)> = entries[t]
+            .iter()
+            .map(|&(p, j)| (j, k.values()[p]))
+            .collect();
+        let kss = k.get(s, s);
+        for &(m, c) in &tie.masters {
+            for &(j, v) in row.iter().filter(|e| e.0 != s) {
+                let w = if j == m { 2.0 * c * v } else { c * v };
+                k.add(m, j, w).map_err(|_| missing(m, j))?;
+            }
+        }
+        for (a, &(m, c)) in tie.masters.iter().enumerate() {
+            for &(m2, c2) in &tie.masters[..=a] {
+                k.add(m, m2, c * c2 * kss).map_err(|_| missing(m, m2))?;
+            }
+        }
+        let values = k.values_mut();
+        for &(p, j) in &entries[t] {
+            values[p] = if j == s { 1.0 } else { 0.0 };
+        }
+    }
+    Ok(())
 }
 
 #[cfg(test)]

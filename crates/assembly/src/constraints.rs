@@ -16,6 +16,21 @@ pub struct Constraints {
     prescribed: BTreeMap<usize, (f64, f64)>,
     loads: Vec<f64>,
     dead: Vec<f64>,
+    ties: Vec<Tie>,
+}
+
+/// A linear tie between DOFs: u_slave = Σ c_k·u_{master_k} + λ·offset (a multi-point
+/// constraint, as Abaqus's `*EQUATION`). The slave is eliminated: its row and column of the
+/// tangent are folded onto the masters (K′ = TᵀKT, r′ = Tᵀr) and replaced by the identity, and
+/// its value follows the masters. Masters may be free or prescribed but not slaves themselves.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Tie {
+    /// The dependent DOF.
+    pub slave: usize,
+    /// (master DOF, coefficient).
+    pub masters: Vec<(usize, f64)>,
+    /// Constant part at λ = 1 (scaled by λ like a prescribed value).
+    pub offset: f64,
 }
 
 impl Constraints {
@@ -26,6 +41,81 @@ impl Constraints {
             prescribed: BTreeMap::new(),
             loads: vec![0.0; n],
             dead: vec![0.0; n],
+            ties: Vec::new(),
+        }
+    }
+
+    /// Ties DOF `slave` to `masters`: u_slave = Σ c·u_master + λ·`offset`. Errors: a DOF out
+    /// of range, a non-finite coefficient, the slave among its masters, a slave that is already
+    /// a slave or prescribed, or a chain (a master that is a slave, or a slave that is a master
+    /// of an earlier tie).
+    pub fn tie(
+        &mut self,
+        slave: usize,
+        masters: &[(usize, f64)],
+        offset: f64,
+    ) -> Result<(), AssemblyError> {
+        let bad = |reason: String| AssemblyError::Tie { slave, reason };
+        if slave >= self.n || !offset.is_finite() {
+            return Err(bad(format!(
+                "slave out of range ({} DOFs) or offset {offset}",
+                self.n
+            )));
+        }
+        if masters.is_empty() {
+            return Err(bad("no masters".into()));
+        }
+        for &(m, c) in masters {
+            if m >= self.n || !c.is_finite() {
+                return Err(bad(format!("master {m} out of range or coefficient {c}")));
+            }
+            if m == slave {
+                return Err(bad("the slave is among its own masters".into()));
+            }
+            if masters.iter().filter(|x| x.0 == m).count() > 1 {
+                return Err(bad(format!("master {m} listed twice")));
+            }
+            if self.ties.iter().any(|t| t.slave == m) {
+                return Err(bad(format!(
+                    "master {m} is itself a slave (chains are not supported)"
+                )));
+            }
+        }
+        if self.prescribed.contains_key(&slave) {
+            return Err(bad("the slave is prescribed".into()));
+        }
+        if self
+            .ties
+            .iter()
+            .any(|t| t.slave == slave || t.masters.iter().any(|&(m, _)| m == slave))
+        {
+            return Err(bad("already a slave, or a master of another tie".into()));
+        }
+        self.ties.push(Tie {
+            slave,
+            masters: masters.to_vec(),
+            offset,
+        });
+        Ok(())
+    }
+
+    /// The ties, in the order given.
+    pub fn ties(&self) -> &[Tie] {
+        &self.ties
+    }
+
+    /// Makes an increment `du` consistent with the ties: du_slave = Σ c·du_master (the Newton
+    /// solve leaves slave entries at zero).
+    pub fn expand_increment(&self, du: &mut [f64]) {
+        for t in &self.ties {
+            let v: f64 = t
+                .masters
+                .iter()
+                .map(|&(m, c)| c * du.get(m).copied().unwrap_or(0.0))
+                .sum();
+            if let Some(x) = du.get_mut(t.slave) {
+                *x = v;
+            }
         }
     }
 
@@ -36,9 +126,9 @@ impl Constraints {
 
     /// Prescribes DOF `dof` to λ·`value` (0 = fixed). A later call overrides.
     pub fn prescribe(&mut self, dof: usize, value: f64) -> Result<(), AssemblyError> {
-        if dof >= self.n || !value.is_finite() {
+        if dof >= self.n || !value.is_finite() || self.ties.iter().any(|t| t.slave == dof) {
             return Err(AssemblyError::BadDof {
-                what: "prescribed DOF",
+                what: "prescribed DOF (or a tie's slave)",
                 dof,
                 n: self.n,
                 value,
@@ -109,11 +199,22 @@ impl Constraints {
         self.prescribed.iter().map(|(&d, &(b, v))| (d, b + v))
     }
 
-    /// Sets the constrained entries of `u` to their values at load factor λ.
+    /// Sets the constrained entries of `u` to their values at load factor λ: prescribed DOFs,
+    /// then tied slaves from their masters.
     pub fn apply(&self, u: &mut [f64], lambda: f64) {
         for (&d, &(b, v)) in &self.prescribed {
             if let Some(x) = u.get_mut(d) {
                 *x = b + lambda * v;
+            }
+        }
+        for t in &self.ties {
+            let v: f64 = t
+                .masters
+                .iter()
+                .map(|&(m, c)| c * u.get(m).copied().unwrap_or(0.0))
+                .sum();
+            if let Some(x) = u.get_mut(t.slave) {
+                *x = v + lambda * t.offset;
             }
         }
     }

@@ -38,6 +38,14 @@ pub enum AssemblyError {
         /// Number of materials.
         count: usize,
     },
+    /// A tie that cannot be imposed: names the slave DOF and why.
+    #[error("tie of DOF {slave}: {reason}")]
+    Tie {
+        /// The slave DOF.
+        slave: usize,
+        /// Why.
+        reason: String,
+    },
     /// A vector of the wrong length.
     #[error("{what}: expected length {expected}, got {got}")]
     Length {

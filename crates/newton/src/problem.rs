@@ -13,6 +13,9 @@ pub trait NonlinearProblem {
     fn pattern(&self) -> Arc<SymmetricPattern>;
     /// Sets the prescribed entries of `u` for load factor λ (their increments are then zero).
     fn prescribe(&self, u: &mut [f64], lambda: f64);
+    /// Completes a Newton increment `du` for DOFs the solve left at zero but that depend on
+    /// others (tied slaves: du_s = Σ c·du_m). Default: nothing.
+    fn expand(&self, _du: &mut [f64]) {}
     /// Residual at (u, λ) into `r` (zero at prescribed entries) and, when given, the tangent
     /// (identity at prescribed entries). Returns a force scale for relative convergence tests
     /// (the largest external or reaction force).
@@ -37,12 +40,17 @@ pub struct StructuralProblem {
 
 impl StructuralProblem {
     /// A problem from an assembler and constraints of the same size.
-    pub fn new(assembler: Assembler, constraints: Constraints) -> Result<Self, NewtonError> {
+    /// With ties in `constraints`, the assembler's pattern is extended for them
+    /// ([`Assembler::tie`]); ties added later are refused at the first evaluation.
+    pub fn new(mut assembler: Assembler, constraints: Constraints) -> Result<Self, NewtonError> {
         if assembler.n() != constraints.n() {
             return Err(NewtonError::Setting {
                 name: "constraints",
                 reason: format!("{} DOFs for a model of {}", constraints.n(), assembler.n()),
             });
+        }
+        if !constraints.ties().is_empty() {
+            assembler.tie(&constraints)?;
         }
         let n = assembler.n();
         Ok(Self {
@@ -64,6 +72,10 @@ impl NonlinearProblem for StructuralProblem {
 
     fn prescribe(&self, u: &mut [f64], lambda: f64) {
         self.constraints.apply(u, lambda);
+    }
+
+    fn expand(&self, du: &mut [f64]) {
+        self.constraints.expand_increment(du);
     }
 
     fn evaluate(

@@ -158,6 +158,7 @@ pub fn solve_increment(
             report.termination = Termination::Singular(e.to_string());
             return Ok(report);
         }
+        problem.expand(&mut du);
         // The next iteration refactors: evaluate the tangent together with the residual.
         let need_k = (it + 1) % settings.refactor_every == 0;
         let mut alpha = 1.0;
