@@ -161,12 +161,7 @@ pub fn build_model(scene: &Scene) -> Result<Model, Error> {
     };
     let amp = scene.loads.imperfection_mm * mm;
     if amp != 0.0 {
-        let base = match &scene.geometry {
-            Geometry::Embedded { base_mm, .. }
-            | Geometry::Edge { base_mm, .. }
-            | Geometry::Plate { base_mm, .. }
-            | Geometry::ThroughWidth { base_mm, .. } => base_mm * mm,
-        };
+        let base = scene.geometry.base_mm() * mm;
         let shape = match &scene.geometry {
             Geometry::Embedded { a_mm, b_mm, .. } | Geometry::Edge { a_mm, b_mm, .. } => {
                 Imperfection::Cosine {

@@ -115,6 +115,70 @@ pub enum Geometry {
     },
 }
 
+impl Geometry {
+    /// The named lengths of the geometry (mm), as written in the scene.
+    pub fn lengths_mm(&self) -> Vec<(&'static str, f64)> {
+        match *self {
+            Self::Embedded {
+                a_mm,
+                b_mm,
+                h_mm,
+                base_mm,
+                w_mm,
+                ..
+            }
+            | Self::Edge {
+                a_mm,
+                b_mm,
+                h_mm,
+                base_mm,
+                w_mm,
+                ..
+            } => vec![
+                ("a_mm", a_mm),
+                ("b_mm", b_mm),
+                ("h_mm", h_mm),
+                ("base_mm", base_mm),
+                ("w_mm", w_mm),
+            ],
+            Self::ThroughWidth {
+                a_mm,
+                length_mm,
+                width_mm,
+                h_mm,
+                base_mm,
+            } => vec![
+                ("a_mm", a_mm),
+                ("length_mm", length_mm),
+                ("width_mm", width_mm),
+                ("h_mm", h_mm),
+                ("base_mm", base_mm),
+            ],
+            Self::Plate {
+                a_mm,
+                h_mm,
+                base_mm,
+                w_mm,
+            } => vec![
+                ("a_mm", a_mm),
+                ("h_mm", h_mm),
+                ("base_mm", base_mm),
+                ("w_mm", w_mm),
+            ],
+        }
+    }
+
+    /// The base laminate thickness H, mm.
+    pub fn base_mm(&self) -> f64 {
+        match *self {
+            Self::Embedded { base_mm, .. }
+            | Self::Edge { base_mm, .. }
+            | Self::ThroughWidth { base_mm, .. }
+            | Self::Plate { base_mm, .. } => base_mm,
+        }
+    }
+}
+
 /// Homogenisation of the material into one effective solid.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "kebab-case")]
@@ -462,74 +526,15 @@ impl Scene {
                 Err(Error::Scene(format!("{name} = {v}: must be positive")))
             }
         };
-        match &self.geometry {
-            Geometry::Embedded {
-                a_mm,
-                b_mm,
-                h_mm,
-                base_mm,
-                w_mm,
-                ..
+        for (name, v) in self.geometry.lengths_mm() {
+            positive(&format!("geometry.{name}"), v)?;
+        }
+        if matches!(self.geometry, Geometry::Plate { .. }) {
+            if self.loads.transverse_n.is_empty() {
+                return bad("loads.transverse_n: at least one load for a plate".into());
             }
-            | Geometry::Edge {
-                a_mm,
-                b_mm,
-                h_mm,
-                base_mm,
-                w_mm,
-                ..
-            } => {
-                for (n, v) in [
-                    ("geometry.a_mm", *a_mm),
-                    ("geometry.b_mm", *b_mm),
-                    ("geometry.h_mm", *h_mm),
-                    ("geometry.base_mm", *base_mm),
-                    ("geometry.w_mm", *w_mm),
-                ] {
-                    positive(n, v)?;
-                }
-                if self.loads.strains.is_empty() {
-                    return bad("loads.strains: at least one strain level".into());
-                }
-            }
-            Geometry::ThroughWidth {
-                a_mm,
-                length_mm,
-                width_mm,
-                h_mm,
-                base_mm,
-            } => {
-                for (n, v) in [
-                    ("geometry.a_mm", *a_mm),
-                    ("geometry.length_mm", *length_mm),
-                    ("geometry.width_mm", *width_mm),
-                    ("geometry.h_mm", *h_mm),
-                    ("geometry.base_mm", *base_mm),
-                ] {
-                    positive(n, v)?;
-                }
-                if self.loads.strains.is_empty() {
-                    return bad("loads.strains: at least one strain level".into());
-                }
-            }
-            Geometry::Plate {
-                a_mm,
-                h_mm,
-                base_mm,
-                w_mm,
-            } => {
-                for (n, v) in [
-                    ("geometry.a_mm", *a_mm),
-                    ("geometry.h_mm", *h_mm),
-                    ("geometry.base_mm", *base_mm),
-                    ("geometry.w_mm", *w_mm),
-                ] {
-                    positive(n, v)?;
-                }
-                if self.loads.transverse_n.is_empty() {
-                    return bad("loads.transverse_n: at least one load for a plate".into());
-                }
-            }
+        } else if self.loads.strains.is_empty() {
+            return bad("loads.strains: at least one strain level".into());
         }
         for (k, e) in self.loads.strains.iter().enumerate() {
             if !e.is_finite() || *e == 0.0 {

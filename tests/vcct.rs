@@ -97,6 +97,30 @@ fn line_load(mesh: &Mesh, line: &[usize], width: f64, dir: usize, p: f64) -> Vec
         .collect()
 }
 
+/// A DCB from `p` (arms of thickness h = p.h, width b = p.width): opening line loads ±`load`
+/// at the arms' mid-planes on x = 0, the uncracked end x = L clamped, plane strain. Returns the
+/// mesh, front, assembler and linear solution.
+fn solve_dcb(p: &ThroughWidthParams, load: f64) -> (Mesh, Front, Assembler, Vec<f64>) {
+    let (h, b) = (p.h, p.width);
+    let (mesh, front) = through_width_delamination(p).unwrap();
+    let top = nodes_at(&mesh, "x0", 2, 1.5 * h);
+    let bottom = nodes_at(&mesh, "x0", 2, 0.5 * h);
+    let mut loads = line_load(&mesh, &top, b, 2, load);
+    loads.extend(line_load(&mesh, &bottom, b, 2, -load));
+    let (asm, u) = solve_linear(
+        &mesh,
+        |c| {
+            for r in 0..3 {
+                c.fix_nodes(&mesh.node_sets["x1"], r).unwrap();
+            }
+            c.fix_nodes(&mesh.node_sets["y0"], 1).unwrap();
+            c.fix_nodes(&mesh.node_sets["y1"], 1).unwrap();
+        },
+        &loads,
+    );
+    (mesh, front, asm, u)
+}
+
 fn beam(
     a: f64,
     length: f64,
@@ -140,24 +164,8 @@ fn spread(r: &[FrontRelease], g: impl Fn(&FrontRelease) -> f64) -> f64 {
 #[test]
 fn dcb_mode_i_matches_corrected_beam_theory() {
     let (a, h, b) = (20e-3, 1e-3, 1e-3);
-    let p = beam(a, 40e-3, h, 24, 16, 0.3);
-    let (mesh, front) = through_width_delamination(&p).unwrap();
     let load = 1.0; // N over the width
-    let top = nodes_at(&mesh, "x0", 2, 1.5 * h);
-    let bottom = nodes_at(&mesh, "x0", 2, 0.5 * h);
-    let mut loads = line_load(&mesh, &top, b, 2, load);
-    loads.extend(line_load(&mesh, &bottom, b, 2, -load));
-    let (asm, u) = solve_linear(
-        &mesh,
-        |c| {
-            for r in 0..3 {
-                c.fix_nodes(&mesh.node_sets["x1"], r).unwrap();
-            }
-            c.fix_nodes(&mesh.node_sets["y0"], 1).unwrap();
-            c.fix_nodes(&mesh.node_sets["y1"], 1).unwrap();
-        },
-        &loads,
-    );
+    let (mesh, front, asm, u) = solve_dcb(&beam(a, 40e-3, h, 24, 16, 0.3), load);
     let r = rates(&mesh, &front, &asm, &u);
     let g_beam =
         |chi: f64| 12.0 * load * load * (a + chi * h).powi(2) / (b * b * e_plane() * h.powi(3));
@@ -266,22 +274,7 @@ fn vcct_matches_the_energy_of_two_solutions() {
             kind,
             ..beam(a, 40e-3, h, cells_inside, 80 - cells_inside, 1.0)
         };
-        let (mesh, front) = through_width_delamination(&p).unwrap();
-        let top = nodes_at(&mesh, "x0", 2, 1.5 * h);
-        let bottom = nodes_at(&mesh, "x0", 2, 0.5 * h);
-        let mut loads = line_load(&mesh, &top, b, 2, load);
-        loads.extend(line_load(&mesh, &bottom, b, 2, -load));
-        let (asm, u) = solve_linear(
-            &mesh,
-            |c| {
-                for r in 0..3 {
-                    c.fix_nodes(&mesh.node_sets["x1"], r).unwrap();
-                }
-                c.fix_nodes(&mesh.node_sets["y0"], 1).unwrap();
-                c.fix_nodes(&mesh.node_sets["y1"], 1).unwrap();
-            },
-            &loads,
-        );
+        let (mesh, front, asm, u) = solve_dcb(&p, load);
         let energy = asm.assemble(&u, None).unwrap().energy;
         let r = rates(&mesh, &front, &asm, &u);
         (energy, closure_energy(&r) / (dx * b), r)
