@@ -1,93 +1,74 @@
-//! Parallel, deterministic assembly of internal forces and tangents over the cells of a mesh.
+//! Parallel, deterministic assembly of internal forces and tangents over the cells of a mesh
+//! (thesis §2.2–2.3: f_int = Σ_cells ∫ Bᵀ S dV, K = Σ_cells (K_L + K_NL)), owner-computes: see
+//! `scatter.rs` for the layout and the split among threads.
 
+use crate::scatter::{Shared, Sweep, add_cell_tangent, block_offsets, check_node_blocked};
 use crate::{AssemblyError, Constraints};
 use nonlin3d_element::{
     BatchInput, ElementError, ElementKind, ElementOutput, IntegrationRule, Kinematics, ShapeTable,
-    Workspace, evaluate, evaluate_batch_with,
+    Workspace, evaluate, evaluate_listed_with,
 };
 use nonlin3d_laminate::{ShearCoupling, Stiffness};
 use nonlin3d_mesh::Mesh;
-use nonlin3d_solver::{SymmetricMatrix, SymmetricPattern};
+use nonlin3d_solver::{SymmetricMatrix, SymmetricPattern, reverse_cuthill_mckee};
+use rayon::prelude::*;
 use std::collections::HashMap;
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 
-/// Cells of one element kind and one colour: no two share a node, so their contributions can
-/// be added to the global arrays concurrently.
+/// The cells of one element kind, in sweep order (by highest node rank, then lowest), with what the
+/// kernel and the scatter need of each.
 struct Group {
     table: ShapeTable,
+    /// Mesh cell of each member.
     cells: Vec<usize>,
+    /// Node coordinates, `table.nodes()` per member.
     coords: Vec<[f64; 3]>,
+    /// Stiffness index of each member.
     material_of: Vec<usize>,
+    /// Nodes, `table.nodes()` per member.
+    nodes: Vec<usize>,
+    /// (lowest, highest) node rank of each member.
+    span: Vec<(usize, usize)>,
+    /// Node-pair offsets into the pattern, `table.nodes()²` per member.
+    offsets: Vec<u32>,
 }
 
-/// Greedy colouring of `cells` (in order) so that no two cells of one colour share a node.
-fn colour(mesh: &Mesh, cells: &[usize]) -> Vec<Vec<usize>> {
-    let mut used: Vec<Vec<usize>> = vec![Vec::new(); mesh.nodes.len()];
-    let mut colours: Vec<Vec<usize>> = Vec::new();
-    for &c in cells {
-        let nodes = &mesh.cells[c].nodes;
-        // The smallest colour none of its nodes has; colours.len() is always free, since every
-        // colour recorded at a node is an existing one.
-        let k = (0..colours.len())
-            .find(|k| nodes.iter().all(|&n| !used[n].contains(k)))
-            .unwrap_or(colours.len());
-        for &n in nodes {
-            used[n].push(k);
-        }
-        if k == colours.len() {
-            colours.push(Vec::new());
-        }
-        colours[k].push(c);
+impl Group {
+    fn nodes_of(&self, i: usize) -> &[usize] {
+        let nn = self.table.nodes();
+        &self.nodes[i * nn..(i + 1) * nn]
     }
-    colours
 }
 
-/// Shared write access to the global force vector and tangent values for the cells of one
-/// colour: they touch disjoint entries, so concurrent adds never alias.
-struct Disjoint {
-    forces: *mut f64,
-    forces_len: usize,
-    values: *mut f64,
-    values_len: usize,
-}
+/// (group, position in the group, strain energy) of a cell, from the part that owns it.
+type OwnedEnergy = (usize, usize, f64);
 
-// SAFETY: `Disjoint` is only used inside `Assembler::assemble` while the cells of a single
-// colour are evaluated; the colouring guarantees that no two of them share a node, hence no
-// two write the same force entry or (through their scatter maps, which address entries (i, j)
-// of their own DOFs only) the same tangent value. Each entry is therefore written by at most
-// one thread, and the pointers outlive the parallel section (they borrow `internal` and `k`,
-// which stay alive and unaliased until it ends).
-unsafe impl Sync for Disjoint {}
-
-impl Disjoint {
-    /// Adds `v` to force entry `i`.
-    fn add_force(&self, i: usize, v: f64) {
-        assert!(i < self.forces_len);
-        // SAFETY: in bounds (checked); exclusive per the type's invariant.
-        unsafe { *self.forces.add(i) += v };
-    }
-
-    /// Adds `v` to tangent value `p`.
-    fn add_value(&self, p: usize, v: f64) {
-        assert!(p < self.values_len);
-        // SAFETY: in bounds (checked); exclusive per the type's invariant.
-        unsafe { *self.values.add(p) += v };
-    }
+/// Positions of the tangent entries in the rows and columns of the constrained DOFs (with
+/// whether each is on the diagonal), for the set of constrained DOFs they were found for.
+#[derive(Default)]
+struct FixedMask {
+    dofs: Vec<usize>,
+    positions: Vec<(usize, bool)>,
 }
 
 /// Everything needed to assemble a mesh again and again: shape tables, per-cell stiffness
-/// (rotated to each cell's ply angle once), DOF lists, the sparsity pattern and each cell's
-/// scatter map into it.
+/// (rotated to each cell's ply angle once), DOF lists, the node-blocked sparsity pattern and
+/// each cell's node-pair offsets into it.
 pub struct Assembler {
     n: usize,
     groups: Vec<Group>,
     stiffness: Vec<Stiffness>,
     dofs: Vec<Vec<usize>>,
-    maps: Vec<Vec<Option<usize>>>,
     pattern: Arc<SymmetricPattern>,
     kinematics: Kinematics,
     /// (group, position in the group) of each cell.
     place: Vec<(usize, usize)>,
+    /// Sweep rank of each node (reverse Cuthill–McKee on the node graph) and the node of each
+    /// rank.
+    rank: Vec<usize>,
+    order: Vec<usize>,
+    sweep: Sweep,
+    mask: Mutex<FixedMask>,
 }
 
 /// One assembly: internal forces, strain energy, and the tangent if it was asked for.
@@ -175,32 +156,49 @@ impl Assembler {
             };
             cell_stiffness.push(id);
         }
+        // Ranks for the sweep: a banded order of the node graph, whatever the mesh numbering.
+        let node_lists: Vec<&[usize]> = mesh.cells.iter().map(|c| &c.nodes[..]).collect();
+        let graph = SymmetricPattern::from_dof_lists(mesh.nodes.len(), &node_lists)?;
+        let rcm = reverse_cuthill_mckee(&graph);
+        let (order, rank) = (rcm.forward().to_vec(), rcm.inverse().to_vec());
+        let span_of = |c: usize| {
+            let nodes = &mesh.cells[c].nodes;
+            let lo = nodes.iter().map(|&v| rank[v]).min().unwrap_or(0);
+            let hi = nodes.iter().map(|&v| rank[v]).max().unwrap_or(0);
+            (lo, hi)
+        };
         let mut groups = Vec::new();
         for (kind, rule) in [
             (ElementKind::Hex20, hex20_rule),
             (ElementKind::Hex8, hex8_rule),
         ] {
-            let cells: Vec<usize> = (0..mesh.cells.len())
+            let mut cells: Vec<usize> = (0..mesh.cells.len())
                 .filter(|&c| mesh.cells[c].kind == kind)
                 .collect();
             if cells.is_empty() {
                 continue;
             }
-            let table = ShapeTable::new(kind, rule)?;
-            // One group per colour: the parallel scatter in `assemble` relies on it.
-            for cells in colour(mesh, &cells) {
-                let coords = cells
+            // Sweep order, by highest rank: consecutive cells share columns, which stay in cache,
+            // and columns are zeroed just before their first cell (`assemble`).
+            cells.sort_by_key(|&c| {
+                let (lo, hi) = span_of(c);
+                (hi, lo, c)
+            });
+            groups.push(Group {
+                table: ShapeTable::new(kind, rule)?,
+                coords: cells
                     .iter()
                     .flat_map(|&c| mesh.cell_coordinates(c))
-                    .collect();
-                let material_of = cells.iter().map(|&c| cell_stiffness[c]).collect();
-                groups.push(Group {
-                    table: table.clone(),
-                    cells,
-                    coords,
-                    material_of,
-                });
-            }
+                    .collect(),
+                material_of: cells.iter().map(|&c| cell_stiffness[c]).collect(),
+                nodes: cells
+                    .iter()
+                    .flat_map(|&c| mesh.cells[c].nodes.iter().copied())
+                    .collect(),
+                span: cells.iter().map(|&c| span_of(c)).collect(),
+                cells,
+                offsets: Vec::new(),
+            });
         }
         let mut place = vec![(0, 0); mesh.cells.len()];
         for (gi, g) in groups.iter().enumerate() {
@@ -208,22 +206,44 @@ impl Assembler {
                 place[c] = (gi, i);
             }
         }
+        let sweep = Sweep::new(
+            mesh.nodes.len(),
+            groups.iter().flat_map(|g| g.span.iter().copied()),
+        );
         let dofs = mesh.cell_dofs();
         let pattern = Arc::new(SymmetricPattern::from_dof_lists(n, &dofs)?);
-        let maps = dofs
-            .iter()
-            .map(|d| pattern.scatter_map(d))
-            .collect::<Result<Vec<_>, _>>()?;
-        Ok(Self {
+        let mut assembler = Self {
             n,
             groups,
             stiffness,
             dofs,
-            maps,
-            pattern,
+            pattern: pattern.clone(),
             kinematics,
             place,
-        })
+            rank,
+            order,
+            sweep,
+            mask: Mutex::new(FixedMask::default()),
+        };
+        assembler.set_pattern(pattern)?;
+        Ok(assembler)
+    }
+
+    /// Adopts `pattern` (node-blocked, checked) and recomputes every cell's offsets into it.
+    fn set_pattern(&mut self, pattern: Arc<SymmetricPattern>) -> Result<(), AssemblyError> {
+        check_node_blocked(&pattern, self.n / 3)?;
+        for g in &mut self.groups {
+            let nn = g.table.nodes();
+            let offsets: Result<Vec<Vec<u32>>, AssemblyError> = g
+                .nodes
+                .par_chunks(nn)
+                .map(|nodes| block_offsets(&pattern, nodes))
+                .collect();
+            g.offsets = offsets?.concat();
+        }
+        self.pattern = pattern;
+        *self.mask.lock().unwrap_or_else(|e| e.into_inner()) = FixedMask::default();
+        Ok(())
     }
 
     /// Internal forces of the listed cells alone, f = Σ_cells ∫ Bᵀ S dV, node-major over the
@@ -278,7 +298,8 @@ impl Assembler {
     }
 
     /// Rebuilds the sparsity pattern for the ties of `constraints`: a cell that holds a slave
-    /// DOF couples its DOFs with the slave's masters too, the entries K′ = TᵀKT needs when
+    /// DOF couples its nodes with the slave's master nodes too (all three DOFs of each, so the
+    /// pattern stays node-blocked), the entries K′ = TᵀKT needs when
     /// [`residual`](Self::residual) folds the slave onto them. Tangents made before this call
     /// no longer fit ([`new_tangent`](Self::new_tangent) again).
     pub fn tie(&mut self, constraints: &Constraints) -> Result<(), AssemblyError> {
@@ -287,7 +308,15 @@ impl Assembler {
             .iter()
             .map(|t| (t.slave, t.masters.iter().map(|m| m.0).collect()))
             .collect();
-        let lists: Vec<Vec<usize>> = self
+        let whole_nodes = |mut l: Vec<usize>| {
+            let mut nodes: Vec<usize> = l.iter().map(|d| d / 3).collect();
+            nodes.sort_unstable();
+            nodes.dedup();
+            l.clear();
+            l.extend(nodes.iter().flat_map(|&v| [3 * v, 3 * v + 1, 3 * v + 2]));
+            l
+        };
+        let mut all: Vec<Vec<usize>> = self
             .dofs
             .iter()
             .map(|d| {
@@ -297,28 +326,17 @@ impl Assembler {
                         l.extend(m);
                     }
                 }
-                l.sort_unstable();
-                l.dedup();
-                l
+                whole_nodes(l)
             })
             .collect();
         // Ties whose slave no cell holds still need their masters coupled to each other.
-        let mut all = lists;
         all.extend(constraints.ties().iter().map(|t| {
             let mut l: Vec<usize> = t.masters.iter().map(|m| m.0).collect();
             l.push(t.slave);
-            l.sort_unstable();
-            l.dedup();
-            l
+            whole_nodes(l)
         }));
         let pattern = Arc::new(SymmetricPattern::from_dof_lists(self.n, &all)?);
-        self.maps = self
-            .dofs
-            .iter()
-            .map(|d| pattern.scatter_map(d))
-            .collect::<Result<Vec<_>, _>>()?;
-        self.pattern = pattern;
-        Ok(())
+        self.set_pattern(pattern)
     }
 
     /// Number of DOFs.
@@ -336,9 +354,14 @@ impl Assembler {
         SymmetricMatrix::zeros(self.pattern.clone())
     }
 
-    /// Internal forces (and energy) at displacements `u`; the tangent into `tangent` (zeroed
-    /// first) when given. Elements run in parallel on the current rayon pool; the scatter runs
-    /// in cell order, so results do not depend on the thread count.
+    /// Internal forces (and energy) at displacements `u`; the tangent into `tangent` (made by
+    /// [`new_tangent`](Self::new_tangent); every value is overwritten) when given.
+    ///
+    /// Owner-computes on the current rayon pool: thread t adds the columns and forces of the
+    /// nodes in its part of the node range, evaluating each cell that has a node there, in the
+    /// sweep order; every entry receives its contributions in that order, so the results are
+    /// bitwise the same on any number of threads. Columns are zeroed just before the first cell
+    /// reaches them, while they go into cache anyway.
     pub fn assemble(
         &self,
         u: &[f64],
@@ -351,71 +374,144 @@ impl Assembler {
                 got: u.len(),
             });
         }
-        let mut internal = vec![0.0; self.n];
-        let mut energy = 0.0;
-        let mut k = tangent;
-        if let Some(k) = k.as_deref_mut() {
-            k.set_zero();
-        }
-        // Colour after colour; within a colour, cells in parallel writing straight into the
-        // global arrays (no two share an entry). Every entry receives its contributions in
-        // colour order, one per colour at most: the result does not depend on the threads.
-        let (values_ptr, values_len) = match k.as_deref_mut() {
+        let want_k = tangent.is_some();
+        let col_ptr = self.pattern.col_ptr();
+        let values: &mut [f64] = match tangent {
             Some(k) => {
-                let v = k.values_mut();
-                (v.as_mut_ptr(), v.len())
+                if !Arc::ptr_eq(k.pattern(), &self.pattern) && **k.pattern() != *self.pattern {
+                    return Err(AssemblyError::Length {
+                        what: "tangent entries (make it with Assembler::new_tangent)",
+                        expected: self.pattern.nnz_lower(),
+                        got: k.pattern().nnz_lower(),
+                    });
+                }
+                k.values_mut()
             }
-            None => (std::ptr::null_mut(), 0),
+            None => &mut [],
         };
-        let want_k = k.is_some();
-        let writer = Disjoint {
-            forces: internal.as_mut_ptr(),
-            forces_len: internal.len(),
-            values: values_ptr,
-            values_len,
-        };
-        for g in &self.groups {
-            let nd = g.table.dofs();
-            let disp: Vec<[f64; 3]> = g
-                .cells
-                .iter()
-                .flat_map(|&c| {
-                    self.dofs[c]
-                        .chunks_exact(3)
-                        .map(|d| [u[d[0]], u[d[1]], u[d[2]]])
-                })
-                .collect();
-            let input = BatchInput {
-                coords: &g.coords,
-                disp: &disp,
-                materials: &self.stiffness,
-                material_of: &g.material_of,
-            };
-            let energies = evaluate_batch_with(
-                &g.table,
-                &input,
-                self.kinematics,
-                want_k,
-                || 0.0,
-                |e_sum, i, out| {
-                    let c = g.cells[i];
-                    for (a, &d) in self.dofs[c].iter().enumerate() {
-                        writer.add_force(d, out.forces[a]);
-                    }
-                    if want_k {
-                        for (p, v) in self.maps[c].iter().zip(&out.tangent[..nd * nd]) {
-                            if let Some(p) = *p {
-                                writer.add_value(p, *v);
-                            }
+        // Each group's nodal displacements, cell after cell (the kernel's input layout).
+        let disp: Vec<Vec<[f64; 3]>> = self
+            .groups
+            .iter()
+            .map(|g| {
+                let mut d = vec![[0.0; 3]; g.nodes.len()];
+                d.par_chunks_mut(1024)
+                    .zip(g.nodes.par_chunks(1024))
+                    .for_each(|(d, nodes)| {
+                        for (d, &v) in d.iter_mut().zip(nodes) {
+                            *d = [u[3 * v], u[3 * v + 1], u[3 * v + 2]];
                         }
+                    });
+                d
+            })
+            .collect();
+        let mut internal = vec![0.0; self.n];
+        let splits = self.sweep.splits(rayon::current_num_threads());
+        let (forces, values) = (Shared::new(&mut internal), Shared::new(values));
+        let rank = &self.rank;
+        // Tangent columns of the node ranked r.
+        let columns = |r: usize| {
+            let v = self.order[r];
+            col_ptr[3 * v]..col_ptr[3 * v + 3]
+        };
+        let owned: Vec<Result<Vec<OwnedEnergy>, AssemblyError>> = splits
+            .par_windows(2)
+            .map(|w| {
+                let (lo, hi) = (w[0], w[1]);
+                let mut energies = Vec::new();
+                // Columns of the nodes ranked lo..zeroed have been zeroed.
+                let mut zeroed = lo;
+                for (gi, g) in self.groups.iter().enumerate() {
+                    let list: Vec<usize> = (0..g.cells.len())
+                        .filter(|&i| g.span[i].0 < hi && g.span[i].1 >= lo)
+                        .collect();
+                    let input = BatchInput {
+                        coords: &g.coords,
+                        disp: &disp[gi],
+                        materials: &self.stiffness,
+                        material_of: &g.material_of,
+                    };
+                    let nn = g.table.nodes();
+                    let offsets = |i: usize| &g.offsets[i * nn * nn..(i + 1) * nn * nn];
+                    evaluate_listed_with(
+                        &g.table,
+                        &input,
+                        self.kinematics,
+                        want_k,
+                        &list,
+                        |i, out| {
+                            let nodes = g.nodes_of(i);
+                            for (a, &v) in nodes.iter().enumerate() {
+                                if rank[v] >= lo && rank[v] < hi {
+                                    forces.add3(3 * v, &out.forces[3 * a..]);
+                                }
+                            }
+                            if want_k {
+                                let top = g.span[i].1.min(hi - 1);
+                                while zeroed <= top {
+                                    values.zero(columns(zeroed));
+                                    zeroed += 1;
+                                }
+                                add_cell_tangent(
+                                    nodes,
+                                    offsets(i),
+                                    &out.tangent,
+                                    col_ptr,
+                                    rank,
+                                    (lo, hi),
+                                    &values,
+                                );
+                            }
+                            if g.span[i].0 >= lo {
+                                energies.push((gi, i, out.energy));
+                            }
+                        },
+                    )
+                    .map_err(|e| relocate(e, &g.cells))?;
+                }
+                if want_k {
+                    for r in zeroed..hi {
+                        values.zero(columns(r));
                     }
-                    *e_sum += out.energy;
-                },
-            )
-            .map_err(|e| relocate(e, &g.cells))?;
-            energy += energies.iter().sum::<f64>();
+                }
+                Ok(energies)
+            })
+            .collect();
+        // Energies cell by cell in sweep order: independent of the split.
+        let mut per_cell: Vec<Vec<f64>> = self
+            .groups
+            .iter()
+            .map(|g| vec![0.0; g.cells.len()])
+            .collect();
+        for part in owned {
+            for (gi, i, e) in part? {
+                per_cell[gi][i] = e;
+            }
         }
+        let energy = per_cell.iter().flatten().sum();
         Ok(Assembly { internal, energy })
+    }
+
+    /// The tangent positions in the rows and columns of the (sorted) DOFs `fixed`: one pass
+    /// over the pattern, done again only when the set of constrained DOFs changes.
+    fn fixed_mask(&self, fixed: Vec<usize>) -> FixedMask {
+        let mut is_fixed = vec![false; self.n];
+        for &d in &fixed {
+            is_fixed[d] = true;
+        }
+        let (cp, ri) = (self.pattern.col_ptr(), self.pattern.row_idx());
+        let mut positions = Vec::new();
+        for j in 0..self.n {
+            for (p, &i) in ri.iter().enumerate().take(cp[j + 1]).skip(cp[j]) {
+                if is_fixed[i] || is_fixed[j] {
+                    positions.push((p, i == j));
+                }
+            }
+        }
+        FixedMask {
+            dofs: fixed,
+            positions,
+        }
     }
 
     /// The residual r = f_int − f_ext(λ) with zeros at constrained DOFs, the reactions
@@ -444,25 +540,21 @@ impl Assembler {
         if !constraints.ties().is_empty() {
             fold_ties(constraints, &mut r, &mut reactions, k.as_deref_mut())?;
         }
-        let mut fixed = vec![false; self.n];
-        for (d, _) in constraints.prescribed() {
-            fixed[d] = true;
+        let mut fixed: Vec<usize> = constraints.prescribed().map(|(d, _)| d).collect();
+        fixed.sort_unstable();
+        fixed.dedup();
+        for &d in &fixed {
             reactions[d] = r[d];
             r[d] = 0.0;
         }
         if let Some(k) = k {
-            let (cp, ri) = (
-                self.pattern.col_ptr().to_vec(),
-                self.pattern.row_idx().to_vec(),
-            );
+            let mut mask = self.mask.lock().unwrap_or_else(|e| e.into_inner());
+            if mask.dofs != fixed {
+                *mask = self.fixed_mask(fixed);
+            }
             let vals = k.values_mut();
-            for j in 0..self.n {
-                for p in cp[j]..cp[j + 1] {
-                    let i = ri[p];
-                    if fixed[i] || fixed[j] {
-                        vals[p] = if i == j { 1.0 } else { 0.0 };
-                    }
-                }
+            for &(p, diagonal) in &mask.positions {
+                vals[p] = if diagonal { 1.0 } else { 0.0 };
             }
         }
         Ok((r, reactions, a.energy))
@@ -552,49 +644,98 @@ mod tests {
     use super::*;
     use nonlin3d_mesh::{BoxParams, EmbeddedParams, embedded_delamination, structured_box};
 
-    /// The invariant the parallel scatter relies on: within a colour no two cells share a node,
-    /// and every cell is in exactly one colour.
+    /// The owner-computes assembly equals the plain element-by-element sum (each cell's
+    /// `evaluate` added through `SymmetricMatrix::scatter_add`, an independent path) to
+    /// summation-order rounding (1e-12 of the largest entry), and is bitwise the same on 1 to 4
+    /// threads (each split puts straddling cells on both sides), on a swept model with two
+    /// materials and ply angles.
     #[test]
-    fn colours_never_share_a_node() {
-        let meshes = [
-            structured_box(&BoxParams::new(
-                ElementKind::Hex20,
-                [5, 4, 3],
-                [1.0, 1.0, 1.0],
-            ))
-            .unwrap(),
-            structured_box(&BoxParams::new(
-                ElementKind::Hex8,
-                [7, 2, 2],
-                [1.0, 1.0, 1.0],
-            ))
-            .unwrap(),
-            embedded_delamination(&EmbeddedParams {
-                slices: 4,
-                ..EmbeddedParams::thesis_reference()
-            })
-            .unwrap(),
-        ];
-        for mesh in &meshes {
-            let all: Vec<usize> = (0..mesh.cells.len()).collect();
-            let colours = colour(mesh, &all);
-            let mut seen = vec![0usize; mesh.cells.len()];
-            for cells in &colours {
-                let mut owner = std::collections::HashMap::new();
-                for &c in cells {
-                    seen[c] += 1;
-                    for &n in &mesh.cells[c].nodes {
-                        assert!(
-                            owner.insert(n, c).is_none(),
-                            "node {n} in two cells of one colour"
-                        );
-                    }
-                }
-            }
-            assert!(seen.iter().all(|&k| k == 1));
-            // A structured Hex mesh needs 8 colours (2 per direction); the swept model a few more.
-            assert!(colours.len() <= 16, "{} colours", colours.len());
+    fn assembly_equals_the_plain_sum_on_any_thread_count() {
+        use nonlin3d_laminate::materials;
+        let mut mesh = embedded_delamination(&EmbeddedParams {
+            slices: 4,
+            ..EmbeddedParams::thesis_reference()
+        })
+        .unwrap();
+        for (c, cell) in mesh.cells.iter_mut().enumerate() {
+            cell.material = c % 2;
+            cell.ply_angle_deg = [0.0, 45.0, -45.0, 90.0][c % 4];
         }
+        let mats = [
+            materials::generic_graphite_epoxy().stiffness().unwrap(),
+            materials::steel().stiffness().unwrap(),
+        ];
+        let asm = Assembler::new(
+            &mesh,
+            &mats,
+            ShearCoupling::Exact,
+            IntegrationRule::Gauss2,
+            IntegrationRule::Gauss2,
+            Kinematics::Nonlinear,
+        )
+        .unwrap();
+        let u: Vec<f64> = (0..asm.n())
+            .map(|d| 1e-5 * ((d * 7919) % 23) as f64 / 23.0)
+            .collect();
+        let mut runs = Vec::new();
+        for threads in 1..=4 {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            let mut k = asm.new_tangent();
+            // Stale values must not survive.
+            k.values_mut().fill(7.0);
+            let a = pool.install(|| asm.assemble(&u, Some(&mut k))).unwrap();
+            runs.push((a, k));
+        }
+        for r in &runs[1..] {
+            assert!(r.0 == runs[0].0, "forces or energy depend on the threads");
+            assert!(r.1 == runs[0].1, "the tangent depends on the threads");
+        }
+        let mut reference = asm.new_tangent();
+        let mut f = vec![0.0; asm.n()];
+        let mut energy = 0.0;
+        for (c, dofs) in asm.dofs.iter().enumerate() {
+            let (gi, i) = asm.place[c];
+            let g = &asm.groups[gi];
+            let nn = g.table.nodes();
+            let disp: Vec<[f64; 3]> = dofs
+                .chunks(3)
+                .map(|d| [u[d[0]], u[d[1]], u[d[2]]])
+                .collect();
+            let mut out = ElementOutput::new(&g.table);
+            let mut ws = Workspace::new(&g.table);
+            evaluate(
+                &g.table,
+                &g.coords[i * nn..(i + 1) * nn],
+                &disp,
+                &asm.stiffness[g.material_of[i]],
+                Kinematics::Nonlinear,
+                true,
+                &mut ws,
+                &mut out,
+            )
+            .unwrap();
+            reference.scatter_add(dofs, &out.tangent).unwrap();
+            for (a, &d) in dofs.iter().enumerate() {
+                f[d] += out.forces[a];
+            }
+            energy += out.energy;
+        }
+        let (a, k) = &runs[0];
+        let kmax = reference
+            .values()
+            .iter()
+            .fold(0.0_f64, |m, v| m.max(v.abs()));
+        for (x, y) in k.values().iter().zip(reference.values()) {
+            assert!((x - y).abs() <= 1e-12 * kmax, "{x} vs {y}");
+        }
+        let fmax = f.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+        for (x, y) in a.internal.iter().zip(&f) {
+            assert!((x - y).abs() <= 1e-12 * fmax, "{x} vs {y}");
+        }
+        assert!((a.energy - energy).abs() <= 1e-12 * energy.abs());
     }
 
     /// The forces of all cells through `partial_internal` are the assembled internal forces,

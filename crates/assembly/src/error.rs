@@ -56,4 +56,13 @@ pub enum AssemblyError {
         /// Given.
         got: usize,
     },
+    /// The sparsity pattern is not node-blocked (three DOFs per node, every node coupled with
+    /// all three DOFs of its neighbours), which the scatter relies on.
+    #[error("pattern column {column}: {reason}")]
+    Pattern {
+        /// The column where it was found.
+        column: usize,
+        /// What is wrong.
+        reason: String,
+    },
 }

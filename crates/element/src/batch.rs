@@ -209,6 +209,41 @@ pub fn evaluate_batch(
     results.into_iter().collect()
 }
 
+/// Evaluates the `elements` listed (indices into the batch, in the order given) one after
+/// another on the calling thread, handing each output to `consume(element, output)` while it is
+/// in cache. The building block of an owner-computes assembly, where each thread runs its own
+/// list and scatters into its own part of the global arrays. The per-element arithmetic is that
+/// of [`evaluate`](crate::evaluate); the first failing element stops the run and is named.
+pub fn evaluate_listed_with<F>(
+    table: &ShapeTable,
+    input: &BatchInput<'_>,
+    kinematics: Kinematics,
+    tangent: bool,
+    elements: &[usize],
+    mut consume: F,
+) -> Result<(), ElementError>
+where
+    F: FnMut(usize, &ElementOutput),
+{
+    input.validate(table)?;
+    let n = input.material_of.len();
+    let nonlinear = kinematics == Kinematics::Nonlinear;
+    let mut ws = Workspace::new(table);
+    let mut one = ElementOutput::new(table);
+    for &e in elements {
+        if e >= n {
+            return Err(ElementError::LengthMismatch {
+                what: "listed element index (batch size)",
+                expected: n,
+                got: e,
+            });
+        }
+        input.run_element(table, e, nonlinear, tangent, &mut ws, one.view())?;
+        consume(e, &one);
+    }
+    Ok(())
+}
+
 /// Evaluates every element of the batch and hands each result to `consume` while it is still
 /// in cache, instead of storing all of them (a Hex20 tangent is 28.8 kB: storing a thousand
 /// of them makes the batch memory-bound). Elements are processed in chunks on the current

@@ -55,7 +55,9 @@ pub mod strategies;
 mod syrk;
 mod table;
 
-pub use batch::{BatchInput, BatchOutput, evaluate_batch, evaluate_batch_with};
+pub use batch::{
+    BatchInput, BatchOutput, evaluate_batch, evaluate_batch_with, evaluate_listed_with,
+};
 pub use eigen::{EigenReport, ZERO_MODE_THRESHOLD, eigen_analysis};
 pub use error::ElementError;
 pub use kernel::{

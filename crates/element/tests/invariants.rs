@@ -6,7 +6,7 @@ use nonlin3d_element::reference::evaluate_reference;
 use nonlin3d_element::strategies::{apply, displacements, distorted_element, material, rotation};
 use nonlin3d_element::{
     BatchInput, BatchOutput, ElementKind, ElementOutput, IntegrationRule, Kinematics, ShapeTable,
-    Workspace, evaluate, evaluate_batch, evaluate_batch_with,
+    Workspace, evaluate, evaluate_batch, evaluate_batch_with, evaluate_listed_with,
 };
 use nonlin3d_laminate::Stiffness;
 use proptest::prelude::*;
@@ -240,6 +240,21 @@ proptest! {
                 prop_assert_eq!(k73, outs[0].tangents[e * nd * nd + 7 * nd + 3]);
             }
         }
+        // The listed variant, in reverse order on the calling thread: the same bits per element;
+        // an index past the batch is refused.
+        let list: Vec<usize> = (0..elems.len()).rev().collect();
+        let mut seen = Vec::new();
+        evaluate_listed_with(&t, &input, Kinematics::Nonlinear, true, &list, |e, out| {
+            seen.push((e, out.energy, out.tangent[7 * nd + 3]));
+        }).unwrap();
+        prop_assert_eq!(seen.len(), elems.len());
+        for (i, &(e, energy, k73)) in seen.iter().enumerate() {
+            prop_assert_eq!(e, elems.len() - 1 - i);
+            prop_assert_eq!(energy, outs[0].energy[e]);
+            prop_assert_eq!(k73, outs[0].tangents[e * nd * nd + 7 * nd + 3]);
+        }
+        let past_the_end = evaluate_listed_with(&t, &input, Kinematics::Nonlinear, false, &[elems.len()], |_, _| ());
+        prop_assert!(past_the_end.is_err());
         for (e, (_, x, u, m)) in elems.iter().enumerate() {
             let one = run(&t, x, u, m, Kinematics::Nonlinear);
             prop_assert_eq!(&outs[0].forces[e * nd..(e + 1) * nd], &one.forces[..]);

@@ -4,7 +4,8 @@
 //! |---|---|
 //! | [`NonlinearProblem`] | residual r(u, λ) and tangent K(u) of any model |
 //! | [`StructuralProblem`] | the finite element model: [`Assembler`](nonlin3d_assembly::Assembler) + [`Constraints`](nonlin3d_assembly::Constraints) |
-//! | [`NewtonSettings`], [`solve_increment`] | one load level: full or modified Newton, line search, convergence records |
+//! | [`NewtonSettings`], [`solve_increment`] | one load level: full, modified or quasi-Newton (BFGS), line search, convergence records |
+//! | [`TangentCache`], [`solve_increment_with`] | a factorised tangent (and BFGS pairs) kept across increments |
 //! | [`Stepping`], [`follow_path`] | load stepping to a list of targets with cutback and regrowth |
 //! | [`perturbed_path`] | the thesis's perturbation load, converged with the first level and then removed (§3.2) |
 //! | [`IncrementReport`], [`Termination`] | what happened, iteration by iteration, with the inertia |
@@ -24,4 +25,7 @@ pub use path::{
     PathReport, Stepping, follow_path, follow_path_from, perturbed_path, perturbed_step,
 };
 pub use problem::{NonlinearProblem, StructuralProblem};
-pub use solve::{IncrementReport, IterationRecord, NewtonSettings, Termination, solve_increment};
+pub use solve::{
+    IncrementReport, IterationRecord, NewtonSettings, TangentCache, Termination, solve_increment,
+    solve_increment_with,
+};

@@ -1,6 +1,9 @@
 //! Load stepping to a list of load-factor targets with cutback and regrowth.
 
-use crate::{IncrementReport, NewtonError, NewtonSettings, NonlinearProblem, solve_increment};
+use crate::{
+    IncrementReport, NewtonError, NewtonSettings, NonlinearProblem, TangentCache, solve_increment,
+    solve_increment_with,
+};
 
 /// Increment control.
 #[derive(Debug, Clone, PartialEq)]
@@ -112,6 +115,9 @@ pub fn follow_path_from(
     let mut cutbacks = 0;
     // The previous converged state and its increment, for the secant predictor.
     let mut previous: Option<(Vec<f64>, f64)> = None;
+    // The factorised tangent (and BFGS pairs) carried between increments when
+    // `settings.keep_tangent`; a failed attempt clears it, so its retry starts afresh.
+    let mut cache = TangentCache::new();
     for &target in targets {
         while (target - lambda).abs() > 1e-12 * target.abs().max(1.0) {
             let dir = (target - lambda).signum();
@@ -123,13 +129,14 @@ pub fn follow_path_from(
                     *t = a + f * (a - b);
                 }
             }
-            let attempt = solve_increment(
+            let attempt = solve_increment_with(
                 problem,
                 &mut trial,
                 lambda + dir * delta,
                 settings,
                 solver.as_mut(),
                 &mut k,
+                &mut cache,
             )?;
             let converged = attempt.converged();
             let iterations = attempt.iterations.len();

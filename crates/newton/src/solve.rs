@@ -1,7 +1,10 @@
-//! One load level: Newton–Raphson iterations with line search (thesis §2.1, §4.4).
+//! One load level: Newton–Raphson iterations with line search (thesis §2.1, §4.4); full,
+//! modified (a tangent kept for several iterations or increments) and quasi-Newton (BFGS
+//! updates of a kept tangent, Matthies & Strang 1979).
 
 use crate::{NewtonError, NonlinearProblem};
 use nonlin3d_solver::{LinearSolver, SolverKind, SymmetricMatrix};
+use std::collections::VecDeque;
 
 /// Settings of the Newton iteration.
 #[derive(Debug, Clone, PartialEq)]
@@ -15,8 +18,22 @@ pub struct NewtonSettings {
     pub relative_tolerance: f64,
     /// Backtracking line search on the residual norm.
     pub line_search: bool,
-    /// Refactor the tangent every this many iterations: 1 = full Newton, more = modified Newton.
+    /// Refactor the tangent every this many iterations: 1 = full Newton, more = modified Newton
+    /// (the thesis's §2.1 option). With `keep_tangent` the count runs on across increments.
     pub refactor_every: usize,
+    /// Keep the factorised tangent from one increment to the next (modified Newton "for several
+    /// increments"): an increment then starts with a residual evaluation only. Only with
+    /// [`solve_increment_with`] and one [`TangentCache`] over the increments (as
+    /// [`follow_path`](crate::follow_path) does).
+    pub keep_tangent: bool,
+    /// With a tangent older than the current iteration: factor a new one when an iteration
+    /// reduced ‖r‖∞ by less than this ratio (‖r_new‖ > ratio·‖r_old‖). 1 or more = never.
+    pub refactor_ratio: f64,
+    /// Quasi-Newton: at most this many BFGS pairs (s = Δu, y = Δr) update the inverse of the
+    /// kept tangent, H = (I − ρ s yᵀ) H (I − ρ y sᵀ) + ρ s sᵀ, ρ = 1/(yᵀs), applied by the
+    /// two-loop recursion around the factorised tangent. 0 = plain (modified) Newton. Pairs
+    /// are dropped when the tangent is refactored; pairs with yᵀs ≤ 1e-10·‖y‖‖s‖ are skipped.
+    pub quasi_newton: usize,
     /// Linear solver.
     pub solver: SolverKind,
     /// Also require ‖Δu‖∞ ≤ displacement_tolerance·‖u‖∞ of the last step (0 = residual only).
@@ -31,6 +48,9 @@ impl Default for NewtonSettings {
             relative_tolerance: 1e-8,
             line_search: true,
             refactor_every: 1,
+            keep_tangent: false,
+            refactor_ratio: 0.5,
+            quasi_newton: 0,
             solver: SolverKind::FaerLdlt,
             displacement_tolerance: 0.0,
         }
@@ -46,8 +66,11 @@ pub struct IterationRecord {
     pub step: f64,
     /// ‖Δu‖∞ of the accepted step.
     pub increment: f64,
-    /// Negative pivots of the factorisation used (None when the previous one was reused).
+    /// Negative pivots of the factorisation made for this iteration (None when an older one
+    /// was used).
     pub negative_pivots: Option<usize>,
+    /// BFGS pairs applied to the direction (0 for plain Newton steps).
+    pub bfgs_pairs: usize,
 }
 
 /// How an attempt ended.
@@ -99,9 +122,82 @@ fn norm_inf(v: &[f64]) -> f64 {
     )
 }
 
+/// What an iteration may reuse from earlier ones: whether the solver holds a valid
+/// factorisation, how many iterations it has served, and the BFGS pairs gathered since.
+#[derive(Debug, Clone, Default)]
+pub struct TangentCache {
+    factored: bool,
+    age: usize,
+    slow: bool,
+    pairs: VecDeque<(Vec<f64>, Vec<f64>, f64)>,
+}
+
+impl TangentCache {
+    /// An empty cache: the first iteration factors.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Forgets the factorisation and the pairs (after a failed attempt, or when the problem
+    /// changed in a way the old tangent does not describe).
+    pub fn invalidate(&mut self) {
+        *self = Self::default();
+    }
+
+    /// Whether the solver holds a factorisation this cache vouches for.
+    pub fn is_factored(&self) -> bool {
+        self.factored
+    }
+
+    /// Records a pair s = Δu, y = Δr unless its curvature yᵀs is not clearly positive.
+    fn push_pair(&mut self, s: Vec<f64>, y: Vec<f64>, limit: usize) {
+        let ys = dot(&y, &s);
+        let curved = ys > 1e-10 * (dot(&y, &y) * dot(&s, &s)).sqrt();
+        if !curved {
+            return;
+        }
+        if self.pairs.len() == limit {
+            self.pairs.pop_front();
+        }
+        self.pairs.push_back((s, y, 1.0 / ys));
+    }
+
+    /// d = −H r by the two-loop recursion with H₀ = K₀⁻¹ (the factorised tangent).
+    fn direction(
+        &self,
+        r: &[f64],
+        solver: &mut dyn LinearSolver,
+    ) -> Result<Vec<f64>, nonlin3d_solver::SolverError> {
+        let mut q: Vec<f64> = r.iter().map(|x| -x).collect();
+        let mut alphas = Vec::with_capacity(self.pairs.len());
+        for (s, y, rho) in self.pairs.iter().rev() {
+            let a = rho * dot(s, &q);
+            axpy(-a, y, &mut q);
+            alphas.push(a);
+        }
+        solver.solve_in_place(&mut q, 1)?;
+        for ((s, y, rho), a) in self.pairs.iter().zip(alphas.iter().rev()) {
+            let b = rho * dot(y, &q);
+            axpy(a - b, s, &mut q);
+        }
+        Ok(q)
+    }
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+fn axpy(a: f64, x: &[f64], y: &mut [f64]) {
+    for (y, x) in y.iter_mut().zip(x) {
+        *y += a * x;
+    }
+}
+
 /// Solves r(u, λ) = 0 from the current `u` (updated in place, also when not converged; the
 /// caller keeps a copy to restart from). `solver` must have analysed the problem's pattern;
-/// `k` is the tangent storage.
+/// `k` is the tangent storage. Nothing is reused from earlier calls (see
+/// [`solve_increment_with`]).
 pub fn solve_increment(
     problem: &mut dyn NonlinearProblem,
     u: &mut [f64],
@@ -110,16 +206,46 @@ pub fn solve_increment(
     solver: &mut dyn LinearSolver,
     k: &mut SymmetricMatrix,
 ) -> Result<IncrementReport, NewtonError> {
+    let mut cache = TangentCache::new();
+    solve_increment_with(problem, u, lambda, settings, solver, k, &mut cache)
+}
+
+/// [`solve_increment`] with a [`TangentCache`] carried between increments: with
+/// `settings.keep_tangent` the factorisation `solver` holds (and the BFGS pairs) serve the next
+/// increment too, until an iteration converges too slowly (`refactor_ratio`) or `refactor_every`
+/// iterations have used it. Each iteration: direction d = −K⁻¹r (or −Hr with BFGS pairs),
+/// backtracking line search on ‖r‖∞, then the convergence test.
+pub fn solve_increment_with(
+    problem: &mut dyn NonlinearProblem,
+    u: &mut [f64],
+    lambda: f64,
+    settings: &NewtonSettings,
+    solver: &mut dyn LinearSolver,
+    k: &mut SymmetricMatrix,
+    cache: &mut TangentCache,
+) -> Result<IncrementReport, NewtonError> {
     if settings.refactor_every == 0 || settings.max_iterations == 0 {
         return Err(NewtonError::Setting {
             name: "refactor_every / max_iterations",
             reason: "must be ≥ 1".into(),
         });
     }
+    if settings.refactor_ratio.is_nan() || settings.refactor_ratio <= 0.0 {
+        return Err(NewtonError::Setting {
+            name: "refactor_ratio",
+            reason: format!("{} (must be > 0)", settings.refactor_ratio),
+        });
+    }
+    if !settings.keep_tangent {
+        cache.invalidate();
+    }
     let n = problem.n();
     problem.prescribe(u, lambda);
     let mut r = vec![0.0; n];
-    let scale = problem.evaluate(u, lambda, &mut r, Some(k))?;
+    // The tangent at u is wanted with the first residual unless a kept one will do.
+    let reuse = cache.factored && cache.age < settings.refactor_every && !cache.slow;
+    let scale = problem.evaluate(u, lambda, &mut r, if reuse { None } else { Some(k) })?;
+    let mut k_current = !reuse;
     let tolerance = settings
         .force_tolerance
         .max(settings.relative_tolerance * scale);
@@ -142,25 +268,38 @@ pub fn solve_increment(
     let initial = norm;
     let mut trial_u = vec![0.0; n];
     let mut trial_r = vec![0.0; n];
-    for it in 0..settings.max_iterations {
+    for _ in 0..settings.max_iterations {
         let mut pivots = None;
-        if it % settings.refactor_every == 0 {
+        if !cache.factored || cache.age >= settings.refactor_every || cache.slow {
+            if !k_current {
+                problem.evaluate(u, lambda, &mut r, Some(k))?;
+            }
             match solver.factorize(k) {
                 Ok(f) => pivots = Some(f.negative_pivots),
                 Err(e) => {
+                    cache.invalidate();
                     report.termination = Termination::Singular(e.to_string());
                     return Ok(report);
                 }
             }
+            *cache = TangentCache {
+                factored: true,
+                ..TangentCache::default()
+            };
         }
-        let mut du: Vec<f64> = r.iter().map(|x| -x).collect();
-        if let Err(e) = solver.solve_in_place(&mut du, 1) {
-            report.termination = Termination::Singular(e.to_string());
-            return Ok(report);
-        }
+        cache.age += 1;
+        let bfgs_pairs = cache.pairs.len();
+        let mut du = match cache.direction(&r, solver) {
+            Ok(d) => d,
+            Err(e) => {
+                cache.invalidate();
+                report.termination = Termination::Singular(e.to_string());
+                return Ok(report);
+            }
+        };
         problem.expand(&mut du);
-        // The next iteration refactors: evaluate the tangent together with the residual.
-        let need_k = (it + 1) % settings.refactor_every == 0;
+        // The next iteration refactors by count: evaluate the tangent with the residual.
+        let need_k = cache.age >= settings.refactor_every;
         let mut alpha = 1.0;
         let mut accepted = false;
         for _ in 0..if settings.line_search { 6 } else { 1 } {
@@ -176,7 +315,6 @@ pub fn solve_increment(
             let trial = norm_inf(&trial_r);
             if trial.is_finite() && (trial < norm || !settings.line_search) {
                 accepted = true;
-                norm = trial;
                 break;
             }
             alpha *= 0.5;
@@ -194,8 +332,18 @@ pub fn solve_increment(
                 &mut trial_r,
                 if need_k { Some(k) } else { None },
             )?;
-            norm = norm_inf(&trial_r);
         }
+        let previous = norm;
+        norm = norm_inf(&trial_r);
+        k_current = need_k;
+        if settings.quasi_newton > 0 && norm.is_finite() {
+            let s: Vec<f64> = trial_u.iter().zip(u.iter()).map(|(a, b)| a - b).collect();
+            let y: Vec<f64> = trial_r.iter().zip(&r).map(|(a, b)| a - b).collect();
+            cache.push_pair(s, y, settings.quasi_newton);
+        }
+        // An old tangent that no longer pulls the residual down is replaced next iteration.
+        let pulled_down = norm <= settings.refactor_ratio * previous;
+        cache.slow = pivots.is_none() && !pulled_down;
         u.copy_from_slice(&trial_u);
         r.copy_from_slice(&trial_r);
         report.iterations.push(IterationRecord {
@@ -203,8 +351,10 @@ pub fn solve_increment(
             step: alpha,
             increment: alpha * norm_inf(&du),
             negative_pivots: pivots,
+            bfgs_pairs,
         });
         if !norm.is_finite() || u.iter().any(|x| !x.is_finite()) {
+            cache.invalidate();
             report.termination = Termination::NonFinite;
             return Ok(report);
         }
@@ -215,9 +365,11 @@ pub fn solve_increment(
             return Ok(report);
         }
         if norm > 1e8 * initial {
+            cache.invalidate();
             report.termination = Termination::Diverged;
             return Ok(report);
         }
     }
+    cache.invalidate();
     Ok(report)
 }

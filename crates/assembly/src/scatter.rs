@@ -1,0 +1,367 @@
+//! The owner-computes scatter: node-block offsets into the lower-triangle CSC pattern, the
+//! split of the node range among threads, and the per-cell adds.
+//!
+//! DOF 3I + a belongs to node I. Every cell couples all three DOFs of each of its nodes, so the
+//! pattern is node-blocked: column 3J + c holds rows 3J + c … 3J + 2 of the diagonal block, then
+//! three rows 3I, 3I + 1, 3I + 2 for each neighbour I > J in increasing order. Hence
+//!
+//! pos(3I + a, 3J + c) = col_ptr[3J + c] − c + o(I, J) + a,  o(I, J) = 3·(rank of I among J's
+//! nodes I ≥ J),
+//!
+//! one offset per node pair instead of one position per matrix entry: 400 `u32` (1.6 kB) per
+//! Hex20 instead of 3 600 positions (57.6 kB), so the scatter streams from cache.
+//!
+//! The nodes are ranked by reverse Cuthill–McKee on the node graph (whatever the mesh's own
+//! numbering), and cells are swept in order of their highest rank. Thread t owns the columns
+//! and force entries of the nodes ranked in [s_t, s_{t+1}) and evaluates every cell with a node
+//! there (cells across a split are evaluated by both sides, each adding its own columns; the
+//! splits sit where fewest cells straddle). Each thread visits its cells in the global sweep
+//! order, so every entry receives its contributions in the same order whatever the number of
+//! threads: the result is bitwise independent of it.
+
+use crate::AssemblyError;
+use nonlin3d_solver::SymmetricPattern;
+
+/// Checks that `pattern` (3·`nodes` DOFs) is node-blocked as described in the module docs.
+pub(crate) fn check_node_blocked(
+    pattern: &SymmetricPattern,
+    nodes: usize,
+) -> Result<(), AssemblyError> {
+    let bad = |j: usize, why: &str| AssemblyError::Pattern {
+        column: j,
+        reason: why.to_string(),
+    };
+    if pattern.n() != 3 * nodes {
+        return Err(bad(0, "the pattern's size is not three DOFs per node"));
+    }
+    for node in 0..nodes {
+        let first = pattern.column(3 * node);
+        if first.len() < 3 || first[..3] != [3 * node, 3 * node + 1, 3 * node + 2] {
+            return Err(bad(3 * node, "the node's diagonal block is incomplete"));
+        }
+        for (k, t) in first[3..].chunks(3).enumerate() {
+            if t.len() != 3 || t[1] != t[0] + 1 || t[2] != t[0] + 2 || t[0] % 3 != 0 {
+                return Err(bad(
+                    3 * node,
+                    &format!("rows of neighbour {k} are not a triple"),
+                ));
+            }
+        }
+        for c in 1..3 {
+            if pattern.column(3 * node + c) != &first[c..] {
+                return Err(bad(
+                    3 * node + c,
+                    "the column differs from the node's first one",
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// o(I, J) for every ordered pair of the cell's nodes, j-major (`j·nn + i` for local nodes i, j,
+/// `nn²` entries); pairs with I < J hold `u32::MAX` (they are added as their mirror).
+pub(crate) fn block_offsets(
+    pattern: &SymmetricPattern,
+    nodes: &[usize],
+) -> Result<Vec<u32>, AssemblyError> {
+    let nn = nodes.len();
+    let mut out = vec![u32::MAX; nn * nn];
+    for (i, &ni) in nodes.iter().enumerate() {
+        for (j, &nj) in nodes.iter().enumerate() {
+            if ni < nj {
+                continue;
+            }
+            let col = 3 * nj;
+            let p = pattern
+                .position(3 * ni, col)
+                .ok_or(AssemblyError::Pattern {
+                    column: col,
+                    reason: format!("no entry for row {}", 3 * ni),
+                })?;
+            let o = p - pattern.col_ptr()[col];
+            out[j * nn + i] = u32::try_from(o).map_err(|_| AssemblyError::Pattern {
+                column: col,
+                reason: "column longer than u32".into(),
+            })?;
+        }
+    }
+    Ok(out)
+}
+
+/// Shared write access to a global array (forces or tangent values) for the parts of one
+/// assembly. Each part writes only entries of the nodes it owns — forces 3v … 3v + 2, tangent
+/// columns 3v … 3v + 2 — and every node has one owner, so no entry is written by two threads.
+pub(crate) struct Shared<'a> {
+    ptr: *mut f64,
+    len: usize,
+    _borrow: std::marker::PhantomData<&'a mut [f64]>,
+}
+
+// SAFETY: a `Shared` is made from a `&mut [f64]` that stays borrowed (and so unaliased) for its
+// whole life (`Shared::new` ties it to the borrow); concurrent use is confined to the parts of
+// one assembly, which write disjoint entries (the owner-of-the-node rule above, enforced by the
+// callers `add_cell_tangent`/`zero_columns`/the force loop, which check ownership per node).
+unsafe impl Sync for Shared<'_> {}
+// SAFETY: as for `Sync`: the pointer is only a borrowed slice.
+unsafe impl Send for Shared<'_> {}
+
+impl<'a> Shared<'a> {
+    /// Shares `v` for the duration of the borrow.
+    pub(crate) fn new(v: &'a mut [f64]) -> Self {
+        Self {
+            ptr: v.as_mut_ptr(),
+            len: v.len(),
+            _borrow: std::marker::PhantomData,
+        }
+    }
+
+    /// v[p] += x.
+    #[inline(always)]
+    pub(crate) fn add(&self, p: usize, x: f64) {
+        assert!(p < self.len);
+        // SAFETY: in bounds (checked); written by the owner of its node only (type invariant).
+        unsafe { *self.ptr.add(p) += x }
+    }
+
+    /// v[p..p + 3] += x.
+    #[inline(always)]
+    pub(crate) fn add3(&self, p: usize, x: &[f64]) {
+        assert!(p + 3 <= self.len && x.len() >= 3);
+        // SAFETY: in bounds (checked); written by the owner of its node only (type invariant).
+        unsafe {
+            *self.ptr.add(p) += x[0];
+            *self.ptr.add(p + 1) += x[1];
+            *self.ptr.add(p + 2) += x[2];
+        }
+    }
+
+    /// v[range] = 0.
+    pub(crate) fn zero(&self, range: std::ops::Range<usize>) {
+        assert!(range.start <= range.end && range.end <= self.len);
+        // SAFETY: in bounds (checked); the range is the columns of one owned node.
+        unsafe { std::ptr::write_bytes(self.ptr.add(range.start), 0, range.len()) }
+    }
+}
+
+/// K(3I + a, 3J + c) += Ke(3i + a, 3j + c) for the cell's node pairs I ≥ J (mesh numbers) whose
+/// column node J is ranked in [lo, hi). `ke` is the cell's full symmetric tangent, row-major;
+/// row 3j + c is read as column 3j + c. `offsets` is j-major: o(I, J) at `j·nn + i`.
+pub(crate) fn add_cell_tangent(
+    nodes: &[usize],
+    offsets: &[u32],
+    ke: &[f64],
+    col_ptr: &[usize],
+    rank: &[usize],
+    (lo, hi): (usize, usize),
+    values: &Shared<'_>,
+) {
+    let nn = nodes.len();
+    let nd = 3 * nn;
+    for (j, &nj) in nodes.iter().enumerate() {
+        if rank[nj] < lo || rank[nj] >= hi {
+            continue;
+        }
+        // Column 3J + c, less c: where the triple of node I sits, o(I, J) on.
+        let base = [
+            col_ptr[3 * nj],
+            col_ptr[3 * nj + 1] - 1,
+            col_ptr[3 * nj + 2] - 2,
+        ];
+        let rows = [
+            &ke[3 * j * nd..(3 * j + 1) * nd],
+            &ke[(3 * j + 1) * nd..(3 * j + 2) * nd],
+            &ke[(3 * j + 2) * nd..(3 * j + 3) * nd],
+        ];
+        // The diagonal block: its lower triangle.
+        for c in 0..3 {
+            for a in c..3 {
+                values.add(base[c] + a, rows[c][3 * j + a]);
+            }
+        }
+        for (i, (&ni, &o)) in nodes.iter().zip(&offsets[j * nn..(j + 1) * nn]).enumerate() {
+            if ni <= nj {
+                continue;
+            }
+            let o = o as usize;
+            for c in 0..3 {
+                values.add3(base[c] + o, &rows[c][3 * i..3 * i + 3]);
+            }
+        }
+    }
+}
+
+/// Where the rank range can be split: how many cells have their lowest rank below s, and how
+/// many their highest, for every s. The part [a, b) evaluates the cells with a node ranked
+/// there: lowest < b and highest ≥ a, `lo_below[b] − hi_below[a]` of them.
+#[derive(Debug, Clone)]
+pub(crate) struct Sweep {
+    lo_below: Vec<u32>,
+    hi_below: Vec<u32>,
+}
+
+impl Sweep {
+    /// From each cell's (lowest, highest) rank, over `nodes` ranks.
+    pub(crate) fn new(nodes: usize, spans: impl Iterator<Item = (usize, usize)>) -> Self {
+        let mut lo_below = vec![0u32; nodes + 1];
+        let mut hi_below = vec![0u32; nodes + 1];
+        for (lo, hi) in spans {
+            lo_below[lo + 1] += 1;
+            hi_below[hi + 1] += 1;
+        }
+        for s in 0..nodes {
+            lo_below[s + 1] += lo_below[s];
+            hi_below[s + 1] += hi_below[s];
+        }
+        Self { lo_below, hi_below }
+    }
+
+    /// Cells the part [a, b) evaluates.
+    fn load(&self, a: usize, b: usize) -> usize {
+        (self.lo_below[b] - self.hi_below[a]) as usize
+    }
+
+    /// Greedy parts of at most `w` cells each from rank 0 on; None if more than `parts` are
+    /// needed.
+    fn greedy(&self, parts: usize, w: usize) -> Option<Vec<usize>> {
+        let nodes = self.lo_below.len() - 1;
+        let mut out = vec![0];
+        let mut a = 0;
+        while a < nodes {
+            if out.len() > parts {
+                return None;
+            }
+            // The furthest b whose part stays within w (lo_below is non-decreasing).
+            let h = self.hi_below[a];
+            let b = self
+                .lo_below
+                .partition_point(|&x| x.saturating_sub(h) as usize <= w)
+                .saturating_sub(1)
+                .min(nodes);
+            debug_assert!(b <= a || self.load(a, b) <= w);
+            if b <= a {
+                return None;
+            }
+            out.push(b);
+            a = b;
+        }
+        (out.len() <= parts + 1).then_some(out)
+    }
+
+    /// Rank boundaries 0 = s_0 < s_1 < … = nodes, at most `parts` parts, minimising the largest
+    /// part's cell count (cells across a split count on both sides) by bisection on it.
+    pub(crate) fn splits(&self, parts: usize) -> Vec<usize> {
+        let nodes = self.lo_below.len() - 1;
+        let total = self.lo_below[nodes] as usize;
+        if parts <= 1 || nodes < 2 {
+            return vec![0, nodes];
+        }
+        let (mut lo, mut hi) = (total.div_ceil(parts).max(1), total.max(1));
+        let mut best = self.greedy(parts, hi).unwrap_or_else(|| vec![0, nodes]);
+        while lo < hi {
+            let mid = lo + (hi - lo) / 2;
+            match self.greedy(parts, mid) {
+                Some(s) => {
+                    best = s;
+                    hi = mid;
+                }
+                None => lo = mid + 1,
+            }
+        }
+        best
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two Hex8-like cells sharing a face in a 1-D chain of node pairs: the offsets give the
+    /// positions `SymmetricPattern::position` gives, for every entry of every pair.
+    #[test]
+    fn offsets_give_the_pattern_positions() {
+        let cells = [vec![0usize, 1, 2, 3], vec![2, 3, 4, 5], vec![5, 1, 6, 0]];
+        let lists: Vec<Vec<usize>> = cells
+            .iter()
+            .map(|c| {
+                c.iter()
+                    .flat_map(|&n| [3 * n, 3 * n + 1, 3 * n + 2])
+                    .collect()
+            })
+            .collect();
+        let pattern = SymmetricPattern::from_dof_lists(21, &lists).unwrap();
+        check_node_blocked(&pattern, 7).unwrap();
+        for nodes in &cells {
+            let o = block_offsets(&pattern, nodes).unwrap();
+            let nn = nodes.len();
+            for (i, &ni) in nodes.iter().enumerate() {
+                for (j, &nj) in nodes.iter().enumerate() {
+                    if ni < nj {
+                        assert_eq!(o[j * nn + i], u32::MAX);
+                        continue;
+                    }
+                    for c in 0..3 {
+                        for a in 0..3 {
+                            let (r, col) = (3 * ni + a, 3 * nj + c);
+                            if r < col {
+                                continue;
+                            }
+                            let p = pattern.col_ptr()[col] - c + o[j * nn + i] as usize + a;
+                            assert_eq!(Some(p), pattern.position(r, col), "({r}, {col})");
+                        }
+                    }
+                }
+            }
+        }
+        // A pattern that couples single DOFs is not node-blocked.
+        let loose = SymmetricPattern::from_dof_lists(6, &[vec![0, 4]]).unwrap();
+        assert!(check_node_blocked(&loose, 2).is_err());
+    }
+
+    /// Splits are increasing, cover the range, and balance the cells each part evaluates
+    /// (counting cells across a split on both sides) to within one cell of the best possible.
+    #[test]
+    fn splits_balance_the_parts() {
+        // A chain of 100 cells over ranks 2k … 2k + 3 (an even rank is straddled by one cell,
+        // an odd one by two), and a second chain whose cells are twice as dense at the start.
+        let chain: Vec<(usize, usize)> = (0..100).map(|k| (2 * k, 2 * k + 3)).collect();
+        let dense: Vec<(usize, usize)> = (0..150)
+            .map(|k| {
+                if k < 100 {
+                    (k, k + 3)
+                } else {
+                    (2 * k - 100, 2 * k - 97)
+                }
+            })
+            .collect();
+        for spans in [&chain, &dense] {
+            let nodes = spans.iter().map(|s| s.1).max().unwrap() + 1;
+            let sweep = Sweep::new(nodes, spans.iter().copied());
+            for parts in 1..6 {
+                let s = sweep.splits(parts);
+                assert_eq!(s.first(), Some(&0));
+                assert_eq!(s.last(), Some(&nodes));
+                assert!(s.len() <= parts + 1, "{s:?}");
+                assert!(s.windows(2).all(|w| w[0] < w[1]), "{s:?}");
+                let loads: Vec<usize> = s
+                    .windows(2)
+                    .map(|w| {
+                        spans
+                            .iter()
+                            .filter(|&&(lo, hi)| lo < w[1] && hi >= w[0])
+                            .count()
+                    })
+                    .collect();
+                let ideal = spans.len().div_ceil(parts);
+                // Each split adds at most 3 straddling cells here (chain: ≤ 2, dense: ≤ 3).
+                let bound = ideal + 3 * (parts - 1);
+                assert!(
+                    loads.iter().all(|&l| l <= bound),
+                    "{parts} parts: {loads:?} > {bound}"
+                );
+                assert_eq!(s.len(), parts + 1, "{parts} parts: {s:?}");
+            }
+        }
+        assert_eq!(Sweep::new(3, [(0, 2)].into_iter()).splits(4), vec![0, 3]);
+    }
+}
