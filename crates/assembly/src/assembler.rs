@@ -644,6 +644,24 @@ mod tests {
     use super::*;
     use nonlin3d_mesh::{BoxParams, EmbeddedParams, embedded_delamination, structured_box};
 
+    /// A 2×2×2, nonlinear-kinematics assembler for `mesh` and a deterministic displacement
+    /// field of size `scale` (m) over its DOFs.
+    fn nonlinear_gauss2(mesh: &Mesh, mats: &[Stiffness], scale: f64) -> (Assembler, Vec<f64>) {
+        let asm = Assembler::new(
+            mesh,
+            mats,
+            ShearCoupling::Exact,
+            IntegrationRule::Gauss2,
+            IntegrationRule::Gauss2,
+            Kinematics::Nonlinear,
+        )
+        .unwrap();
+        let u = (0..asm.n())
+            .map(|d| scale * ((d * 7919) % 23) as f64 / 23.0)
+            .collect();
+        (asm, u)
+    }
+
     /// The owner-computes assembly equals the plain element-by-element sum (each cell's
     /// `evaluate` added through `SymmetricMatrix::scatter_add`, an independent path) to
     /// summation-order rounding (1e-12 of the largest entry), and is bitwise the same on 1 to 4
@@ -665,18 +683,7 @@ mod tests {
             materials::generic_graphite_epoxy().stiffness().unwrap(),
             materials::steel().stiffness().unwrap(),
         ];
-        let asm = Assembler::new(
-            &mesh,
-            &mats,
-            ShearCoupling::Exact,
-            IntegrationRule::Gauss2,
-            IntegrationRule::Gauss2,
-            Kinematics::Nonlinear,
-        )
-        .unwrap();
-        let u: Vec<f64> = (0..asm.n())
-            .map(|d| 1e-5 * ((d * 7919) % 23) as f64 / 23.0)
-            .collect();
+        let (asm, u) = nonlinear_gauss2(&mesh, &mats, 1e-5);
         let mut runs = Vec::new();
         for threads in 1..=4 {
             let pool = rayon::ThreadPoolBuilder::new()
@@ -750,18 +757,7 @@ mod tests {
         ))
         .unwrap();
         let steel = materials::steel().stiffness().unwrap();
-        let asm = Assembler::new(
-            &mesh,
-            &[steel],
-            ShearCoupling::Exact,
-            IntegrationRule::Gauss2,
-            IntegrationRule::Gauss2,
-            Kinematics::Nonlinear,
-        )
-        .unwrap();
-        let u: Vec<f64> = (0..asm.n())
-            .map(|d| 1e-3 * ((d * 7919) % 23) as f64 / 23.0)
-            .collect();
+        let (asm, u) = nonlinear_gauss2(&mesh, &[steel], 1e-3);
         let full = asm.assemble(&u, None).unwrap().internal;
         let all: Vec<usize> = (0..mesh.cells.len()).collect();
         let (a, b) = all.split_at(5);
