@@ -14,7 +14,8 @@ use nonlin3d_mesh::{
     embedded_delamination_with_front, through_width_delamination,
 };
 use nonlin3d_newton::{
-    IncrementReport, NewtonSettings, Stepping, StructuralProblem, follow_path_from, perturbed_step,
+    IncrementReport, NewtonSettings, Stepping, StructuralProblem, follow_path_from,
+    negative_pivots_at, perturbed_step,
 };
 use nonlin3d_solver::SolverKind;
 use nonlin3d_vcct::{FrontRelease, cells_above, release_rates};
@@ -285,10 +286,22 @@ pub fn settings(scene: &Scene) -> (NewtonSettings, Stepping) {
         refactor_every: match a.newton {
             NewtonName::Full => 1,
             NewtonName::Modified => a.refactor_every,
+            NewtonName::Bfgs => usize::MAX,
         },
         max_iterations: match a.newton {
             NewtonName::Full => 25,
-            NewtonName::Modified => 60,
+            NewtonName::Modified | NewtonName::Bfgs => 60,
+        },
+        // BFGS on a tangent kept across increments (the fastest strategy on the plate,
+        // docs/PERFORMANCE.md): refactor when an iteration leaves ‖r‖∞ above twice the
+        // previous; no line search (it rejects BFGS's first overshooting directions).
+        keep_tangent: a.newton == NewtonName::Bfgs,
+        quasi_newton: if a.newton == NewtonName::Bfgs { 20 } else { 0 },
+        line_search: a.newton != NewtonName::Bfgs,
+        refactor_ratio: if a.newton == NewtonName::Bfgs {
+            2.0
+        } else {
+            0.5
         },
         solver: match (a.solver, a.threads) {
             (SolverName::Profile, _) => SolverKind::Profile,
@@ -310,11 +323,14 @@ pub fn settings(scene: &Scene) -> (NewtonSettings, Stepping) {
 /// converged state is unstable (negative pivots: the trivial path past a bifurcation) and a
 /// `perturbation` is given, the step is redone from `from` by the §3.2 protocol
 /// ([`perturbed_step`]: perturbation on along the step, removed at `to`) to land on the buckled
-/// branch. Returns the attempts and whether the perturbation was applied.
+/// branch. Returns the attempts, whether the perturbation was applied, and the negative pivots
+/// of the tangent at the final state.
 ///
 /// The thesis applied the perturbation at the first level and left it to the analyst to pick
 /// that level above the buckling strain; here the change of inertia picks the level, so a
-/// sweep may start below buckling (Fig. 5.1.1's flat part) and still find the branch.
+/// sweep may start below buckling (Fig. 5.1.1's flat part) and still find the branch. With a
+/// kept tangent (BFGS) the last factorisation may belong to an older state, so the inertia is
+/// then taken from one extra factorisation at the converged state ([`negative_pivots_at`]).
 pub fn solve_level(
     problem: &mut StructuralProblem,
     u: &mut Vec<f64>,
@@ -323,19 +339,26 @@ pub fn solve_level(
     perturbation: Option<(usize, f64)>,
     newton: &NewtonSettings,
     stepping: &Stepping,
-) -> Result<(Vec<IncrementReport>, bool), Error> {
+) -> Result<(Vec<IncrementReport>, bool, Option<usize>), Error> {
     let stepping = Stepping {
         initial: stepping.initial.min((to - from).abs().max(stepping.min)),
         ..stepping.clone()
     };
     let start = u.clone();
     let mut attempts = follow_path_from(problem, u, from, &[to], newton, &stepping)?.attempts;
-    let unstable = attempts
-        .iter()
-        .rev()
-        .find(|a| a.converged())
-        .and_then(IncrementReport::negative_pivots)
-        .is_some_and(|p| p > 0);
+    let inertia = |problem: &mut StructuralProblem, u: &[f64], attempts: &[IncrementReport]| {
+        if newton.keep_tangent {
+            negative_pivots_at(problem, u, to, newton.solver).map(Some)
+        } else {
+            Ok(attempts
+                .iter()
+                .rev()
+                .find(|a| a.converged())
+                .and_then(IncrementReport::negative_pivots))
+        }
+    };
+    let mut pivots = inertia(problem, u, &attempts)?;
+    let unstable = pivots.is_some_and(|p| p > 0);
     let mut perturbed = false;
     if let (true, Some((dof, f))) = (unstable, perturbation) {
         *u = start;
@@ -359,8 +382,9 @@ pub fn solve_level(
             &fine,
         )?);
         perturbed = true;
+        pivots = inertia(problem, u, &attempts)?;
     }
-    Ok((attempts, perturbed))
+    Ok((attempts, perturbed, pivots))
 }
 
 /// G along the front at state `u`.
@@ -460,16 +484,39 @@ pub fn run(scene: &Scene, progress: &mut dyn FnMut(Progress)) -> Result<Results,
         } else {
             None
         };
-        let (attempts, perturbed) =
-            solve_level(&mut problem, &mut u, from, lambda, pert, &newton, &stepping).map_err(
-                |e| {
-                    Error::Numerical(format!(
-                        "level {k} ({} {}): {e}",
-                        if plate { "load" } else { "strain" },
-                        lambda * reference
-                    ))
-                },
-            )?;
+        let start = u.clone();
+        let level_error = |e: Error| {
+            Error::Numerical(format!(
+                "level {k} ({} {}): {e}",
+                if plate { "load" } else { "strain" },
+                lambda * reference
+            ))
+        };
+        let first = solve_level(&mut problem, &mut u, from, lambda, pert, &newton, &stepping);
+        // BFGS's early directions come from an older tangent and can carry the sublaminate
+        // across to the branch buckled into the base (seen on the reference scene at −0.003);
+        // full Newton follows the outward branch, so the level is redone with it — also when
+        // BFGS does not converge at all.
+        let inward = |u: &[f64]| !plate && deflections(&model, u).1 < -0.01 * model.h;
+        let redo = newton.keep_tangent && first.as_ref().map_or(true, |_| inward(&u));
+        let (mut attempts, mut perturbed, mut pivots) = match first {
+            Err(_) if redo => (Vec::new(), false, None),
+            r => r.map_err(level_error)?,
+        };
+        let mut fallback = false;
+        if redo {
+            u = start;
+            let full = NewtonSettings {
+                solver: newton.solver,
+                force_tolerance: newton.force_tolerance,
+                ..NewtonSettings::default()
+            };
+            let (more, p, piv) =
+                solve_level(&mut problem, &mut u, from, lambda, pert, &full, &stepping)
+                    .map_err(level_error)?;
+            attempts.extend(more);
+            (perturbed, pivots, fallback) = (p, piv, true);
+        }
         if perturbed {
             perturbed_at = Some(lambda * reference);
         }
@@ -487,14 +534,17 @@ pub fn run(scene: &Scene, progress: &mut dyn FnMut(Progress)) -> Result<Results,
                 peak * 1e3
             )));
         }
-        levels.push(LevelResult::new(
+        let mut level = LevelResult::new(
             lambda * reference,
             centre,
             peak,
             &attempts,
             &front,
             u.clone(),
-        ));
+        );
+        level.convergence.negative_pivots = pivots;
+        level.convergence.full_newton_fallback = fallback;
+        levels.push(level);
         progress(Progress::Level {
             index: k,
             value: lambda * reference,

@@ -91,6 +91,9 @@ pub struct Convergence {
     pub residual_n: f64,
     /// Negative pivots of the last factorisation (0: stable equilibrium on this branch).
     pub negative_pivots: Option<usize>,
+    /// The level was redone with full Newton after BFGS landed on the branch buckled into
+    /// the base (`newton = "bfgs"` only).
+    pub full_newton_fallback: bool,
 }
 
 /// One strain (or load) level.
@@ -137,6 +140,7 @@ impl LevelResult {
                     .or(last.map(|a| a.initial_residual))
                     .unwrap_or(0.0),
                 negative_pivots: converged.last().and_then(|a| a.negative_pivots()),
+                full_newton_fallback: false,
             },
             front: front.iter().map(FrontRow::new).collect(),
             displacements,

@@ -355,6 +355,10 @@ pub enum NewtonName {
     Full,
     /// Modified Newton–Raphson (tangent every `refactor_every` iterations).
     Modified,
+    /// Quasi-Newton: BFGS updates (20 pairs) of a factorised tangent kept across increments,
+    /// refactorised when an iteration lets ‖r‖∞ grow; the stability of each converged level
+    /// from one extra factorisation there.
+    Bfgs,
 }
 
 /// Which strain–displacement relations give the VCCT forces (§2.8).

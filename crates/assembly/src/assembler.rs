@@ -2,7 +2,9 @@
 //! (thesis §2.2–2.3: f_int = Σ_cells ∫ Bᵀ S dV, K = Σ_cells (K_L + K_NL)), owner-computes: see
 //! `scatter.rs` for the layout and the split among threads.
 
-use crate::scatter::{Shared, Sweep, add_cell_tangent, block_offsets, check_node_blocked};
+use crate::scatter::{
+    Shared, Sweep, add_cell_tangent, block_offsets, check_node_blocked, mark_first,
+};
 use crate::{AssemblyError, Constraints};
 use nonlin3d_element::{
     BatchInput, ElementError, ElementKind, ElementOutput, IntegrationRule, Kinematics, ShapeTable,
@@ -29,7 +31,8 @@ struct Group {
     nodes: Vec<usize>,
     /// (lowest, highest) node rank of each member.
     span: Vec<(usize, usize)>,
-    /// Node-pair offsets into the pattern, `table.nodes()²` per member.
+    /// Node-pair offsets into the pattern, `table.nodes()²` per member, the first to reach each
+    /// pair flagged (`scatter::FIRST`).
     offsets: Vec<u32>,
 }
 
@@ -63,11 +66,11 @@ pub struct Assembler {
     kinematics: Kinematics,
     /// (group, position in the group) of each cell.
     place: Vec<(usize, usize)>,
-    /// Sweep rank of each node (reverse Cuthill–McKee on the node graph) and the node of each
-    /// rank.
+    /// Sweep rank of each node (reverse Cuthill–McKee on the node graph).
     rank: Vec<usize>,
-    order: Vec<usize>,
     sweep: Sweep,
+    /// Tangent positions no cell reaches (tie couplings, nodes in no cell): zeroed apart.
+    unreached: Vec<usize>,
     mask: Mutex<FixedMask>,
 }
 
@@ -81,6 +84,19 @@ pub struct Assembly {
 }
 
 /// Re-attributes a batch error (group-local element index) to the mesh cell.
+/// `lists` and the DOF triple of every node none of them holds: a node in no cell keeps a
+/// whole (zero) diagonal block, so the pattern stays node-blocked and a solve names its DOF.
+fn with_lone_nodes(mut lists: Vec<Vec<usize>>, n: usize) -> Vec<Vec<usize>> {
+    let mut held = vec![false; n / 3];
+    for &d in lists.iter().flatten() {
+        held[d / 3] = true;
+    }
+    for (v, _) in held.iter().enumerate().filter(|(_, h)| !**h) {
+        lists.push(vec![3 * v, 3 * v + 1, 3 * v + 2]);
+    }
+    lists
+}
+
 fn relocate(err: ElementError, cells: &[usize]) -> ElementError {
     relabel(err, |e| e.and_then(|e| cells.get(e).copied()))
 }
@@ -160,7 +176,7 @@ impl Assembler {
         let node_lists: Vec<&[usize]> = mesh.cells.iter().map(|c| &c.nodes[..]).collect();
         let graph = SymmetricPattern::from_dof_lists(mesh.nodes.len(), &node_lists)?;
         let rcm = reverse_cuthill_mckee(&graph);
-        let (order, rank) = (rcm.forward().to_vec(), rcm.inverse().to_vec());
+        let rank = rcm.inverse().to_vec();
         let span_of = |c: usize| {
             let nodes = &mesh.cells[c].nodes;
             let lo = nodes.iter().map(|&v| rank[v]).min().unwrap_or(0);
@@ -178,8 +194,7 @@ impl Assembler {
             if cells.is_empty() {
                 continue;
             }
-            // Sweep order, by highest rank: consecutive cells share columns, which stay in cache,
-            // and columns are zeroed just before their first cell (`assemble`).
+            // Sweep order, by highest rank: consecutive cells share columns, which stay in cache.
             cells.sort_by_key(|&c| {
                 let (lo, hi) = span_of(c);
                 (hi, lo, c)
@@ -211,7 +226,10 @@ impl Assembler {
             groups.iter().flat_map(|g| g.span.iter().copied()),
         );
         let dofs = mesh.cell_dofs();
-        let pattern = Arc::new(SymmetricPattern::from_dof_lists(n, &dofs)?);
+        let pattern = Arc::new(SymmetricPattern::from_dof_lists(
+            n,
+            &with_lone_nodes(dofs.clone(), n),
+        )?);
         let mut assembler = Self {
             n,
             groups,
@@ -221,8 +239,8 @@ impl Assembler {
             kinematics,
             place,
             rank,
-            order,
             sweep,
+            unreached: Vec::new(),
             mask: Mutex::new(FixedMask::default()),
         };
         assembler.set_pattern(pattern)?;
@@ -241,6 +259,14 @@ impl Assembler {
                 .collect();
             g.offsets = offsets?.concat();
         }
+        // Flags in sweep order: group after group (as `assemble` visits them), cell after cell.
+        self.unreached = mark_first(
+            &pattern,
+            self.groups.iter_mut().flat_map(|g| {
+                let nn = g.table.nodes();
+                g.nodes.chunks(nn).zip(g.offsets.chunks_mut(nn * nn))
+            }),
+        );
         self.pattern = pattern;
         *self.mask.lock().unwrap_or_else(|e| e.into_inner()) = FixedMask::default();
         Ok(())
@@ -335,7 +361,10 @@ impl Assembler {
             l.push(t.slave);
             whole_nodes(l)
         }));
-        let pattern = Arc::new(SymmetricPattern::from_dof_lists(self.n, &all)?);
+        let pattern = Arc::new(SymmetricPattern::from_dof_lists(
+            self.n,
+            &with_lone_nodes(all, self.n),
+        )?);
         self.set_pattern(pattern)
     }
 
@@ -360,8 +389,8 @@ impl Assembler {
     /// Owner-computes on the current rayon pool: thread t adds the columns and forces of the
     /// nodes in its part of the node range, evaluating each cell that has a node there, in the
     /// sweep order; every entry receives its contributions in that order, so the results are
-    /// bitwise the same on any number of threads. Columns are zeroed just before the first cell
-    /// reaches them, while they go into cache anyway.
+    /// bitwise the same on any number of threads. The first cell to reach a node pair stores
+    /// its block, later ones add, so the tangent is never zeroed as a whole.
     pub fn assemble(
         &self,
         u: &[f64],
@@ -405,22 +434,20 @@ impl Assembler {
                 d
             })
             .collect();
+        if want_k {
+            for &p in &self.unreached {
+                values[p] = 0.0;
+            }
+        }
         let mut internal = vec![0.0; self.n];
         let splits = self.sweep.splits(rayon::current_num_threads());
         let (forces, values) = (Shared::new(&mut internal), Shared::new(values));
         let rank = &self.rank;
-        // Tangent columns of the node ranked r.
-        let columns = |r: usize| {
-            let v = self.order[r];
-            col_ptr[3 * v]..col_ptr[3 * v + 3]
-        };
         let owned: Vec<Result<Vec<OwnedEnergy>, AssemblyError>> = splits
             .par_windows(2)
             .map(|w| {
                 let (lo, hi) = (w[0], w[1]);
                 let mut energies = Vec::new();
-                // Columns of the nodes ranked lo..zeroed have been zeroed.
-                let mut zeroed = lo;
                 for (gi, g) in self.groups.iter().enumerate() {
                     let list: Vec<usize> = (0..g.cells.len())
                         .filter(|&i| g.span[i].0 < hi && g.span[i].1 >= lo)
@@ -447,11 +474,6 @@ impl Assembler {
                                 }
                             }
                             if want_k {
-                                let top = g.span[i].1.min(hi - 1);
-                                while zeroed <= top {
-                                    values.zero(columns(zeroed));
-                                    zeroed += 1;
-                                }
                                 add_cell_tangent(
                                     nodes,
                                     offsets(i),
@@ -468,11 +490,6 @@ impl Assembler {
                         },
                     )
                     .map_err(|e| relocate(e, &g.cells))?;
-                }
-                if want_k {
-                    for r in zeroed..hi {
-                        values.zero(columns(r));
-                    }
                 }
                 Ok(energies)
             })
@@ -743,6 +760,45 @@ mod tests {
             assert!((x - y).abs() <= 1e-12 * fmax, "{x} vs {y}");
         }
         assert!((a.energy - energy).abs() <= 1e-12 * energy.abs());
+    }
+
+    /// A node in no cell (a stray node of a deck) keeps a zero diagonal block in a node-blocked
+    /// pattern; every tangent value is written (the matrix starts as NaN), and the other nodes'
+    /// entries are those of the mesh without it (1e-12 of the largest: summation order).
+    #[test]
+    fn a_node_in_no_cell_gets_a_zero_block() {
+        use nonlin3d_laminate::materials;
+        let mesh = structured_box(&BoxParams::new(
+            ElementKind::Hex20,
+            [2, 1, 1],
+            [2.0, 1.0, 1.0],
+        ))
+        .unwrap();
+        let mut stray = mesh.clone();
+        stray.nodes.push([5.0, 5.0, 5.0]);
+        let v = mesh.nodes.len();
+        let steel = materials::steel().stiffness().unwrap();
+        let (plain, u) = nonlinear_gauss2(&mesh, std::slice::from_ref(&steel), 1e-3);
+        let (asm, mut us) = nonlinear_gauss2(&stray, &[steel], 1e-3);
+        us[..u.len()].copy_from_slice(&u);
+        let mut k = asm.new_tangent();
+        k.values_mut().fill(f64::NAN);
+        let a = asm.assemble(&us, Some(&mut k)).unwrap();
+        assert!(k.values().iter().all(|x| x.is_finite()));
+        assert_eq!(&a.internal[3 * v..], &[0.0; 3]);
+        for c in 3 * v..3 * v + 3 {
+            assert_eq!(asm.pattern().column(c).len(), 3 * v + 3 - c);
+            assert_eq!(k.get(c, c), 0.0);
+        }
+        let mut kp = plain.new_tangent();
+        plain.assemble(&u, Some(&mut kp)).unwrap();
+        let kmax = kp.values().iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+        for col in 0..plain.n() {
+            for &row in plain.pattern().column(col) {
+                let (x, y) = (k.get(row, col), kp.get(row, col));
+                assert!((x - y).abs() <= 1e-12 * kmax, "({row}, {col})");
+            }
+        }
     }
 
     /// The forces of all cells through `partial_internal` are the assembled internal forces,

@@ -26,6 +26,6 @@ pub use path::{
 };
 pub use problem::{NonlinearProblem, StructuralProblem};
 pub use solve::{
-    IncrementReport, IterationRecord, NewtonSettings, TangentCache, Termination, solve_increment,
-    solve_increment_with,
+    IncrementReport, IterationRecord, NewtonSettings, TangentCache, Termination,
+    negative_pivots_at, solve_increment, solve_increment_with,
 };

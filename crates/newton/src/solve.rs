@@ -194,6 +194,25 @@ fn axpy(a: f64, x: &[f64], y: &mut [f64]) {
     }
 }
 
+/// Negative pivots of the tangent at (u, λ), from one assembly and one factorisation with a
+/// new solver of `kind`: the stability test of a converged state (thesis §3.2: the trivial
+/// path past a bifurcation has K_T with negative eigenvalues) for strategies whose last
+/// factorisation belongs to an older state (a kept tangent, BFGS). `u` is taken as it is.
+pub fn negative_pivots_at(
+    problem: &mut dyn NonlinearProblem,
+    u: &[f64],
+    lambda: f64,
+    kind: SolverKind,
+) -> Result<usize, NewtonError> {
+    let pattern = problem.pattern();
+    let mut solver = kind.build();
+    solver.analyze(&pattern)?;
+    let mut k = SymmetricMatrix::zeros(pattern);
+    let mut r = vec![0.0; problem.n()];
+    problem.evaluate(u, lambda, &mut r, Some(&mut k))?;
+    Ok(solver.factorize(&k)?.negative_pivots)
+}
+
 /// Solves r(u, λ) = 0 from the current `u` (updated in place, also when not converged; the
 /// caller keeps a copy to restart from). `solver` must have analysed the problem's pattern;
 /// `k` is the tangent storage. Nothing is reused from earlier calls (see
