@@ -126,6 +126,15 @@ fn relabel(err: ElementError, cell: impl Fn(Option<usize>) -> Option<usize>) -> 
             node,
             value,
         },
+        ElementError::CoupledTransverseShear {
+            element,
+            material,
+            coupling,
+        } => ElementError::CoupledTransverseShear {
+            element: cell(element),
+            material,
+            coupling,
+        },
         other => other,
     }
 }
@@ -760,6 +769,50 @@ mod tests {
             assert!((x - y).abs() <= 1e-12 * fmax, "{x} vs {y}");
         }
         assert!((a.energy - energy).abs() <= 1e-12 * energy.abs());
+    }
+
+    /// A non-finite displacement fails the assembly with a cell holding that node named (mesh
+    /// numbering), on one thread and on several, where the cell may straddle a split and be
+    /// evaluated by both parts.
+    #[test]
+    fn a_bad_cell_is_named_on_any_thread_count() {
+        use nonlin3d_laminate::materials;
+        let mesh = embedded_delamination(&EmbeddedParams {
+            slices: 4,
+            ..EmbeddedParams::thesis_reference()
+        })
+        .unwrap();
+        let steel = materials::steel().stiffness().unwrap();
+        let (asm, mut u) = nonlinear_gauss2(&mesh, &[steel], 1e-6);
+        for bad in [0, mesh.cells.len() / 2, mesh.cells.len() - 1] {
+            let v = mesh.cells[bad].nodes[5];
+            let keep = u[3 * v + 1];
+            u[3 * v + 1] = f64::NAN;
+            for threads in 1..=3 {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap();
+                let mut k = asm.new_tangent();
+                let err = match pool.install(|| asm.assemble(&u, Some(&mut k))) {
+                    Ok(_) => panic!("node {v} has a NaN displacement, yet the assembly succeeded"),
+                    Err(e) => e,
+                };
+                let AssemblyError::Element(ElementError::NonFiniteInput {
+                    element: Some(c),
+                    what: "displacements",
+                    ..
+                }) = err
+                else {
+                    panic!("{err}");
+                };
+                assert!(
+                    mesh.cells[c].nodes.contains(&v),
+                    "cell {c} does not hold node {v}"
+                );
+            }
+            u[3 * v + 1] = keep;
+        }
     }
 
     /// A node in no cell (a stray node of a deck) keeps a zero diagonal block in a node-blocked
