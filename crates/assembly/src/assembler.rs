@@ -688,6 +688,14 @@ mod tests {
         (asm, u)
     }
 
+    /// A rayon pool of `threads` threads.
+    fn pool_of(threads: usize) -> rayon::ThreadPool {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+    }
+
     /// The owner-computes assembly equals the plain element-by-element sum (each cell's
     /// `evaluate` added through `SymmetricMatrix::scatter_add`, an independent path) to
     /// summation-order rounding (1e-12 of the largest entry), and is bitwise the same on 1 to 4
@@ -712,10 +720,7 @@ mod tests {
         let (asm, u) = nonlinear_gauss2(&mesh, &mats, 1e-5);
         let mut runs = Vec::new();
         for threads in 1..=4 {
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .unwrap();
+            let pool = pool_of(threads);
             let mut k = asm.new_tangent();
             // Stale values must not survive.
             k.values_mut().fill(7.0);
@@ -789,10 +794,7 @@ mod tests {
             let keep = u[3 * v + 1];
             u[3 * v + 1] = f64::NAN;
             for threads in 1..=3 {
-                let pool = rayon::ThreadPoolBuilder::new()
-                    .num_threads(threads)
-                    .build()
-                    .unwrap();
+                let pool = pool_of(threads);
                 let mut k = asm.new_tangent();
                 let err = match pool.install(|| asm.assemble(&u, Some(&mut k))) {
                     Ok(_) => panic!("node {v} has a NaN displacement, yet the assembly succeeded"),
