@@ -2,13 +2,15 @@
 //! (thesis §2.2–2.3: f_int = Σ_cells ∫ Bᵀ S dV, K = Σ_cells (K_L + K_NL)), owner-computes: see
 //! `scatter.rs` for the layout and the split among threads.
 
+use crate::prefetch::{CellLines, PrefetchPlan};
 use crate::scatter::{
-    Shared, Sweep, add_cell_tangent, block_offsets, check_node_blocked, mark_first,
+    Shared, Sweep, add_cell_tangent, block_offsets, cell_positions, check_node_blocked, mark_first,
+    pair_lists, pair_stride,
 };
 use crate::{AssemblyError, Constraints};
 use nonlin3d_element::{
-    BatchInput, ElementError, ElementKind, ElementOutput, IntegrationRule, Kinematics, ShapeTable,
-    Workspace, evaluate, evaluate_listed_with,
+    BatchInput, ElementError, ElementKind, ElementOutput, IntegrationRule, Kinematics, Prefetch,
+    ShapeTable, Workspace, evaluate, evaluate_listed_prefetching,
 };
 use nonlin3d_laminate::{ShearCoupling, Stiffness};
 use nonlin3d_mesh::Mesh;
@@ -31,15 +33,27 @@ struct Group {
     nodes: Vec<usize>,
     /// (lowest, highest) node rank of each member.
     span: Vec<(usize, usize)>,
-    /// Node-pair offsets into the pattern, `table.nodes()²` per member, the first to reach each
-    /// pair flagged (`scatter::FIRST`).
-    offsets: Vec<u32>,
+    /// Node pairs and their offsets into the pattern, grouped for the scatter
+    /// (`scatter::pair_lists`), `pair_stride(table.nodes())` words per member.
+    pairs: Vec<u32>,
 }
 
 impl Group {
     fn nodes_of(&self, i: usize) -> &[usize] {
         let nn = self.table.nodes();
         &self.nodes[i * nn..(i + 1) * nn]
+    }
+
+    fn pairs_of(&self, i: usize) -> &[u32] {
+        let stride = pair_stride(self.table.nodes());
+        &self.pairs[i * stride..(i + 1) * stride]
+    }
+
+    /// The members with a node ranked in [lo, hi), in sweep order: what that part evaluates.
+    fn listed(&self, lo: usize, hi: usize) -> Vec<usize> {
+        (0..self.cells.len())
+            .filter(|&i| self.span[i].0 < hi && self.span[i].1 >= lo)
+            .collect()
     }
 }
 
@@ -72,6 +86,10 @@ pub struct Assembler {
     /// Tangent positions no cell reaches (tie couplings, nodes in no cell): zeroed apart.
     unreached: Vec<usize>,
     mask: Mutex<FixedMask>,
+    /// Prefetch hints of the last split and values alignment assembled with a tangent.
+    plan: Mutex<Arc<PrefetchPlan>>,
+    /// Whether tangent assemblies issue prefetch hints (see [`Assembler::set_prefetch`]).
+    prefetch: bool,
 }
 
 /// One assembly: internal forces, strain energy, and the tangent if it was asked for.
@@ -221,7 +239,7 @@ impl Assembler {
                     .collect(),
                 span: cells.iter().map(|&c| span_of(c)).collect(),
                 cells,
-                offsets: Vec::new(),
+                pairs: Vec::new(),
             });
         }
         let mut place = vec![(0, 0); mesh.cells.len()];
@@ -251,6 +269,8 @@ impl Assembler {
             sweep,
             unreached: Vec::new(),
             mask: Mutex::new(FixedMask::default()),
+            plan: Mutex::default(),
+            prefetch: true,
         };
         assembler.set_pattern(pattern)?;
         Ok(assembler)
@@ -259,26 +279,87 @@ impl Assembler {
     /// Adopts `pattern` (node-blocked, checked) and recomputes every cell's offsets into it.
     fn set_pattern(&mut self, pattern: Arc<SymmetricPattern>) -> Result<(), AssemblyError> {
         check_node_blocked(&pattern, self.n / 3)?;
-        for g in &mut self.groups {
+        let mut offsets = Vec::with_capacity(self.groups.len());
+        for g in &self.groups {
             let nn = g.table.nodes();
-            let offsets: Result<Vec<Vec<u32>>, AssemblyError> = g
+            let of_group: Result<Vec<Vec<u32>>, AssemblyError> = g
                 .nodes
                 .par_chunks(nn)
                 .map(|nodes| block_offsets(&pattern, nodes))
                 .collect();
-            g.offsets = offsets?.concat();
+            offsets.push(of_group?.concat());
         }
         // Flags in sweep order: group after group (as `assemble` visits them), cell after cell.
         self.unreached = mark_first(
             &pattern,
-            self.groups.iter_mut().flat_map(|g| {
-                let nn = g.table.nodes();
-                g.nodes.chunks(nn).zip(g.offsets.chunks_mut(nn * nn))
-            }),
+            self.groups
+                .iter()
+                .zip(offsets.iter_mut())
+                .flat_map(|(g, o)| {
+                    let nn = g.table.nodes();
+                    g.nodes.chunks(nn).zip(o.chunks_mut(nn * nn))
+                }),
         );
+        for (g, o) in self.groups.iter_mut().zip(&offsets) {
+            let nn = g.table.nodes();
+            let stride = pair_stride(nn);
+            let mut pairs = vec![0u32; stride * g.cells.len()];
+            for ((nodes, o), out) in g
+                .nodes
+                .chunks(nn)
+                .zip(o.chunks(nn * nn))
+                .zip(pairs.chunks_mut(stride))
+            {
+                pair_lists(nodes, o, out)?;
+            }
+            g.pairs = pairs;
+        }
         self.pattern = pattern;
         *self.mask.lock().unwrap_or_else(|e| e.into_inner()) = FixedMask::default();
+        *self.plan.lock().unwrap_or_else(|e| e.into_inner()) = Arc::default();
         Ok(())
+    }
+
+    /// The prefetch hints for this split of the rank range and a values array starting `align`
+    /// f64s past a 64-byte boundary: the cached plan if it was made for them, else a new one
+    /// (one pass over every cell's scatter positions, parts in parallel). Tangents of 2³² or
+    /// more entries get no hints.
+    fn prefetch_plan(&self, splits: &[usize], align: usize) -> Arc<PrefetchPlan> {
+        let mut cached = self.plan.lock().unwrap_or_else(|e| e.into_inner());
+        if cached.key.0 == splits && cached.key.1 == align {
+            return cached.clone();
+        }
+        let nnz = self.pattern.nnz_lower();
+        let col_ptr = self.pattern.col_ptr();
+        let rank = &self.rank;
+        let parts = if u32::try_from(nnz).is_err() {
+            Vec::new()
+        } else {
+            splits
+                .par_windows(2)
+                .map(|w| {
+                    let (lo, hi) = (w[0], w[1]);
+                    let mut marks = vec![0u32; (nnz + 8) / 8 + 1];
+                    self.groups
+                        .iter()
+                        .map(|g| {
+                            let cells = g.listed(lo, hi).into_iter().map(|i| {
+                                move |visit: &mut dyn FnMut(usize)| {
+                                    let (nodes, pairs) = (g.nodes_of(i), g.pairs_of(i));
+                                    cell_positions(nodes, pairs, col_ptr, rank, (lo, hi), visit)
+                                }
+                            });
+                            CellLines::new(cells, align, &mut marks)
+                        })
+                        .collect()
+                })
+                .collect()
+        };
+        *cached = Arc::new(PrefetchPlan {
+            key: (splits.to_vec(), align),
+            parts,
+        });
+        cached.clone()
     }
 
     /// Internal forces of the listed cells alone, f = Σ_cells ∫ Bᵀ S dV, node-major over the
@@ -377,6 +458,17 @@ impl Assembler {
         self.set_pattern(pattern)
     }
 
+    /// Turns the prefetch hints of tangent assemblies on (the default) or off. With hints, each
+    /// cell's evaluation prefetches the tangent lines its scatter will write (listed once per
+    /// thread split, ≈ 1.5 kB per Hex20 cell; see docs/DESIGN.md); results are bitwise the
+    /// same either way, only the time differs. Off frees the lists.
+    pub fn set_prefetch(&mut self, on: bool) {
+        self.prefetch = on;
+        if !on {
+            *self.plan.lock().unwrap_or_else(|e| e.into_inner()) = Arc::default();
+        }
+    }
+
     /// Number of DOFs.
     pub fn n(&self) -> usize {
         self.n
@@ -450,31 +542,35 @@ impl Assembler {
         }
         let mut internal = vec![0.0; self.n];
         let splits = self.sweep.splits(rayon::current_num_threads());
+        let plan = (want_k && self.prefetch).then(|| {
+            let align = (values.as_ptr() as usize / std::mem::size_of::<f64>()) % 8;
+            self.prefetch_plan(&splits, align)
+        });
         let (forces, values) = (Shared::new(&mut internal), Shared::new(values));
         let rank = &self.rank;
         let owned: Vec<Result<Vec<OwnedEnergy>, AssemblyError>> = splits
             .par_windows(2)
-            .map(|w| {
+            .enumerate()
+            .map(|(part, w)| {
                 let (lo, hi) = (w[0], w[1]);
+                let base = values.as_ptr();
                 let mut energies = Vec::new();
                 for (gi, g) in self.groups.iter().enumerate() {
-                    let list: Vec<usize> = (0..g.cells.len())
-                        .filter(|&i| g.span[i].0 < hi && g.span[i].1 >= lo)
-                        .collect();
+                    let list = g.listed(lo, hi);
+                    let hints = plan.as_ref().and_then(|p| p.parts.get(part)?.get(gi));
                     let input = BatchInput {
                         coords: &g.coords,
                         disp: &disp[gi],
                         materials: &self.stiffness,
                         material_of: &g.material_of,
                     };
-                    let nn = g.table.nodes();
-                    let offsets = |i: usize| &g.offsets[i * nn * nn..(i + 1) * nn * nn];
-                    evaluate_listed_with(
+                    evaluate_listed_prefetching(
                         &g.table,
                         &input,
                         self.kinematics,
                         want_k,
                         &list,
+                        |k| hints.map_or(Prefetch::NONE, |h| Prefetch::new(base, h.of(k))),
                         |i, out| {
                             let nodes = g.nodes_of(i);
                             for (a, &v) in nodes.iter().enumerate() {
@@ -485,7 +581,7 @@ impl Assembler {
                             if want_k {
                                 add_cell_tangent(
                                     nodes,
-                                    offsets(i),
+                                    g.pairs_of(i),
                                     &out.tangent,
                                     col_ptr,
                                     rank,
@@ -699,8 +795,8 @@ mod tests {
     /// The owner-computes assembly equals the plain element-by-element sum (each cell's
     /// `evaluate` added through `SymmetricMatrix::scatter_add`, an independent path) to
     /// summation-order rounding (1e-12 of the largest entry), and is bitwise the same on 1 to 4
-    /// threads (each split puts straddling cells on both sides), on a swept model with two
-    /// materials and ply angles.
+    /// threads (each split puts straddling cells on both sides), with prefetch hints on and
+    /// off, on a swept model with two materials and ply angles.
     #[test]
     fn assembly_equals_the_plain_sum_on_any_thread_count() {
         use nonlin3d_laminate::materials;
@@ -717,15 +813,20 @@ mod tests {
             materials::generic_graphite_epoxy().stiffness().unwrap(),
             materials::steel().stiffness().unwrap(),
         ];
-        let (asm, u) = nonlinear_gauss2(&mesh, &mats, 1e-5);
+        let (mut asm, u) = nonlinear_gauss2(&mesh, &mats, 1e-5);
         let mut runs = Vec::new();
-        for threads in 1..=4 {
-            let pool = pool_of(threads);
-            let mut k = asm.new_tangent();
-            // Stale values must not survive.
-            k.values_mut().fill(7.0);
-            let a = pool.install(|| asm.assemble(&u, Some(&mut k))).unwrap();
-            runs.push((a, k));
+        // With and without prefetch hints (hints only move cache lines), a fresh tangent (new
+        // alignment, so a new hint plan) each time.
+        for hints in [true, false] {
+            asm.set_prefetch(hints);
+            for threads in 1..=4 {
+                let pool = pool_of(threads);
+                let mut k = asm.new_tangent();
+                // Stale values must not survive.
+                k.values_mut().fill(7.0);
+                let a = pool.install(|| asm.assemble(&u, Some(&mut k))).unwrap();
+                runs.push((a, k));
+            }
         }
         for r in &runs[1..] {
             assert!(r.0 == runs[0].0, "forces or energy depend on the threads");

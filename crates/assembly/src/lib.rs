@@ -22,6 +22,7 @@
 mod assembler;
 mod constraints;
 mod error;
+mod prefetch;
 mod scatter;
 
 pub use assembler::{Assembler, Assembly};

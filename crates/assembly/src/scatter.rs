@@ -9,7 +9,9 @@
 //! nodes I ≥ J),
 //!
 //! one offset per node pair instead of one position per matrix entry: 400 `u32` (1.6 kB) per
-//! Hex20 instead of 3 600 positions (57.6 kB), so the scatter streams from cache.
+//! Hex20 instead of 3 600 positions (57.6 kB), so the scatter streams from cache. Each cell
+//! keeps them regrouped ([`pair_lists`]: 210 words per Hex20), per column node the pairs it
+//! stores, then those it adds.
 //!
 //! The top bit of an offset ([`FIRST`]) marks the cell that is first, in the sweep, to reach
 //! the node pair: it stores its block instead of adding it, so no value is zeroed beforehand
@@ -175,6 +177,11 @@ impl<'a> Shared<'a> {
         }
     }
 
+    /// The array's first element, for prefetch hints (never dereferenced through this).
+    pub(crate) fn as_ptr(&self) -> *const f64 {
+        self.ptr
+    }
+
     /// v[p] += x.
     #[inline(always)]
     pub(crate) fn add(&self, p: usize, x: f64) {
@@ -216,13 +223,75 @@ impl<'a> Shared<'a> {
     }
 }
 
-/// K(3I + a, 3J + c) += Ke(3i + a, 3j + c) for the cell's node pairs I ≥ J (mesh numbers) whose
-/// column node J is ranked in [lo, hi); `=` instead of `+=` for the pairs flagged [`FIRST`].
-/// `ke` is the cell's full symmetric tangent, row-major; row 3j + c is read as column 3j + c.
-/// `offsets` is j-major: o(I, J) at `j·nn + i`.
-pub(crate) fn add_cell_tangent(
+/// u32 words per cell of a [`pair_lists`] table for cells of `nn` nodes: a head per local
+/// node, then one entry per node pair.
+pub(crate) fn pair_stride(nn: usize) -> usize {
+    nn + nn * nn.saturating_sub(1) / 2
+}
+
+/// Bit of a head word: the cell stores (rather than adds) the node's diagonal block.
+const DIAG_FIRST: u32 = 1 << 31;
+
+/// A cell's node pairs I > J regrouped for a branch-free scatter, from its flagged offsets
+/// (j-major, as [`block_offsets`] and [`mark_first`] leave them) into `out` ([`pair_stride`]
+/// words). Head j: segment start (bits 0–11), length (12–19), number of first-reached pairs
+/// (20–27), [`DIAG_FIRST`]. Entry: local node i (bits 24–31) and o(I, J) (bits 0–23); in each
+/// segment the first-reached pairs come first, then the others, each in increasing offset.
+pub(crate) fn pair_lists(
     nodes: &[usize],
     offsets: &[u32],
+    out: &mut [u32],
+) -> Result<(), AssemblyError> {
+    let nn = nodes.len();
+    if pair_stride(nn) - nn > 0xfff {
+        return Err(AssemblyError::Pattern {
+            column: nodes.first().map_or(0, |&n| 3 * n),
+            reason: format!("a cell of {nn} nodes has more node pairs than the scatter lists hold"),
+        });
+    }
+    let (heads, entries) = out.split_at_mut(nn);
+    let mut next = 0usize;
+    let mut seg: Vec<(bool, u32, u32)> = Vec::with_capacity(nn);
+    for (j, &nj) in nodes.iter().enumerate() {
+        seg.clear();
+        for (i, &ni) in nodes.iter().enumerate() {
+            if ni > nj {
+                let o = offsets[j * nn + i];
+                let off = o & !FIRST;
+                if off >= 1 << 24 {
+                    return Err(AssemblyError::Pattern {
+                        column: 3 * nj,
+                        reason: "column longer than 2²⁴ entries".into(),
+                    });
+                }
+                seg.push((o & FIRST == 0, off, ((i as u32) << 24) | off));
+            }
+        }
+        seg.sort_unstable();
+        let first = seg.iter().filter(|s| !s.0).count();
+        heads[j] = next as u32
+            | (seg.len() as u32) << 12
+            | (first as u32) << 20
+            | if offsets[j * nn + j] & FIRST != 0 {
+                DIAG_FIRST
+            } else {
+                0
+            };
+        for (k, s) in seg.iter().enumerate() {
+            entries[next + k] = s.2;
+        }
+        next += seg.len();
+    }
+    Ok(())
+}
+
+/// K(3I + a, 3J + c) += Ke(3i + a, 3j + c) for the cell's node pairs I ≥ J (mesh numbers) whose
+/// column node J is ranked in [lo, hi); `=` instead of `+=` for the pairs flagged first. `ke` is
+/// the cell's full symmetric tangent, row-major; row 3j + c is read as column 3j + c. `pairs` is
+/// the cell's [`pair_lists`] table: the stores and the adds of a column are separate loops.
+pub(crate) fn add_cell_tangent(
+    nodes: &[usize],
+    pairs: &[u32],
     ke: &[f64],
     col_ptr: &[usize],
     rank: &[usize],
@@ -231,6 +300,7 @@ pub(crate) fn add_cell_tangent(
 ) {
     let nn = nodes.len();
     let nd = 3 * nn;
+    let (heads, entries) = pairs.split_at(nn);
     for (j, &nj) in nodes.iter().enumerate() {
         if rank[nj] < lo || rank[nj] >= hi {
             continue;
@@ -246,9 +316,9 @@ pub(crate) fn add_cell_tangent(
             &ke[(3 * j + 1) * nd..(3 * j + 2) * nd],
             &ke[(3 * j + 2) * nd..(3 * j + 3) * nd],
         ];
-        let column = &offsets[j * nn..(j + 1) * nn];
+        let head = heads[j];
         // The diagonal block: its lower triangle.
-        let first = column[j] & FIRST != 0;
+        let first = head & DIAG_FIRST != 0;
         for c in 0..3 {
             for a in c..3 {
                 if first {
@@ -258,16 +328,60 @@ pub(crate) fn add_cell_tangent(
                 }
             }
         }
-        for (i, (&ni, &o)) in nodes.iter().zip(column).enumerate() {
-            if ni <= nj {
-                continue;
-            }
-            let (first, o) = (o & FIRST != 0, (o & !FIRST) as usize);
+        let start = (head & 0xfff) as usize;
+        let len = ((head >> 12) & 0xff) as usize;
+        let stores = ((head >> 20) & 0xff) as usize;
+        let seg = &entries[start..start + len];
+        let (stored, added) = seg.split_at(stores);
+        for &e in stored {
+            let (i, o) = ((e >> 24) as usize, (e & 0xff_ffff) as usize);
             for c in 0..3 {
-                if first {
-                    values.set3(base[c] + o, &rows[c][3 * i..3 * i + 3]);
-                } else {
-                    values.add3(base[c] + o, &rows[c][3 * i..3 * i + 3]);
+                values.set3(base[c] + o, &rows[c][3 * i..3 * i + 3]);
+            }
+        }
+        for &e in added {
+            let (i, o) = ((e >> 24) as usize, (e & 0xff_ffff) as usize);
+            for c in 0..3 {
+                values.add3(base[c] + o, &rows[c][3 * i..3 * i + 3]);
+            }
+        }
+    }
+}
+
+/// Calls `visit(p)` for every tangent position [`add_cell_tangent`] writes for this cell and
+/// rank range, in the same order: what the prefetch hints of a cell are made from.
+pub(crate) fn cell_positions(
+    nodes: &[usize],
+    pairs: &[u32],
+    col_ptr: &[usize],
+    rank: &[usize],
+    (lo, hi): (usize, usize),
+    mut visit: impl FnMut(usize),
+) {
+    let nn = nodes.len();
+    let (heads, entries) = pairs.split_at(nn);
+    for (j, &nj) in nodes.iter().enumerate() {
+        if rank[nj] < lo || rank[nj] >= hi {
+            continue;
+        }
+        let base = [
+            col_ptr[3 * nj],
+            col_ptr[3 * nj + 1] - 1,
+            col_ptr[3 * nj + 2] - 2,
+        ];
+        for c in 0..3 {
+            for a in c..3 {
+                visit(base[c] + a);
+            }
+        }
+        let head = heads[j];
+        let start = (head & 0xfff) as usize;
+        let len = ((head >> 12) & 0xff) as usize;
+        for &e in &entries[start..start + len] {
+            let o = (e & 0xff_ffff) as usize;
+            for b in base {
+                for a in 0..3 {
+                    visit(b + o + a);
                 }
             }
         }
@@ -454,6 +568,111 @@ mod tests {
         let mut got = unreached;
         got.sort_unstable();
         assert_eq!(got, expected);
+    }
+
+    /// The regrouped pair lists scatter each cell exactly as the plain sum K = Σ Ke does (the
+    /// first cell of a pair storing, later ones adding), for any rank range; each segment lists
+    /// its stores before its adds, each in increasing offset; and `cell_positions` visits
+    /// exactly the positions the scatter writes.
+    #[test]
+    fn pair_lists_scatter_the_plain_sum_and_positions_match() {
+        let cells = [vec![0usize, 1, 2, 3], vec![2, 3, 4, 5], vec![5, 1, 6, 0]];
+        let lists: Vec<Vec<usize>> = cells
+            .iter()
+            .map(|c| {
+                c.iter()
+                    .flat_map(|&n| [3 * n, 3 * n + 1, 3 * n + 2])
+                    .collect()
+            })
+            .collect();
+        let pattern = SymmetricPattern::from_dof_lists(21, &lists).unwrap();
+        let mut offsets: Vec<Vec<u32>> = cells
+            .iter()
+            .map(|c| block_offsets(&pattern, c).unwrap())
+            .collect();
+        let unreached = mark_first(
+            &pattern,
+            cells
+                .iter()
+                .map(|c| &c[..])
+                .zip(offsets.iter_mut().map(|o| &mut o[..])),
+        );
+        assert!(unreached.is_empty());
+        let pairs: Vec<Vec<u32>> = cells
+            .iter()
+            .zip(&offsets)
+            .map(|(c, o)| {
+                let mut out = vec![0; pair_stride(c.len())];
+                pair_lists(c, o, &mut out).unwrap();
+                out
+            })
+            .collect();
+        for (c, p) in cells.iter().zip(&pairs) {
+            let (heads, entries) = p.split_at(c.len());
+            for &h in heads {
+                let (start, len) = ((h & 0xfff) as usize, ((h >> 12) & 0xff) as usize);
+                let stores = ((h >> 20) & 0xff) as usize;
+                let seg = &entries[start..start + len];
+                let off = |e: &u32| e & 0xff_ffff;
+                assert!(seg[..stores].is_sorted_by_key(off) && seg[stores..].is_sorted_by_key(off));
+            }
+        }
+        // Ke(a, b) = 1 + a + 100·b on and below the diagonal (mirrored), distinct per cell.
+        let ke = |k: usize| -> Vec<f64> {
+            (0..144)
+                .map(|e| {
+                    let (a, b) = (e / 12, e % 12);
+                    let (a, b) = (a.max(b), a.min(b));
+                    (1 + a + 100 * b + 10_000 * k) as f64
+                })
+                .collect()
+        };
+        let rank: Vec<usize> = (0..7).collect();
+        let col_ptr = pattern.col_ptr();
+        for (lo, hi) in [(0, 7), (0, 3), (3, 7)] {
+            let mut values = vec![f64::NAN; pattern.nnz_lower()];
+            let mut visited = Vec::new();
+            {
+                let shared = Shared::new(&mut values);
+                for (k, (c, p)) in cells.iter().zip(&pairs).enumerate() {
+                    add_cell_tangent(c, p, &ke(k), col_ptr, &rank, (lo, hi), &shared);
+                    cell_positions(c, p, col_ptr, &rank, (lo, hi), |q| visited.push(q));
+                }
+            }
+            let mut expected = vec![f64::NAN; pattern.nnz_lower()];
+            for (k, c) in cells.iter().enumerate() {
+                let ke = ke(k);
+                for (i, &ni) in c.iter().enumerate() {
+                    for (j, &nj) in c.iter().enumerate() {
+                        for (a, cc) in (0..3).flat_map(|a| (0..3).map(move |cc| (a, cc))) {
+                            let (r, col) = (3 * ni + a, 3 * nj + cc);
+                            if r < col || rank[nj] < lo || rank[nj] >= hi {
+                                continue;
+                            }
+                            let q = pattern.position(r, col).unwrap();
+                            let v = ke[(3 * i + a) * 12 + 3 * j + cc];
+                            expected[q] = if expected[q].is_nan() {
+                                v
+                            } else {
+                                expected[q] + v
+                            };
+                        }
+                    }
+                }
+            }
+            for (q, (g, e)) in values.iter().zip(&expected).enumerate() {
+                assert!(
+                    g == e || (g.is_nan() && e.is_nan()),
+                    "{lo}..{hi} at {q}: {g} vs {e}"
+                );
+            }
+            let mut written: Vec<usize> =
+                (0..values.len()).filter(|&q| !values[q].is_nan()).collect();
+            visited.sort_unstable();
+            visited.dedup();
+            written.sort_unstable();
+            assert_eq!(visited, written, "{lo}..{hi}");
+        }
     }
 
     /// Splits are increasing, cover the range, and balance the cells each part evaluates

@@ -7,6 +7,7 @@
 //! [`evaluate`](crate::evaluate) and independent of the number of threads.
 
 use crate::kernel::{Job, OutView, check_finite, check_material, run};
+use crate::prefetch::Prefetch;
 use crate::{ElementError, ElementOutput, Kinematics, ShapeTable, Workspace};
 use nonlin3d_laminate::Stiffness;
 use rayon::prelude::*;
@@ -100,12 +101,14 @@ impl BatchInput<'_> {
     }
 
     /// Evaluates element `e` into `out`; errors name the element.
+    #[allow(clippy::too_many_arguments)]
     fn run_element(
         &self,
         table: &ShapeTable,
         e: usize,
         nonlinear: bool,
         tangent: bool,
+        prefetch: Prefetch<'_>,
         ws: &mut Workspace,
         out: OutView<'_>,
     ) -> Result<(), ElementError> {
@@ -120,6 +123,7 @@ impl BatchInput<'_> {
             material,
             nonlinear,
             tangent,
+            prefetch,
         };
         check_finite(coords, "coordinates")
             .and_then(|_| check_finite(disp, "displacements"))
@@ -198,6 +202,7 @@ pub fn evaluate_batch(
                         chunk * CHUNK + i,
                         nonlinear,
                         tangent,
+                        Prefetch::NONE,
                         &mut ws,
                         view,
                     )?;
@@ -220,9 +225,37 @@ pub fn evaluate_listed_with<F>(
     kinematics: Kinematics,
     tangent: bool,
     elements: &[usize],
+    consume: F,
+) -> Result<(), ElementError>
+where
+    F: FnMut(usize, &ElementOutput),
+{
+    evaluate_listed_prefetching(
+        table,
+        input,
+        kinematics,
+        tangent,
+        elements,
+        |_| Prefetch::NONE,
+        consume,
+    )
+}
+
+/// [`evaluate_listed_with`], with `ahead(k)` giving cache lines that `consume` will touch after
+/// the k-th listed element (k counts from 0 along `elements`): they are prefetched during that
+/// element's tangent product, so their misses overlap its arithmetic instead of stalling the
+/// consumer. Results are the same as without hints, bit for bit.
+pub fn evaluate_listed_prefetching<'p, A, F>(
+    table: &ShapeTable,
+    input: &BatchInput<'_>,
+    kinematics: Kinematics,
+    tangent: bool,
+    elements: &[usize],
+    mut ahead: A,
     mut consume: F,
 ) -> Result<(), ElementError>
 where
+    A: FnMut(usize) -> Prefetch<'p>,
     F: FnMut(usize, &ElementOutput),
 {
     input.validate(table)?;
@@ -230,7 +263,7 @@ where
     let nonlinear = kinematics == Kinematics::Nonlinear;
     let mut ws = Workspace::new(table);
     let mut one = ElementOutput::new(table);
-    for &e in elements {
+    for (k, &e) in elements.iter().enumerate() {
         if e >= n {
             return Err(ElementError::LengthMismatch {
                 what: "listed element index (batch size)",
@@ -238,7 +271,8 @@ where
                 got: e,
             });
         }
-        input.run_element(table, e, nonlinear, tangent, &mut ws, one.view())?;
+        let hints = if tangent { ahead(k) } else { Prefetch::NONE };
+        input.run_element(table, e, nonlinear, tangent, hints, &mut ws, one.view())?;
         consume(e, &one);
     }
     Ok(())
@@ -275,7 +309,15 @@ where
             let mut ws = Workspace::new(table);
             let mut one = ElementOutput::new(table);
             for e in chunk * CHUNK..((chunk + 1) * CHUNK).min(n) {
-                input.run_element(table, e, nonlinear, tangent, &mut ws, one.view())?;
+                input.run_element(
+                    table,
+                    e,
+                    nonlinear,
+                    tangent,
+                    Prefetch::NONE,
+                    &mut ws,
+                    one.view(),
+                )?;
                 consume(&mut state, e, &one);
             }
             Ok(state)

@@ -5,6 +5,7 @@
 //! Total Lagrangian: strains are Green–Lagrange (eq. 2.1.4), stresses second Piola–Kirchhoff,
 //! σ = C ε, both referred to the undeformed configuration.
 
+use crate::prefetch::Prefetch;
 use crate::simd::{acc3, comb3, dot};
 use crate::syrk::syrk_lower;
 use crate::{ElementError, ElementKind, ShapeTable};
@@ -123,6 +124,7 @@ pub fn evaluate(
         material,
         nonlinear,
         tangent,
+        prefetch: Prefetch::NONE,
     };
     run(job, workspace, out.view())
 }
@@ -136,6 +138,8 @@ pub(crate) struct Job<'a> {
     pub(crate) material: &'a Stiffness,
     pub(crate) nonlinear: bool,
     pub(crate) tangent: bool,
+    /// Lines the consumer will need, prefetched during the tangent product.
+    pub(crate) prefetch: Prefetch<'a>,
 }
 
 /// Monomorphised dispatch on the element kind (node count as a const generic).
@@ -545,7 +549,7 @@ fn kernel<const NS: usize, const FMA: bool>(
     }
     if want_tangent {
         let k = out.tangent;
-        syrk_lower::<FMA>(&ws.t, row0, p, nd, |a, b, v| {
+        syrk_lower::<FMA>(&ws.t, row0, p, nd, job.prefetch, |a, b, v| {
             k[a * nd + b] = v;
             k[b * nd + a] = v;
         });

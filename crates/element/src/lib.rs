@@ -10,6 +10,7 @@
 //! | [`evaluate`], [`b0bl3d`], [`estif3d`] | one element: strains, stresses, forces, energy, tangent | eq. 2.1.4, 2.3.1–2.3.4, 2.4.2.6 |
 //! | [`Kinematics::Linear`], [`linear_stiffness`] | small-strain variants | §2.6, §2.8 |
 //! | [`evaluate_batch`], [`evaluate_batch_with`] | many elements of one kind, rayon across chunks; stored, or streamed to a consumer | §2.4 |
+//! | [`evaluate_listed_with`], [`evaluate_listed_prefetching`], [`Prefetch`] | a listed run on the calling thread (owner-computes assembly), with cache-line hints for the consumer | — |
 //! | [`eigen_analysis`] | eigenvalues and zero-energy modes of an element stiffness | §2.5 |
 //! | [`reference`](mod@reference) | a plain per-point nalgebra implementation (B explicit, Bᵀ C B): the oracle | — |
 //! | `strategies` (feature `proptest`) | random distorted elements, SPD materials, displacements | — |
@@ -46,6 +47,7 @@ mod batch;
 mod eigen;
 mod error;
 mod kernel;
+mod prefetch;
 mod quadrature;
 pub mod reference;
 mod shape;
@@ -56,13 +58,15 @@ mod syrk;
 mod table;
 
 pub use batch::{
-    BatchInput, BatchOutput, evaluate_batch, evaluate_batch_with, evaluate_listed_with,
+    BatchInput, BatchOutput, evaluate_batch, evaluate_batch_with, evaluate_listed_prefetching,
+    evaluate_listed_with,
 };
 pub use eigen::{EigenReport, ZERO_MODE_THRESHOLD, eigen_analysis};
 pub use error::ElementError;
 pub use kernel::{
     ElementOutput, Kinematics, Workspace, b0bl3d, estif3d, evaluate, linear_stiffness,
 };
+pub use prefetch::Prefetch;
 pub use quadrature::{IntegrationRule, Station, gauss_1d};
 pub use shape::{ElementKind, HEX20_EDGES, HEX20_NODES, THESIS_NODE_HEX8, THESIS_NODE_HEX20};
 pub use table::ShapeTable;

@@ -5,6 +5,8 @@
 //! length NSTR·NG. Here a 4×8 block of K is held in registers while the rows of T stream by,
 //! so every loaded T entry feeds 4 or 8 fused multiply-adds.
 
+use crate::prefetch::Prefetch;
+
 /// Rows of K per register block.
 const MR: usize = 4;
 /// Columns of K per register block (two AVX2 vectors).
@@ -13,16 +15,24 @@ const NR: usize = 8;
 /// Computes the lower triangle of K = TᵀT, where T has `rows` rows of stride `p` (p ≥ n, a
 /// multiple of [`NR`], padding columns zero), and hands each entry (a, b), b ≤ a, to `store`.
 /// With `FMA` (the caller runs with AVX2 + FMA enabled) each block uses the intrinsic
-/// micro-kernel; otherwise the portable one.
+/// micro-kernel; otherwise the portable one. The hints of `ahead` are issued evenly, a few after
+/// each block, so their misses overlap the arithmetic.
 #[inline(always)]
 pub(crate) fn syrk_lower<const FMA: bool>(
     t: &[f64],
     rows: usize,
     p: usize,
     n: usize,
+    ahead: Prefetch<'_>,
     mut store: impl FnMut(usize, usize, f64),
 ) {
     debug_assert!(p.is_multiple_of(NR) && p >= n && t.len() >= rows * p);
+    let per_block = if ahead.is_empty() {
+        0
+    } else {
+        ahead.len().div_ceil(blocks(n))
+    };
+    let mut hinted = 0;
     let mut a0 = 0;
     while a0 < n {
         let mut b0 = 0;
@@ -43,9 +53,21 @@ pub(crate) fn syrk_lower<const FMA: bool>(
                 }
             }
             b0 += NR;
+            if hinted < ahead.len() {
+                ahead.issue(hinted, hinted + per_block);
+                hinted += per_block;
+            }
         }
         a0 += MR;
     }
+}
+
+/// Number of register blocks [`syrk_lower`] computes for an n × n lower triangle.
+fn blocks(n: usize) -> usize {
+    (0..n)
+        .step_by(MR)
+        .map(|a0| (a0 + MR).min(n).div_ceil(NR))
+        .sum()
 }
 
 /// One MR×NR block of TᵀT: Σ_rows T[row][a0 + i]·T[row][b0 + j], plain Rust.
@@ -117,7 +139,7 @@ mod tests {
 
     #[target_feature(enable = "avx2,fma")]
     fn syrk_avx2(t: &[f64], rows: usize, p: usize, n: usize, k: &mut [f64]) {
-        syrk_lower::<true>(t, rows, p, n, |a, b, v| k[a * n + b] = v);
+        syrk_lower::<true>(t, rows, p, n, Prefetch::NONE, |a, b, v| k[a * n + b] = v);
     }
 
     #[test]
@@ -131,7 +153,7 @@ mod tests {
                 }
             }
             let mut k = vec![f64::NAN; n * n];
-            syrk_lower::<false>(&t, rows, p, n, |a, b, v| k[a * n + b] = v);
+            syrk_lower::<false>(&t, rows, p, n, Prefetch::NONE, |a, b, v| k[a * n + b] = v);
             let mut k2 = vec![f64::NAN; n * n];
             if std::arch::is_x86_feature_detected!("avx2")
                 && std::arch::is_x86_feature_detected!("fma")

@@ -5,8 +5,9 @@
 use nonlin3d_element::reference::evaluate_reference;
 use nonlin3d_element::strategies::{apply, displacements, distorted_element, material, rotation};
 use nonlin3d_element::{
-    BatchInput, BatchOutput, ElementKind, ElementOutput, IntegrationRule, Kinematics, ShapeTable,
-    Workspace, evaluate, evaluate_batch, evaluate_batch_with, evaluate_listed_with,
+    BatchInput, BatchOutput, ElementKind, ElementOutput, IntegrationRule, Kinematics, Prefetch,
+    ShapeTable, Workspace, evaluate, evaluate_batch, evaluate_batch_with,
+    evaluate_listed_prefetching, evaluate_listed_with,
 };
 use nonlin3d_laminate::Stiffness;
 use proptest::prelude::*;
@@ -252,6 +253,18 @@ proptest! {
             prop_assert_eq!(e, elems.len() - 1 - i);
             prop_assert_eq!(energy, outs[0].energy[e]);
             prop_assert_eq!(k73, outs[0].tangents[e * nd * nd + 7 * nd + 3]);
+        }
+        // With prefetch hints (a real buffer for some elements, wild addresses for others) the
+        // whole tangent is the same, bit for bit: hints only move cache lines.
+        let buffer = vec![0.0f64; 4096];
+        let near: Vec<u32> = (0..300).map(|k| (k * 13) % 4096).collect();
+        let wild: Vec<u32> = (0..50).map(|k| k * 0x0300_0001).collect();
+        let mut hinted = Vec::new();
+        evaluate_listed_prefetching(&t, &input, Kinematics::Nonlinear, true, &list, |k| {
+            if k % 2 == 0 { Prefetch::new(buffer.as_ptr(), &near) } else { Prefetch::new(std::ptr::null(), &wild) }
+        }, |e, out| hinted.push((e, out.tangent.clone()))).unwrap();
+        for (e, k) in hinted {
+            prop_assert_eq!(&outs[0].tangents[e * nd * nd..(e + 1) * nd * nd], &k[..]);
         }
         let past_the_end = evaluate_listed_with(&t, &input, Kinematics::Nonlinear, false, &[elems.len()], |_, _| ());
         prop_assert!(past_the_end.is_err());

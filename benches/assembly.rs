@@ -1,0 +1,133 @@
+//! Assembly throughput against the bare batched kernel (issue: assembly and Newton; target:
+//! assembly of r + K at ≥ 80 % of the kernel's throughput on ~100 k-DOF Hex20 models).
+//!
+//! The thesis's plate model (embedded circular debond, steel), Hex20 2×2×2, nonlinear, at a
+//! small displacement field; ~10 k and ~89 k DOF; 1 and 2 threads. Per model and thread count:
+//! the bare kernel over every cell (`evaluate_batch_with`, outputs consumed in cache), the
+//! assembly of r + K with prefetch hints (the default) and without. The ratio kernel / assembly
+//! is the issue's measure. Figures go to docs/PERFORMANCE.md.
+//!
+//! Run: `cargo bench --bench assembly`.
+
+use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+use nonlin3d::assembly::Assembler;
+use nonlin3d::element::{
+    BatchInput, ElementKind, IntegrationRule, Kinematics, ShapeTable, evaluate_batch_with,
+};
+use nonlin3d::laminate::{ShearCoupling, materials};
+use nonlin3d::mesh::{EmbeddedParams, embedded_delamination};
+use std::hint::black_box;
+use std::time::Duration;
+
+fn bench_assembly(c: &mut Criterion) {
+    let mut group = c.benchmark_group("assembly");
+    group
+        .warm_up_time(Duration::from_secs(1))
+        .measurement_time(Duration::from_secs(4))
+        .sample_size(15);
+    let models = [
+        (
+            "plate_10k",
+            EmbeddedParams {
+                slices: 12,
+                ..EmbeddedParams::thesis_reference()
+            },
+        ),
+        (
+            "plate_89k",
+            EmbeddedParams {
+                slices: 24,
+                radial_inside: 10,
+                radial_outside: 12,
+                sub_layers: 3,
+                base_layers: 6,
+                ..EmbeddedParams::thesis_reference()
+            },
+        ),
+    ];
+    let steel = materials::steel()
+        .stiffness()
+        .unwrap_or_else(|e| panic!("{e}"));
+    for (name, p) in models {
+        let mesh = embedded_delamination(&p).unwrap_or_else(|e| panic!("{e}"));
+        let mut asm = Assembler::new(
+            &mesh,
+            &[steel],
+            ShearCoupling::Exact,
+            IntegrationRule::Gauss2,
+            IntegrationRule::Gauss2,
+            Kinematics::Nonlinear,
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+        let n = asm.n();
+        let u: Vec<f64> = (0..n).map(|i| 1e-5 * (0.37 * i as f64).sin()).collect();
+        let mut k = asm.new_tangent();
+        let table = ShapeTable::new(ElementKind::Hex20, IntegrationRule::Gauss2)
+            .unwrap_or_else(|e| panic!("{e}"));
+        let coords: Vec<[f64; 3]> = (0..mesh.cells.len())
+            .flat_map(|c| mesh.cell_coordinates(c))
+            .collect();
+        let disp: Vec<[f64; 3]> = mesh
+            .cells
+            .iter()
+            .flat_map(|c| {
+                c.nodes
+                    .iter()
+                    .map(|&v| [u[3 * v], u[3 * v + 1], u[3 * v + 2]])
+            })
+            .collect();
+        let mats = [steel];
+        let of = vec![0usize; mesh.cells.len()];
+        let input = BatchInput {
+            coords: &coords,
+            disp: &disp,
+            materials: &mats,
+            material_of: &of,
+        };
+        group.throughput(Throughput::Elements(mesh.cells.len() as u64));
+        for threads in [1usize, 2] {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap_or_else(|e| panic!("{e}"));
+            group.bench_function(
+                BenchmarkId::new(format!("{name}_bare_kernel_threads"), threads),
+                |b| {
+                    b.iter(|| {
+                        let sums = pool
+                            .install(|| {
+                                evaluate_batch_with(
+                                    &table,
+                                    &input,
+                                    Kinematics::Nonlinear,
+                                    true,
+                                    || 0.0,
+                                    |s, _, o| *s += o.tangent[0] + o.forces[0],
+                                )
+                            })
+                            .unwrap_or_else(|e| panic!("{e}"));
+                        black_box(sums);
+                    })
+                },
+            );
+            for (hints, label) in [(true, "prefetch"), (false, "no_prefetch")] {
+                asm.set_prefetch(hints);
+                group.bench_function(
+                    BenchmarkId::new(format!("{name}_assemble_{label}_threads"), threads),
+                    |b| {
+                        b.iter(|| {
+                            let a = pool
+                                .install(|| asm.assemble(&u, Some(&mut k)))
+                                .unwrap_or_else(|e| panic!("{e}"));
+                            black_box((a.energy, k.values()[0]));
+                        })
+                    },
+                );
+            }
+        }
+    }
+    group.finish();
+}
+
+criterion_group!(benches, bench_assembly);
+criterion_main!(benches);
