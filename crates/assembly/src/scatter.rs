@@ -285,6 +285,27 @@ pub(crate) fn pair_lists(
     Ok(())
 }
 
+/// Where column 3J + c starts, less c, for c = 0, 1, 2: the triple of node I sits o(I, J) on.
+fn column_bases(col_ptr: &[usize], nj: usize) -> [usize; 3] {
+    [
+        col_ptr[3 * nj],
+        col_ptr[3 * nj + 1] - 1,
+        col_ptr[3 * nj + 2] - 2,
+    ]
+}
+
+/// Column node j's segment of a [`pair_lists`] table: whether it stores its diagonal block,
+/// the entries it stores and the entries it adds.
+fn segment(pairs: &[u32], nn: usize, j: usize) -> (bool, &[u32], &[u32]) {
+    let (heads, entries) = pairs.split_at(nn);
+    let head = heads[j];
+    let start = (head & 0xfff) as usize;
+    let len = ((head >> 12) & 0xff) as usize;
+    let stores = ((head >> 20) & 0xff) as usize;
+    let (stored, added) = entries[start..start + len].split_at(stores);
+    (head & DIAG_FIRST != 0, stored, added)
+}
+
 /// K(3I + a, 3J + c) += Ke(3i + a, 3j + c) for the cell's node pairs I ≥ J (mesh numbers) whose
 /// column node J is ranked in [lo, hi); `=` instead of `+=` for the pairs flagged first. `ke` is
 /// the cell's full symmetric tangent, row-major; row 3j + c is read as column 3j + c. `pairs` is
@@ -300,25 +321,18 @@ pub(crate) fn add_cell_tangent(
 ) {
     let nn = nodes.len();
     let nd = 3 * nn;
-    let (heads, entries) = pairs.split_at(nn);
     for (j, &nj) in nodes.iter().enumerate() {
         if rank[nj] < lo || rank[nj] >= hi {
             continue;
         }
-        // Column 3J + c, less c: where the triple of node I sits, o(I, J) on.
-        let base = [
-            col_ptr[3 * nj],
-            col_ptr[3 * nj + 1] - 1,
-            col_ptr[3 * nj + 2] - 2,
-        ];
+        let base = column_bases(col_ptr, nj);
+        let (first, stored, added) = segment(pairs, nn, j);
         let rows = [
             &ke[3 * j * nd..(3 * j + 1) * nd],
             &ke[(3 * j + 1) * nd..(3 * j + 2) * nd],
             &ke[(3 * j + 2) * nd..(3 * j + 3) * nd],
         ];
-        let head = heads[j];
         // The diagonal block: its lower triangle.
-        let first = head & DIAG_FIRST != 0;
         for c in 0..3 {
             for a in c..3 {
                 if first {
@@ -328,11 +342,6 @@ pub(crate) fn add_cell_tangent(
                 }
             }
         }
-        let start = (head & 0xfff) as usize;
-        let len = ((head >> 12) & 0xff) as usize;
-        let stores = ((head >> 20) & 0xff) as usize;
-        let seg = &entries[start..start + len];
-        let (stored, added) = seg.split_at(stores);
         for &e in stored {
             let (i, o) = ((e >> 24) as usize, (e & 0xff_ffff) as usize);
             for c in 0..3 {
@@ -359,25 +368,18 @@ pub(crate) fn cell_positions(
     mut visit: impl FnMut(usize),
 ) {
     let nn = nodes.len();
-    let (heads, entries) = pairs.split_at(nn);
     for (j, &nj) in nodes.iter().enumerate() {
         if rank[nj] < lo || rank[nj] >= hi {
             continue;
         }
-        let base = [
-            col_ptr[3 * nj],
-            col_ptr[3 * nj + 1] - 1,
-            col_ptr[3 * nj + 2] - 2,
-        ];
+        let base = column_bases(col_ptr, nj);
         for c in 0..3 {
             for a in c..3 {
                 visit(base[c] + a);
             }
         }
-        let head = heads[j];
-        let start = (head & 0xfff) as usize;
-        let len = ((head >> 12) & 0xff) as usize;
-        for &e in &entries[start..start + len] {
+        let (_, stored, added) = segment(pairs, nn, j);
+        for &e in stored.iter().chain(added) {
             let o = (e & 0xff_ffff) as usize;
             for b in base {
                 for a in 0..3 {
@@ -608,13 +610,10 @@ mod tests {
             })
             .collect();
         for (c, p) in cells.iter().zip(&pairs) {
-            let (heads, entries) = p.split_at(c.len());
-            for &h in heads {
-                let (start, len) = ((h & 0xfff) as usize, ((h >> 12) & 0xff) as usize);
-                let stores = ((h >> 20) & 0xff) as usize;
-                let seg = &entries[start..start + len];
+            for j in 0..c.len() {
+                let (_, stored, added) = segment(p, c.len(), j);
                 let off = |e: &u32| e & 0xff_ffff;
-                assert!(seg[..stores].is_sorted_by_key(off) && seg[stores..].is_sorted_by_key(off));
+                assert!(stored.is_sorted_by_key(off) && added.is_sorted_by_key(off));
             }
         }
         // Ke(a, b) = 1 + a + 100·b on and below the diagonal (mirrored), distinct per cell.
