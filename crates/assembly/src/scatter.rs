@@ -475,19 +475,20 @@ impl Sweep {
 mod tests {
     use super::*;
 
+    /// The DOFs 3n, 3n + 1, 3n + 2 of each node, node after node.
+    fn dofs(nodes: &[usize]) -> Vec<usize> {
+        nodes
+            .iter()
+            .flat_map(|&n| [3 * n, 3 * n + 1, 3 * n + 2])
+            .collect()
+    }
+
     /// Two Hex8-like cells sharing a face in a 1-D chain of node pairs: the offsets give the
     /// positions `SymmetricPattern::position` gives, for every entry of every pair.
     #[test]
     fn offsets_give_the_pattern_positions() {
         let cells = [vec![0usize, 1, 2, 3], vec![2, 3, 4, 5], vec![5, 1, 6, 0]];
-        let lists: Vec<Vec<usize>> = cells
-            .iter()
-            .map(|c| {
-                c.iter()
-                    .flat_map(|&n| [3 * n, 3 * n + 1, 3 * n + 2])
-                    .collect()
-            })
-            .collect();
+        let lists: Vec<Vec<usize>> = cells.iter().map(|c| dofs(c)).collect();
         let pattern = SymmetricPattern::from_dof_lists(21, &lists).unwrap();
         check_node_blocked(&pattern, 7).unwrap();
         for nodes in &cells {
@@ -523,12 +524,6 @@ mod tests {
     #[test]
     fn first_flags_cover_each_pair_once() {
         let cells = [vec![0usize, 1, 2, 3], vec![2, 3, 4, 5], vec![5, 1, 6, 0]];
-        let dofs = |nodes: &[usize]| -> Vec<usize> {
-            nodes
-                .iter()
-                .flat_map(|&n| [3 * n, 3 * n + 1, 3 * n + 2])
-                .collect()
-        };
         let mut lists: Vec<Vec<usize>> = cells.iter().map(|c| dofs(c)).collect();
         lists.push(dofs(&[0, 4]));
         lists.push(dofs(&[7]));
@@ -579,14 +574,7 @@ mod tests {
     #[test]
     fn pair_lists_scatter_the_plain_sum_and_positions_match() {
         let cells = [vec![0usize, 1, 2, 3], vec![2, 3, 4, 5], vec![5, 1, 6, 0]];
-        let lists: Vec<Vec<usize>> = cells
-            .iter()
-            .map(|c| {
-                c.iter()
-                    .flat_map(|&n| [3 * n, 3 * n + 1, 3 * n + 2])
-                    .collect()
-            })
-            .collect();
+        let lists: Vec<Vec<usize>> = cells.iter().map(|c| dofs(c)).collect();
         let pattern = SymmetricPattern::from_dof_lists(21, &lists).unwrap();
         let mut offsets: Vec<Vec<u32>> = cells
             .iter()
