@@ -2,22 +2,23 @@
 //! (thesis §2.2–2.3: f_int = Σ_cells ∫ Bᵀ S dV, K = Σ_cells (K_L + K_NL)), owner-computes: see
 //! `scatter.rs` for the layout and the split among threads.
 
+use crate::handover::{HandOverPlan, Mailbox, Slot};
 use crate::prefetch::{CellLines, PrefetchPlan};
 use crate::scatter::{
-    Shared, Sweep, add_cell_tangent, block_offsets, cell_positions, check_node_blocked, mark_first,
-    pair_lists, pair_stride,
+    Shared, Sweep, block_offsets, check_node_blocked, mark_first, pair_lists, pair_stride,
 };
+use crate::share::{Count, Pack, Positions, Scatter, Unpack, walk};
 use crate::{AssemblyError, Constraints};
 use nonlin3d_element::{
     BatchInput, ElementError, ElementKind, ElementOutput, IntegrationRule, Kinematics, Prefetch,
-    ShapeTable, Workspace, evaluate, evaluate_listed_prefetching,
+    ShapeTable, Workspace, evaluate, evaluate_listed_prefetching, prefetch_line,
 };
 use nonlin3d_laminate::{ShearCoupling, Stiffness};
 use nonlin3d_mesh::Mesh;
 use nonlin3d_solver::{SymmetricMatrix, SymmetricPattern, reverse_cuthill_mckee};
 use rayon::prelude::*;
 use std::collections::HashMap;
-use std::sync::{Arc, Mutex};
+use std::sync::{Arc, Mutex, TryLockError};
 
 /// The cells of one element kind, in sweep order (by highest node rank, then lowest), with what the
 /// kernel and the scatter need of each.
@@ -57,6 +58,9 @@ impl Group {
     }
 }
 
+/// How many cells ahead of its scatter a hand-over's pack and tangent lines are prefetched.
+const AHEAD: usize = 3;
+
 /// (group, position in the group, strain energy) of a cell, from the part that owns it.
 type OwnedEnergy = (usize, usize, f64);
 
@@ -90,6 +94,9 @@ pub struct Assembler {
     plan: Mutex<Arc<PrefetchPlan>>,
     /// Whether tangent assemblies issue prefetch hints (see [`Assembler::set_prefetch`]).
     prefetch: bool,
+    /// Cells across the last split, and the buffer they are handed over through.
+    hand_over: Mutex<Arc<HandOverPlan>>,
+    mailbox: Mutex<Vec<f64>>,
 }
 
 /// One assembly: internal forces, strain energy, and the tangent if it was asked for.
@@ -271,6 +278,8 @@ impl Assembler {
             mask: Mutex::new(FixedMask::default()),
             plan: Mutex::default(),
             prefetch: true,
+            hand_over: Mutex::default(),
+            mailbox: Mutex::default(),
         };
         assembler.set_pattern(pattern)?;
         Ok(assembler)
@@ -317,6 +326,7 @@ impl Assembler {
         self.pattern = pattern;
         *self.mask.lock().unwrap_or_else(|e| e.into_inner()) = FixedMask::default();
         *self.plan.lock().unwrap_or_else(|e| e.into_inner()) = Arc::default();
+        *self.hand_over.lock().unwrap_or_else(|e| e.into_inner()) = Arc::default();
         Ok(())
     }
 
@@ -346,7 +356,13 @@ impl Assembler {
                             let cells = g.listed(lo, hi).into_iter().map(|i| {
                                 move |visit: &mut dyn FnMut(usize)| {
                                     let (nodes, pairs) = (g.nodes_of(i), g.pairs_of(i));
-                                    cell_positions(nodes, pairs, col_ptr, rank, (lo, hi), visit)
+                                    walk(
+                                        nodes,
+                                        pairs,
+                                        rank,
+                                        (lo, hi),
+                                        &mut Positions::new(col_ptr, visit),
+                                    )
                                 }
                             });
                             CellLines::new(cells, align, &mut marks)
@@ -359,6 +375,59 @@ impl Assembler {
             key: (splits.to_vec(), align),
             parts,
         });
+        cached.clone()
+    }
+
+    /// Which cells cross the parts of this split and where each is handed over: the cached
+    /// plan if it was made for the split, else a new one.
+    fn hand_over_plan(&self, splits: &[usize]) -> Arc<HandOverPlan> {
+        let mut cached = self.hand_over.lock().unwrap_or_else(|e| e.into_inner());
+        if cached.key == splits {
+            return cached.clone();
+        }
+        let parts = splits.len().saturating_sub(1);
+        let part_of = |r: usize| splits.partition_point(|&s| s <= r).saturating_sub(1);
+        let rank = &self.rank;
+        let mut plan = HandOverPlan {
+            key: splits.to_vec(),
+            incoming: vec![vec![Vec::new(); self.groups.len()]; parts],
+            outgoing: vec![vec![Vec::new(); self.groups.len()]; parts],
+            ..HandOverPlan::default()
+        };
+        let (mut end_k, mut end_f) = (0, 0);
+        for (q, w) in splits.windows(2).enumerate() {
+            let (lo, hi) = (w[0], w[1]);
+            for (gi, g) in self.groups.iter().enumerate() {
+                for (at, i) in g.listed(lo, hi).into_iter().enumerate() {
+                    let nodes = g.nodes_of(i);
+                    let inside = nodes
+                        .iter()
+                        .filter(|&&v| rank[v] >= lo && rank[v] < hi)
+                        .count();
+                    if g.span[i].1 < hi || inside == 0 {
+                        continue;
+                    }
+                    let mut share = Count::default();
+                    walk(nodes, g.pairs_of(i), rank, (lo, hi), &mut share);
+                    let k = plan.with_tangent.len();
+                    for (slots, end, len) in [
+                        (&mut plan.with_tangent, &mut end_k, 3 * inside + share.0),
+                        (&mut plan.forces_only, &mut end_f, 3 * inside),
+                    ] {
+                        slots.push(Slot { start: *end, len });
+                        *end += len;
+                    }
+                    plan.incoming[q][gi].push((i, k, at));
+                    plan.outgoing[part_of(g.span[i].1)][gi].push((i, k, q));
+                }
+            }
+        }
+        for lists in &mut plan.outgoing {
+            for l in lists {
+                l.sort_unstable_by_key(|&(i, _, q)| (i, q));
+            }
+        }
+        *cached = Arc::new(plan);
         cached.clone()
     }
 
@@ -487,15 +556,29 @@ impl Assembler {
     /// Internal forces (and energy) at displacements `u`; the tangent into `tangent` (made by
     /// [`new_tangent`](Self::new_tangent); every value is overwritten) when given.
     ///
-    /// Owner-computes on the current rayon pool: thread t adds the columns and forces of the
-    /// nodes in its part of the node range, evaluating each cell that has a node there, in the
-    /// sweep order; every entry receives its contributions in that order, so the results are
-    /// bitwise the same on any number of threads. The first cell to reach a node pair stores
-    /// its block, later ones add, so the tangent is never zeroed as a whole.
+    /// Owner-computes on the current rayon pool: thread t adds the forces of the nodes in its
+    /// part of the node range and the tangent entries whose higher-ranked node is there. It
+    /// evaluates the cells whose highest node is its own, and takes the other cells with a node
+    /// there over from the thread that evaluated them (no cell is evaluated twice). Each adds
+    /// in the sweep order, so every entry receives its contributions in the same order and the
+    /// results are bitwise the same on any number of threads. The first cell to reach a node
+    /// pair stores its block, later ones add, so the tangent is never zeroed as a whole.
     pub fn assemble(
         &self,
         u: &[f64],
         tangent: Option<&mut SymmetricMatrix>,
+    ) -> Result<Assembly, AssemblyError> {
+        self.assemble_in_parts(u, tangent, rayon::current_num_threads())
+    }
+
+    /// [`assemble`](Self::assemble) with the node range cut into `parts` (one per thread in
+    /// `assemble`; tests run more parts than threads, so that a part meets hand-overs nobody
+    /// has started and evaluates them itself).
+    fn assemble_in_parts(
+        &self,
+        u: &[f64],
+        tangent: Option<&mut SymmetricMatrix>,
+        parts: usize,
     ) -> Result<Assembly, AssemblyError> {
         if u.len() != self.n {
             return Err(AssemblyError::Length {
@@ -541,11 +624,24 @@ impl Assembler {
             }
         }
         let mut internal = vec![0.0; self.n];
-        let splits = self.sweep.splits(rayon::current_num_threads());
+        let splits = self.sweep.splits(parts);
         let plan = (want_k && self.prefetch).then(|| {
             let align = (values.as_ptr() as usize / std::mem::size_of::<f64>()) % 8;
             self.prefetch_plan(&splits, align)
         });
+        let hand_over = self.hand_over_plan(&splits);
+        let (slots, need) = hand_over.slots(want_k);
+        let mut spare = Vec::new();
+        let mut held = match self.mailbox.try_lock() {
+            Ok(g) => Some(g),
+            Err(TryLockError::Poisoned(e)) => Some(e.into_inner()),
+            Err(TryLockError::WouldBlock) => None,
+        };
+        let buffer = held.as_deref_mut().unwrap_or(&mut spare);
+        if buffer.len() < need {
+            buffer.resize(need, 0.0);
+        }
+        let mail = Mailbox::new(slots, &mut buffer[..need]);
         let (forces, values) = (Shared::new(&mut internal), Shared::new(values));
         let rank = &self.rank;
         let owned: Vec<Result<Vec<OwnedEnergy>, AssemblyError>> = splits
@@ -553,10 +649,13 @@ impl Assembler {
             .enumerate()
             .map(|(part, w)| {
                 let (lo, hi) = (w[0], w[1]);
+                let inside = |v: usize| rank[v] >= lo && rank[v] < hi;
                 let base = values.as_ptr();
                 let mut energies = Vec::new();
                 for (gi, g) in self.groups.iter().enumerate() {
                     let list = g.listed(lo, hi);
+                    // The part's own cells (highest rank in it) come first in the sweep.
+                    let own = list.partition_point(|&i| g.span[i].1 < hi);
                     let hints = plan.as_ref().and_then(|p| p.parts.get(part)?.get(gi));
                     let input = BatchInput {
                         coords: &g.coords,
@@ -564,41 +663,109 @@ impl Assembler {
                         materials: &self.stiffness,
                         material_of: &g.material_of,
                     };
+                    let nd = g.table.dofs();
+                    // An evaluated cell's forces at the part's nodes and its share of K.
+                    let scatter = |i: usize, out: &ElementOutput| {
+                        let nodes = g.nodes_of(i);
+                        for (a, &v) in nodes.iter().enumerate() {
+                            if inside(v) {
+                                forces.add3(3 * v, &out.forces[3 * a..]);
+                            }
+                        }
+                        if want_k {
+                            let mut to = Scatter::new(&out.tangent, nd, col_ptr, &values);
+                            walk(nodes, g.pairs_of(i), rank, (lo, hi), &mut to);
+                        }
+                    };
+                    let mut outgoing = hand_over.outgoing[part][gi].iter().peekable();
                     evaluate_listed_prefetching(
                         &g.table,
                         &input,
                         self.kinematics,
                         want_k,
-                        &list,
-                        |k| hints.map_or(Prefetch::NONE, |h| Prefetch::new(base, h.of(k))),
+                        &list[..own],
+                        |k| {
+                            // The scatter's lookups per node, a cell's evaluation ahead.
+                            for &v in g.nodes_of(list[k]) {
+                                prefetch_line(rank.as_ptr().wrapping_add(v));
+                                prefetch_line(col_ptr.as_ptr().wrapping_add(3 * v));
+                                prefetch_line(col_ptr.as_ptr().wrapping_add(3 * v + 2));
+                                prefetch_line(forces.as_ptr().wrapping_add(3 * v));
+                                prefetch_line(forces.as_ptr().wrapping_add(3 * v + 2));
+                            }
+                            hints.map_or(Prefetch::NONE, |h| Prefetch::new(base, h.of(k)))
+                        },
                         |i, out| {
+                            scatter(i, out);
+                            energies.push((gi, i, out.energy));
                             let nodes = g.nodes_of(i);
-                            for (a, &v) in nodes.iter().enumerate() {
-                                if rank[v] >= lo && rank[v] < hi {
-                                    forces.add3(3 * v, &out.forces[3 * a..]);
-                                }
-                            }
-                            if want_k {
-                                add_cell_tangent(
-                                    nodes,
-                                    g.pairs_of(i),
-                                    &out.tangent,
-                                    col_ptr,
-                                    rank,
-                                    (lo, hi),
-                                    &values,
-                                );
-                            }
-                            if g.span[i].0 >= lo {
-                                energies.push((gi, i, out.energy));
+                            while let Some(&(_, k, reader)) = outgoing.next_if(|o| o.0 == i) {
+                                let range = (splits[reader], splits[reader + 1]);
+                                let theirs = |v: usize| rank[v] >= range.0 && rank[v] < range.1;
+                                mail.publish(k, |r| {
+                                    let mut at = 0;
+                                    for (a, &v) in nodes.iter().enumerate() {
+                                        if theirs(v) {
+                                            r[at..at + 3]
+                                                .copy_from_slice(&out.forces[3 * a..][..3]);
+                                            at += 3;
+                                        }
+                                    }
+                                    if want_k {
+                                        let mut pack = Pack::new(&out.tangent, nd, &mut r[at..]);
+                                        walk(nodes, g.pairs_of(i), rank, range, &mut pack);
+                                    }
+                                });
                             }
                         },
                     )
                     .map_err(|e| relocate(e, &g.cells))?;
+                    // Cells owned by higher parts, in sweep order: scattered from their
+                    // hand-over, or evaluated here if nobody had started on them.
+                    let incoming = &hand_over.incoming[part][gi];
+                    for (t, &(i, k, _)) in incoming.iter().enumerate() {
+                        // The pack and the tangent lines of the cell AHEAD on (at the start, of
+                        // the first ones too).
+                        let from = if t == 0 { 0 } else { t + AHEAD };
+                        let soon = from..(t + AHEAD + 1).min(incoming.len());
+                        for &(_, k, at) in incoming.get(soon).unwrap_or(&[]) {
+                            mail.prefetch(k);
+                            if let Some(h) = hints {
+                                Prefetch::new(base, h.of(at)).issue(0, usize::MAX);
+                            }
+                        }
+                        let nodes = g.nodes_of(i);
+                        match mail.take(k) {
+                            Some(pack) => {
+                                let mut f = pack.chunks_exact(3);
+                                for &v in nodes.iter().filter(|&&v| inside(v)) {
+                                    if let Some(f) = f.next() {
+                                        forces.add3(3 * v, f);
+                                    }
+                                }
+                                if want_k {
+                                    let at = 3 * nodes.iter().filter(|&&v| inside(v)).count();
+                                    let mut from = Unpack::new(&pack[at..], col_ptr, &values);
+                                    walk(nodes, g.pairs_of(i), rank, (lo, hi), &mut from);
+                                }
+                            }
+                            None => evaluate_listed_prefetching(
+                                &g.table,
+                                &input,
+                                self.kinematics,
+                                want_k,
+                                &[i],
+                                |_| Prefetch::NONE,
+                                |i, out| scatter(i, out),
+                            )
+                            .map_err(|e| relocate(e, &g.cells))?,
+                        }
+                    }
                 }
                 Ok(energies)
             })
             .collect();
+        drop(mail);
         // Energies cell by cell in sweep order: independent of the split.
         let mut per_cell: Vec<Vec<f64>> = self
             .groups
@@ -795,8 +962,9 @@ mod tests {
     /// The owner-computes assembly equals the plain element-by-element sum (each cell's
     /// `evaluate` added through `SymmetricMatrix::scatter_add`, an independent path) to
     /// summation-order rounding (1e-12 of the largest entry), and is bitwise the same on 1 to 4
-    /// threads (each split puts straddling cells on both sides), with prefetch hints on and
-    /// off, on a swept model with two materials and ply angles.
+    /// threads, with prefetch hints on and off, and with more parts than threads (cells across
+    /// a split handed over, or evaluated by the lower part when it gets there first), on a
+    /// swept model with two materials and ply angles.
     #[test]
     fn assembly_equals_the_plain_sum_on_any_thread_count() {
         use nonlin3d_laminate::materials;
@@ -827,6 +995,22 @@ mod tests {
                 let a = pool.install(|| asm.assemble(&u, Some(&mut k))).unwrap();
                 runs.push((a, k));
             }
+        }
+        // More parts than threads: on one thread the lower part runs first and evaluates the
+        // cells it would have been handed; on two, either may happen cell by cell.
+        for (threads, parts) in [(1, 2), (1, 5), (2, 3), (2, 7)] {
+            let pool = pool_of(threads);
+            let mut k = asm.new_tangent();
+            let a = pool.install(|| asm.assemble_in_parts(&u, Some(&mut k), parts));
+            runs.push((a.unwrap(), k));
+            // Forces alone hand over forces alone.
+            let f = pool
+                .install(|| asm.assemble_in_parts(&u, None, parts))
+                .unwrap();
+            assert!(
+                f == runs[0].0,
+                "{parts} parts: forces without the tangent differ"
+            );
         }
         for r in &runs[1..] {
             assert!(r.0 == runs[0].0, "forces or energy depend on the threads");
@@ -879,7 +1063,7 @@ mod tests {
 
     /// A non-finite displacement fails the assembly with a cell holding that node named (mesh
     /// numbering), on one thread and on several, where the cell may straddle a split and be
-    /// evaluated by both parts.
+    /// evaluated by either part.
     #[test]
     fn a_bad_cell_is_named_on_any_thread_count() {
         use nonlin3d_laminate::materials;

@@ -22,8 +22,10 @@
 mod assembler;
 mod constraints;
 mod error;
+mod handover;
 mod prefetch;
 mod scatter;
+mod share;
 
 pub use assembler::{Assembler, Assembly};
 pub use constraints::{Constraints, Tie};

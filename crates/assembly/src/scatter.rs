@@ -20,12 +20,14 @@
 //! (tie couplings, nodes in no cell) are listed by [`mark_first`] and zeroed apart.
 //!
 //! The nodes are ranked by reverse Cuthill–McKee on the node graph (whatever the mesh's own
-//! numbering), and cells are swept in order of their highest rank. Thread t owns the columns
-//! and force entries of the nodes ranked in [s_t, s_{t+1}) and evaluates every cell with a node
-//! there (cells across a split are evaluated by both sides, each adding its own columns; the
-//! splits sit where fewest cells straddle). Each thread visits its cells in the global sweep
-//! order, so every entry receives its contributions in the same order whatever the number of
-//! threads: the result is bitwise independent of it.
+//! numbering), and cells are swept in order of their highest rank. Thread t owns the nodes
+//! ranked in [s_t, s_{t+1}): their force entries, and the tangent entries (I, J) whose
+//! higher-ranked node is one of them (`share.rs`). It evaluates the cells whose highest rank
+//! is its own; a cell with nodes in lower parts as well is evaluated there once and the values
+//! those parts own are handed over (`handover.rs`), so no cell is evaluated twice. Each thread
+//! adds its own cells, then the handed-over ones, each in the global sweep order, which is the
+//! order every entry receives its contributions in whatever the number of threads: the result
+//! is bitwise independent of it.
 
 use crate::AssemblyError;
 use nonlin3d_solver::SymmetricPattern;
@@ -152,7 +154,8 @@ pub(crate) fn mark_first<'c>(
 
 /// Shared write access to a global array (forces or tangent values) for the parts of one
 /// assembly. Each part writes only entries of the nodes it owns — forces 3v … 3v + 2, tangent
-/// columns 3v … 3v + 2 — and every node has one owner, so no entry is written by two threads.
+/// entries whose higher-ranked node is v — and every node has one owner, so no entry is
+/// written by two threads.
 pub(crate) struct Shared<'a> {
     ptr: *mut f64,
     len: usize,
@@ -162,7 +165,8 @@ pub(crate) struct Shared<'a> {
 // SAFETY: a `Shared` is made from a `&mut [f64]` that stays borrowed (and so unaliased) for its
 // whole life (`Shared::new` ties it to the borrow); concurrent use is confined to the parts of
 // one assembly, which write disjoint entries (the owner-of-the-node rule above, enforced by the
-// callers `add_cell_tangent` and the force loop, which check ownership per node).
+// callers: `share::walk`, which checks the ranks of each pair, and the force loops, which check
+// each node's).
 unsafe impl Sync for Shared<'_> {}
 // SAFETY: as for `Sync`: the pointer is only a borrowed slice.
 unsafe impl Send for Shared<'_> {}
@@ -286,7 +290,7 @@ pub(crate) fn pair_lists(
 }
 
 /// Where column 3J + c starts, less c, for c = 0, 1, 2: the triple of node I sits o(I, J) on.
-fn column_bases(col_ptr: &[usize], nj: usize) -> [usize; 3] {
+pub(crate) fn column_bases(col_ptr: &[usize], nj: usize) -> [usize; 3] {
     [
         col_ptr[3 * nj],
         col_ptr[3 * nj + 1] - 1,
@@ -296,7 +300,7 @@ fn column_bases(col_ptr: &[usize], nj: usize) -> [usize; 3] {
 
 /// Column node j's segment of a [`pair_lists`] table: whether it stores its diagonal block,
 /// the entries it stores and the entries it adds.
-fn segment(pairs: &[u32], nn: usize, j: usize) -> (bool, &[u32], &[u32]) {
+pub(crate) fn segment(pairs: &[u32], nn: usize, j: usize) -> (bool, &[u32], &[u32]) {
     let (heads, entries) = pairs.split_at(nn);
     let head = heads[j];
     let start = (head & 0xfff) as usize;
@@ -306,93 +310,19 @@ fn segment(pairs: &[u32], nn: usize, j: usize) -> (bool, &[u32], &[u32]) {
     (head & DIAG_FIRST != 0, stored, added)
 }
 
-/// K(3I + a, 3J + c) += Ke(3i + a, 3j + c) for the cell's node pairs I ≥ J (mesh numbers) whose
-/// column node J is ranked in [lo, hi); `=` instead of `+=` for the pairs flagged first. `ke` is
-/// the cell's full symmetric tangent, row-major; row 3j + c is read as column 3j + c. `pairs` is
-/// the cell's [`pair_lists`] table: the stores and the adds of a column are separate loops.
-pub(crate) fn add_cell_tangent(
-    nodes: &[usize],
-    pairs: &[u32],
-    ke: &[f64],
-    col_ptr: &[usize],
-    rank: &[usize],
-    (lo, hi): (usize, usize),
-    values: &Shared<'_>,
-) {
-    let nn = nodes.len();
-    let nd = 3 * nn;
-    for (j, &nj) in nodes.iter().enumerate() {
-        if rank[nj] < lo || rank[nj] >= hi {
-            continue;
-        }
-        let base = column_bases(col_ptr, nj);
-        let (first, stored, added) = segment(pairs, nn, j);
-        let rows = [
-            &ke[3 * j * nd..(3 * j + 1) * nd],
-            &ke[(3 * j + 1) * nd..(3 * j + 2) * nd],
-            &ke[(3 * j + 2) * nd..(3 * j + 3) * nd],
-        ];
-        // The diagonal block: its lower triangle.
-        for c in 0..3 {
-            for a in c..3 {
-                if first {
-                    values.set(base[c] + a, rows[c][3 * j + a]);
-                } else {
-                    values.add(base[c] + a, rows[c][3 * j + a]);
-                }
-            }
-        }
-        for &e in stored {
-            let (i, o) = ((e >> 24) as usize, (e & 0xff_ffff) as usize);
-            for c in 0..3 {
-                values.set3(base[c] + o, &rows[c][3 * i..3 * i + 3]);
-            }
-        }
-        for &e in added {
-            let (i, o) = ((e >> 24) as usize, (e & 0xff_ffff) as usize);
-            for c in 0..3 {
-                values.add3(base[c] + o, &rows[c][3 * i..3 * i + 3]);
-            }
-        }
-    }
-}
-
-/// Calls `visit(p)` for every tangent position [`add_cell_tangent`] writes for this cell and
-/// rank range, in the same order: what the prefetch hints of a cell are made from.
-pub(crate) fn cell_positions(
-    nodes: &[usize],
-    pairs: &[u32],
-    col_ptr: &[usize],
-    rank: &[usize],
-    (lo, hi): (usize, usize),
-    mut visit: impl FnMut(usize),
-) {
-    let nn = nodes.len();
-    for (j, &nj) in nodes.iter().enumerate() {
-        if rank[nj] < lo || rank[nj] >= hi {
-            continue;
-        }
-        let base = column_bases(col_ptr, nj);
-        for c in 0..3 {
-            for a in c..3 {
-                visit(base[c] + a);
-            }
-        }
-        let (_, stored, added) = segment(pairs, nn, j);
-        for &e in stored.iter().chain(added) {
-            let o = (e & 0xff_ffff) as usize;
-            for b in base {
-                for a in 0..3 {
-                    visit(b + o + a);
-                }
-            }
-        }
-    }
-}
+/// Cost of a cell in a part, in units of [`COST_READ`]: evaluating it (the part owns its
+/// highest rank) …
+pub(crate) const COST_EVAL: u64 = 16;
+/// … scattering a cell handed over from a higher part (its evaluation is done there) …
+pub(crate) const COST_READ: u64 = 5;
+/// … and packing an evaluated cell for a lower part (measured: docs/PERFORMANCE.md).
+pub(crate) const COST_SEND: u64 = 1;
 
 /// Where the rank range can be split: how many cells have their lowest rank below s, and how
-/// many their highest, for every s. The part [a, b) evaluates the cells with a node ranked
-/// there: lowest < b and highest ≥ a, `lo_below[b] − hi_below[a]` of them.
+/// many their highest, for every s. The part [a, b) evaluates the cells whose highest rank is
+/// there, `hi_below[b] − hi_below[a]`; it scatters, from a hand-over, the cells with lowest
+/// rank below b and highest from b on (`lo_below[b] − hi_below[b]`), and it packs, for the
+/// parts below, the cells it evaluates that have a node below a (`lo_below[a] − hi_below[a]`).
 #[derive(Debug, Clone)]
 pub(crate) struct Sweep {
     lo_below: Vec<u32>,
@@ -415,14 +345,20 @@ impl Sweep {
         Self { lo_below, hi_below }
     }
 
-    /// Cells the part [a, b) evaluates.
-    fn load(&self, a: usize, b: usize) -> usize {
-        (self.lo_below[b] - self.hi_below[a]) as usize
+    /// Cells across rank s: lowest rank below s, highest from s on.
+    fn across(&self, s: usize) -> u64 {
+        u64::from(self.lo_below[s] - self.hi_below[s])
     }
 
-    /// Greedy parts of at most `w` cells each from rank 0 on; None if more than `parts` are
+    /// Cost of the part [a, b) (a < b): its evaluations, hand-overs read and packed.
+    pub(crate) fn cost(&self, a: usize, b: usize) -> u64 {
+        let owned = u64::from(self.hi_below[b] - self.hi_below[a]);
+        COST_EVAL * owned + COST_READ * self.across(b) + COST_SEND * self.across(a)
+    }
+
+    /// Greedy parts of cost at most `w` each from rank 0 on; None if more than `parts` are
     /// needed.
-    fn greedy(&self, parts: usize, w: usize) -> Option<Vec<usize>> {
+    fn greedy(&self, parts: usize, w: u64) -> Option<Vec<usize>> {
         let nodes = self.lo_below.len() - 1;
         let mut out = vec![0];
         let mut a = 0;
@@ -430,32 +366,39 @@ impl Sweep {
             if out.len() > parts {
                 return None;
             }
-            // The furthest b whose part stays within w (lo_below is non-decreasing).
-            let h = self.hi_below[a];
-            let b = self
-                .lo_below
-                .partition_point(|&x| x.saturating_sub(h) as usize <= w)
-                .saturating_sub(1)
-                .min(nodes);
-            debug_assert!(b <= a || self.load(a, b) <= w);
-            if b <= a {
+            // The furthest b whose part stays within w: cost(a, b) is non-decreasing in b
+            // (COST_EVAL·hi_below[b] + COST_READ·(lo_below[b] − hi_below[b]), COST_READ ≤
+            // COST_EVAL), so bisect on b in (a, nodes].
+            let (mut lo, mut hi) = (a, nodes);
+            while lo < hi {
+                let mid = lo + (hi - lo).div_ceil(2);
+                if self.cost(a, mid) <= w {
+                    lo = mid;
+                } else {
+                    hi = mid - 1;
+                }
+            }
+            if lo == a {
                 return None;
             }
-            out.push(b);
-            a = b;
+            out.push(lo);
+            a = lo;
         }
         (out.len() <= parts + 1).then_some(out)
     }
 
-    /// Rank boundaries 0 = s_0 < s_1 < … = nodes, at most `parts` parts, minimising the largest
-    /// part's cell count (cells across a split count on both sides) by bisection on it.
+    /// Rank boundaries 0 = s_0 < s_1 < … = nodes, at most `parts` parts, with the largest
+    /// part's [`cost`](Self::cost) minimised by bisection on it (each bound tried greedily:
+    /// exact for the evaluations and reads, blind to the packing a split adds to the next
+    /// part, which is a few cells' worth at most).
     pub(crate) fn splits(&self, parts: usize) -> Vec<usize> {
+        const { assert!(COST_READ <= COST_EVAL) };
         let nodes = self.lo_below.len() - 1;
-        let total = self.lo_below[nodes] as usize;
         if parts <= 1 || nodes < 2 {
             return vec![0, nodes];
         }
-        let (mut lo, mut hi) = (total.div_ceil(parts).max(1), total.max(1));
+        let whole = self.cost(0, nodes).max(1);
+        let (mut lo, mut hi) = (whole.div_ceil(parts as u64), whole);
         let mut best = self.greedy(parts, hi).unwrap_or_else(|| vec![0, nodes]);
         while lo < hi {
             let mid = lo + (hi - lo) / 2;
@@ -474,6 +417,7 @@ impl Sweep {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::share::{Count, Pack, Positions, Scatter, Unpack, walk};
 
     /// The DOFs 3n, 3n + 1, 3n + 2 of each node, node after node.
     fn dofs(nodes: &[usize]) -> Vec<usize> {
@@ -567,10 +511,11 @@ mod tests {
         assert_eq!(got, expected);
     }
 
-    /// The regrouped pair lists scatter each cell exactly as the plain sum K = Σ Ke does (the
-    /// first cell of a pair storing, later ones adding), for any rank range; each segment lists
-    /// its stores before its adds, each in increasing offset; and `cell_positions` visits
-    /// exactly the positions the scatter writes.
+    /// The regrouped pair lists scatter each cell's share exactly as the plain sum K = Σ Ke
+    /// does on the entries whose higher-ranked node is in the range (the first cell of a pair
+    /// storing, later ones adding), from the full tangent and through a hand-over pack alike;
+    /// each segment lists its stores before its adds, each in increasing offset; and the
+    /// `Positions` walk visits exactly the positions the scatter writes.
     #[test]
     fn pair_lists_scatter_the_plain_sum_and_positions_match() {
         let cells = [vec![0usize, 1, 2, 3], vec![2, 3, 4, 5], vec![5, 1, 6, 0]];
@@ -614,16 +559,32 @@ mod tests {
                 })
                 .collect()
         };
-        let rank: Vec<usize> = (0..7).collect();
+        // Ranks scrambled against the mesh numbers, so shares cut across columns.
+        let rank: Vec<usize> = vec![3, 0, 5, 1, 6, 2, 4];
         let col_ptr = pattern.col_ptr();
-        for (lo, hi) in [(0, 7), (0, 3), (3, 7)] {
+        let ranges = [(0, 7), (0, 3), (3, 7), (2, 5), (0, 3), (3, 7), (2, 5)];
+        for (case, (lo, hi)) in ranges.into_iter().enumerate() {
+            let packed = case >= 4;
             let mut values = vec![f64::NAN; pattern.nnz_lower()];
             let mut visited = Vec::new();
             {
                 let shared = Shared::new(&mut values);
                 for (k, (c, p)) in cells.iter().zip(&pairs).enumerate() {
-                    add_cell_tangent(c, p, &ke(k), col_ptr, &rank, (lo, hi), &shared);
-                    cell_positions(c, p, col_ptr, &rank, (lo, hi), |q| visited.push(q));
+                    let full = ke(k);
+                    if packed {
+                        let mut count = Count::default();
+                        walk(c, p, &rank, (lo, hi), &mut count);
+                        let mut pack = vec![f64::NAN; count.0];
+                        walk(c, p, &rank, (lo, hi), &mut Pack::new(&full, 12, &mut pack));
+                        assert!(pack.iter().all(|x| !x.is_nan()));
+                        let mut from = Unpack::new(&pack, col_ptr, &shared);
+                        walk(c, p, &rank, (lo, hi), &mut from);
+                    } else {
+                        let mut to = Scatter::new(&full, 12, col_ptr, &shared);
+                        walk(c, p, &rank, (lo, hi), &mut to);
+                    }
+                    let mut at = Positions::new(col_ptr, |q| visited.push(q));
+                    walk(c, p, &rank, (lo, hi), &mut at);
                 }
             }
             let mut expected = vec![f64::NAN; pattern.nnz_lower()];
@@ -633,7 +594,8 @@ mod tests {
                     for (j, &nj) in c.iter().enumerate() {
                         for (a, cc) in (0..3).flat_map(|a| (0..3).map(move |cc| (a, cc))) {
                             let (r, col) = (3 * ni + a, 3 * nj + cc);
-                            if r < col || rank[nj] < lo || rank[nj] >= hi {
+                            let owner = rank[ni].max(rank[nj]);
+                            if r < col || owner < lo || owner >= hi {
                                 continue;
                             }
                             let q = pattern.position(r, col).unwrap();
@@ -662,8 +624,10 @@ mod tests {
         }
     }
 
-    /// Splits are increasing, cover the range, and balance the cells each part evaluates
-    /// (counting cells across a split on both sides) to within one cell of the best possible.
+    /// Splits are increasing, cover the range, and minimise the largest part's cost (cells it
+    /// evaluates, hand-overs it reads and packs, counted straight from the spans): within the
+    /// packing of the cells across each split of the optimum of a search over every split,
+    /// for 2 and 3 parts.
     #[test]
     fn splits_balance_the_parts() {
         // A chain of 100 cells over ranks 2k … 2k + 3 (an even rank is straddled by one cell,
@@ -681,29 +645,49 @@ mod tests {
         for spans in [&chain, &dense] {
             let nodes = spans.iter().map(|s| s.1).max().unwrap() + 1;
             let sweep = Sweep::new(nodes, spans.iter().copied());
+            let cost = |a: usize, b: usize| -> u64 {
+                let count = |f: &dyn Fn(&(usize, usize)) -> bool| {
+                    spans.iter().filter(|s| f(s)).count() as u64
+                };
+                COST_EVAL * count(&|&(_, h)| h >= a && h < b)
+                    + COST_READ * count(&|&(l, h)| l < b && h >= b)
+                    + COST_SEND * count(&|&(l, h)| l < a && h >= a)
+            };
+            let worst = |s: &[usize]| s.windows(2).map(|w| cost(w[0], w[1])).max().unwrap();
             for parts in 1..6 {
                 let s = sweep.splits(parts);
                 assert_eq!(s.first(), Some(&0));
                 assert_eq!(s.last(), Some(&nodes));
-                assert!(s.len() <= parts + 1, "{s:?}");
-                assert!(s.windows(2).all(|w| w[0] < w[1]), "{s:?}");
-                let loads: Vec<usize> = s
-                    .windows(2)
-                    .map(|w| {
-                        spans
-                            .iter()
-                            .filter(|&&(lo, hi)| lo < w[1] && hi >= w[0])
-                            .count()
-                    })
-                    .collect();
-                let ideal = spans.len().div_ceil(parts);
-                // Each split adds at most 3 straddling cells here (chain: ≤ 2, dense: ≤ 3).
-                let bound = ideal + 3 * (parts - 1);
-                assert!(
-                    loads.iter().all(|&l| l <= bound),
-                    "{parts} parts: {loads:?} > {bound}"
-                );
                 assert_eq!(s.len(), parts + 1, "{parts} parts: {s:?}");
+                assert!(s.windows(2).all(|w| w[0] < w[1]), "{s:?}");
+                for w in s.windows(2) {
+                    assert_eq!(sweep.cost(w[0], w[1]), cost(w[0], w[1]), "{w:?}");
+                }
+                let best = match parts {
+                    1 => cost(0, nodes),
+                    2 => (1..nodes).map(|a| worst(&[0, a, nodes])).min().unwrap(),
+                    3 => (1..nodes)
+                        .flat_map(|a| (a + 1..nodes).map(move |b| [0, a, b, nodes]))
+                        .map(|s| worst(&s))
+                        .min()
+                        .unwrap(),
+                    // Within one cell's evaluation and the straddlers of each split.
+                    _ => spans.len() as u64 * COST_EVAL / parts as u64,
+                };
+                // The greedy takes each part as far as it goes, blind to the packing the next
+                // part then does: off by at most that, the most cells across one rank.
+                let max_across = (0..nodes).map(|r| sweep.across(r)).max().unwrap();
+                let slack = (parts as u64 - 1) * COST_SEND * max_across
+                    + if parts <= 3 {
+                        0
+                    } else {
+                        COST_EVAL + 3 * (COST_READ + COST_SEND)
+                    };
+                assert!(
+                    worst(&s) <= best + slack,
+                    "{parts} parts: {s:?} costs {} best {best}",
+                    worst(&s)
+                );
             }
         }
         assert_eq!(Sweep::new(3, [(0, 2)].into_iter()).splits(4), vec![0, 3]);

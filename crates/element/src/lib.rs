@@ -66,7 +66,7 @@ pub use error::ElementError;
 pub use kernel::{
     ElementOutput, Kinematics, Workspace, b0bl3d, estif3d, evaluate, linear_stiffness,
 };
-pub use prefetch::Prefetch;
+pub use prefetch::{Prefetch, prefetch_line};
 pub use quadrature::{IntegrationRule, Station, gauss_1d};
 pub use shape::{ElementKind, HEX20_EDGES, HEX20_NODES, THESIS_NODE_HEX8, THESIS_NODE_HEX20};
 pub use table::ShapeTable;

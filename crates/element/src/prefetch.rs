@@ -40,23 +40,32 @@ impl<'a> Prefetch<'a> {
         self.offsets.is_empty()
     }
 
-    /// Issues hints `from..to` (clamped to the list).
+    /// Issues hints `from..to` (clamped to the list): the kernel spreads them over the
+    /// tangent product; a caller may issue a list itself (`issue(0, usize::MAX)`) ahead of
+    /// work that does not go through the kernel.
     #[inline(always)]
-    pub(crate) fn issue(&self, from: usize, to: usize) {
+    pub fn issue(&self, from: usize, to: usize) {
         let to = to.min(self.offsets.len());
         for &o in self.offsets.get(from..to).unwrap_or(&[]) {
-            let p = self.base.wrapping_add(o as usize);
-            #[cfg(target_arch = "x86_64")]
-            // SAFETY: a prefetch has no architectural effect and never faults, whatever the
-            // address (Intel SDM and AMD APM, PREFETCHh); SSE is part of x86-64.
-            unsafe {
-                use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
-                _mm_prefetch::<_MM_HINT_T0>(p.cast());
-            }
-            #[cfg(not(target_arch = "x86_64"))]
-            let _ = p;
+            prefetch_line(self.base.wrapping_add(o as usize));
         }
     }
+}
+
+/// Brings the cache line holding `*p` towards the core (a hint: `p` is never dereferenced,
+/// any address is safe, only speed depends on it). For the scattered lookups of an assembly
+/// (column starts, force entries) issued one element before they are needed.
+#[inline(always)]
+pub fn prefetch_line<T>(p: *const T) {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: a prefetch has no architectural effect and never faults, whatever the address
+    // (Intel SDM and AMD APM, PREFETCHh); SSE is part of x86-64.
+    unsafe {
+        use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
+        _mm_prefetch::<_MM_HINT_T0>(p.cast());
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = p;
 }
 
 #[cfg(test)]
