@@ -72,6 +72,14 @@ struct FixedMask {
     positions: Vec<(usize, bool)>,
 }
 
+/// Positions of the tangent entries in each tie slave's row and column, with the index on the
+/// other side ((position, j) for entry (s, j) or (j, s)), for the slaves they were found for.
+#[derive(Default)]
+struct TieMask {
+    slaves: Vec<usize>,
+    entries: Vec<Vec<(usize, usize)>>,
+}
+
 /// Everything needed to assemble a mesh again and again: shape tables, per-cell stiffness
 /// (rotated to each cell's ply angle once), DOF lists, the node-blocked sparsity pattern and
 /// each cell's node-pair offsets into it.
@@ -90,6 +98,8 @@ pub struct Assembler {
     /// Tangent positions no cell reaches (tie couplings, nodes in no cell): zeroed apart.
     unreached: Vec<usize>,
     mask: Mutex<FixedMask>,
+    /// The slave rows and columns of the last tie set folded into a tangent.
+    tie_mask: Mutex<TieMask>,
     /// Prefetch hints of the last split and values alignment assembled with a tangent.
     plan: Mutex<Arc<PrefetchPlan>>,
     /// Whether tangent assemblies issue prefetch hints (see [`Assembler::set_prefetch`]).
@@ -276,6 +286,7 @@ impl Assembler {
             sweep,
             unreached: Vec::new(),
             mask: Mutex::new(FixedMask::default()),
+            tie_mask: Mutex::default(),
             plan: Mutex::default(),
             prefetch: true,
             hand_over: Mutex::default(),
@@ -325,6 +336,7 @@ impl Assembler {
         }
         self.pattern = pattern;
         *self.mask.lock().unwrap_or_else(|e| e.into_inner()) = FixedMask::default();
+        *self.tie_mask.lock().unwrap_or_else(|e| e.into_inner()) = TieMask::default();
         *self.plan.lock().unwrap_or_else(|e| e.into_inner()) = Arc::default();
         *self.hand_over.lock().unwrap_or_else(|e| e.into_inner()) = Arc::default();
         Ok(())
@@ -803,6 +815,30 @@ impl Assembler {
         }
     }
 
+    /// The tangent positions in the rows and columns of the tie slaves `slaves` (in tie order):
+    /// one pass over the pattern, done again only when the slaves change.
+    fn tie_mask(&self, slaves: Vec<usize>) -> TieMask {
+        let mut tie_of = vec![usize::MAX; self.n];
+        for (t, &s) in slaves.iter().enumerate() {
+            tie_of[s] = t;
+        }
+        let (cp, ri) = (self.pattern.col_ptr(), self.pattern.row_idx());
+        let mut entries = vec![Vec::new(); slaves.len()];
+        for j in 0..self.n {
+            for (p, &i) in ri.iter().enumerate().take(cp[j + 1]).skip(cp[j]) {
+                if let Some(e) = entries.get_mut(tie_of[i]) {
+                    e.push((p, j));
+                }
+                if i != j
+                    && let Some(e) = entries.get_mut(tie_of[j])
+                {
+                    e.push((p, i));
+                }
+            }
+        }
+        TieMask { slaves, entries }
+    }
+
     /// The residual r = f_int − f_ext(λ) with zeros at constrained DOFs, the reactions
     /// (f_int − f_ext at constrained DOFs, zero elsewhere), and the tangent with identity rows
     /// and columns at constrained DOFs when given.
@@ -827,7 +863,13 @@ impl Assembler {
         let mut r: Vec<f64> = a.internal.iter().zip(&f).map(|(i, e)| i - e).collect();
         let mut reactions = vec![0.0; self.n];
         if !constraints.ties().is_empty() {
-            fold_ties(constraints, &mut r, &mut reactions, k.as_deref_mut())?;
+            let mut mask = self.tie_mask.lock().unwrap_or_else(|e| e.into_inner());
+            let slaves: Vec<usize> = constraints.ties().iter().map(|t| t.slave).collect();
+            if k.is_some() && mask.slaves != slaves {
+                *mask = self.tie_mask(slaves);
+            }
+            let k = k.as_deref_mut().map(|k| (k, &*mask));
+            fold_ties(constraints, &mut r, &mut reactions, k)?;
         }
         let mut fixed: Vec<usize> = constraints.prescribed().map(|(d, _)| d).collect();
         fixed.sort_unstable();
@@ -853,12 +895,13 @@ impl Assembler {
 /// Folds each tie's slave onto its masters (K′ = TᵀKT, r′ = Tᵀr for u_s = Σ c_k u_{m_k}),
 /// slave by slave: r_m += c·r_s; K_{m j} += c·K_{s j} (twice on the diagonal m = j, which stands
 /// for both triangles); K_{m m′} += c c′ K_ss; then the slave's row and column become the
-/// identity and its residual (the force the tie carries) its reaction.
+/// identity and its residual (the force the tie carries) its reaction. `k` comes with the
+/// stored positions of each slave's row and column (a `TieMask` made for these ties).
 fn fold_ties(
     constraints: &Constraints,
     r: &mut [f64],
     reactions: &mut [f64],
-    k: Option<&mut SymmetricMatrix>,
+    k: Option<(&mut SymmetricMatrix, &TieMask)>,
 ) -> Result<(), AssemblyError> {
     for t in constraints.ties() {
         let rs = r[t.slave];
@@ -868,32 +911,10 @@ fn fold_ties(
         reactions[t.slave] = rs;
         r[t.slave] = 0.0;
     }
-    let Some(k) = k else {
+    let Some((k, mask)) = k else {
         return Ok(());
     };
-    let pattern = k.pattern().clone();
-    let (cp, ri) = (pattern.col_ptr(), pattern.row_idx());
-    let slave_of: HashMap<usize, usize> = constraints
-        .ties()
-        .iter()
-        .enumerate()
-        .map(|(i, t)| (t.slave, i))
-        .collect();
-    // Stored positions of every slave's row/column: (position, the other index).
-    let mut entries: Vec<Vec<(usize, usize)>> = vec![Vec::new(); constraints.ties().len()];
-    for j in 0..pattern.n() {
-        for p in cp[j]..cp[j + 1] {
-            let i = ri[p];
-            if let Some(&t) = slave_of.get(&i) {
-                entries[t].push((p, j));
-            }
-            if i != j
-                && let Some(&t) = slave_of.get(&j)
-            {
-                entries[t].push((p, i));
-            }
-        }
-    }
+    let entries = &mask.entries;
     for (t, tie) in constraints.ties().iter().enumerate() {
         let s = tie.slave;
         let missing = |i: usize, j: usize| AssemblyError::Tie {
@@ -1170,5 +1191,40 @@ mod tests {
                 .any(|(l, f)| (l - f).abs() > 1e-9 * scale)
         );
         assert!(asm.partial_internal(&[99], &u, Kinematics::Linear).is_err());
+    }
+
+    /// The slave rows and columns found for one tie set are not reused for another: folding
+    /// set B after set A on one assembler gives bitwise what a fresh assembler gives for B.
+    #[test]
+    fn a_new_tie_set_gets_its_own_slave_positions() {
+        use nonlin3d_laminate::materials;
+        let mesh = structured_box(&BoxParams::new(
+            ElementKind::Hex20,
+            [2, 1, 1],
+            [2.0, 1.0, 1.0],
+        ))
+        .unwrap();
+        let steel = materials::steel().stiffness().unwrap();
+        let (mut asm, u) = nonlinear_gauss2(&mesh, &[steel], 1e-3);
+        let n = asm.n();
+        // The pattern is extended for both sets at once; each is then folded on its own.
+        let nodes = &mesh.cells[0].nodes;
+        let (p, q) = (3 * nodes[0], 3 * nodes[5]);
+        let mut a = Constraints::new(n);
+        a.tie(p, &[(q + 1, 0.5)], 0.0).unwrap();
+        let mut b = Constraints::new(n);
+        b.tie(q, &[(p + 2, -0.3), (p + 1, 0.2)], 1e-4).unwrap();
+        let mut both = a.clone();
+        both.tie(q, &[(p + 2, -0.3), (p + 1, 0.2)], 1e-4).unwrap();
+        asm.tie(&both).unwrap();
+        let (mut fresh, _) = nonlinear_gauss2(&mesh, &[steel], 1e-3);
+        fresh.tie(&both).unwrap();
+        let mut k = asm.new_tangent();
+        asm.residual(&u, 1.0, &a, Some(&mut k)).unwrap();
+        let got = asm.residual(&u, 1.0, &b, Some(&mut k)).unwrap();
+        let mut k_fresh = fresh.new_tangent();
+        let want = fresh.residual(&u, 1.0, &b, Some(&mut k_fresh)).unwrap();
+        assert!(got == want, "residual or reactions differ");
+        assert!(k == k_fresh, "the tangent kept set A's slave positions");
     }
 }
