@@ -14,8 +14,8 @@ use nonlin3d_mesh::{
     embedded_delamination_with_front, through_width_delamination,
 };
 use nonlin3d_newton::{
-    IncrementReport, NewtonSettings, Stepping, StructuralProblem, follow_path_from,
-    negative_pivots_at, perturbed_step,
+    IncrementReport, NewtonSettings, PathSolver, Stepping, StructuralProblem, follow_path_with,
+    perturbed_step,
 };
 use nonlin3d_solver::SolverKind;
 use nonlin3d_vcct::{FrontRelease, cells_above, release_rates};
@@ -330,7 +330,9 @@ pub fn settings(scene: &Scene) -> (NewtonSettings, Stepping) {
 /// that level above the buckling strain; here the change of inertia picks the level, so a
 /// sweep may start below buckling (Fig. 5.1.1's flat part) and still find the branch. With a
 /// kept tangent (BFGS) the last factorisation may belong to an older state, so the inertia is
-/// then taken from one extra factorisation at the converged state ([`negative_pivots_at`]).
+/// then taken from one extra factorisation at the converged state
+/// ([`PathSolver::inertia_at`]), which `session` keeps as the next level's starting tangent.
+#[allow(clippy::too_many_arguments)]
 pub fn solve_level(
     problem: &mut StructuralProblem,
     u: &mut Vec<f64>,
@@ -339,16 +341,21 @@ pub fn solve_level(
     perturbation: Option<(usize, f64)>,
     newton: &NewtonSettings,
     stepping: &Stepping,
+    session: &mut PathSolver,
 ) -> Result<(Vec<IncrementReport>, bool, Option<usize>), Error> {
     let stepping = Stepping {
         initial: stepping.initial.min((to - from).abs().max(stepping.min)),
         ..stepping.clone()
     };
     let start = u.clone();
-    let mut attempts = follow_path_from(problem, u, from, &[to], newton, &stepping)?.attempts;
-    let inertia = |problem: &mut StructuralProblem, u: &[f64], attempts: &[IncrementReport]| {
+    let mut attempts =
+        follow_path_with(problem, u, from, &[to], newton, &stepping, session)?.attempts;
+    let inertia = |problem: &mut StructuralProblem,
+                   u: &[f64],
+                   attempts: &[IncrementReport],
+                   session: &mut PathSolver| {
         if newton.keep_tangent {
-            negative_pivots_at(problem, u, to, newton.solver).map(Some)
+            session.inertia_at(problem, u, to).map(Some)
         } else {
             Ok(attempts
                 .iter()
@@ -357,7 +364,7 @@ pub fn solve_level(
                 .and_then(IncrementReport::negative_pivots))
         }
     };
-    let mut pivots = inertia(problem, u, &attempts)?;
+    let mut pivots = inertia(problem, u, &attempts, session)?;
     let unstable = pivots.is_some_and(|p| p > 0);
     let mut perturbed = false;
     if let (true, Some((dof, f))) = (unstable, perturbation) {
@@ -382,7 +389,7 @@ pub fn solve_level(
             &fine,
         )?);
         perturbed = true;
-        pivots = inertia(problem, u, &attempts)?;
+        pivots = inertia(problem, u, &attempts, session)?;
     }
     Ok((attempts, perturbed, pivots))
 }
@@ -473,6 +480,9 @@ pub fn run(scene: &Scene, progress: &mut dyn FnMut(Progress)) -> Result<Results,
         (p != 0.0).then_some((3 * top + 2, p))
     };
     let mut u = vec![0.0; problem.assembler.n()];
+    // One solver for every level: analysed once; with BFGS each level starts from the
+    // factorisation its predecessor's stability test left.
+    let mut session = PathSolver::new(&problem, newton.solver)?;
     let mut levels = Vec::with_capacity(factors.len());
     let (mut t_solve, mut t_vcct) = (0.0, 0.0);
     let mut from = 0.0;
@@ -492,7 +502,16 @@ pub fn run(scene: &Scene, progress: &mut dyn FnMut(Progress)) -> Result<Results,
                 lambda * reference
             ))
         };
-        let first = solve_level(&mut problem, &mut u, from, lambda, pert, &newton, &stepping);
+        let first = solve_level(
+            &mut problem,
+            &mut u,
+            from,
+            lambda,
+            pert,
+            &newton,
+            &stepping,
+            &mut session,
+        );
         // BFGS's early directions come from an older tangent and can carry the sublaminate
         // across to the branch buckled into the base (seen on the reference scene at −0.003);
         // full Newton follows the outward branch, so the level is redone with it — also when
@@ -511,9 +530,17 @@ pub fn run(scene: &Scene, progress: &mut dyn FnMut(Progress)) -> Result<Results,
                 force_tolerance: newton.force_tolerance,
                 ..NewtonSettings::default()
             };
-            let (more, p, piv) =
-                solve_level(&mut problem, &mut u, from, lambda, pert, &full, &stepping)
-                    .map_err(level_error)?;
+            let (more, p, piv) = solve_level(
+                &mut problem,
+                &mut u,
+                from,
+                lambda,
+                pert,
+                &full,
+                &stepping,
+                &mut session,
+            )
+            .map_err(level_error)?;
             attempts.extend(more);
             (perturbed, pivots, fallback) = (p, piv, true);
         }

@@ -9,7 +9,11 @@ use nonlin3d::laminate::materials;
 use nonlin3d::mesh::{
     BoxParams, Mesh, ThroughWidthParams, structured_box, through_width_delamination,
 };
-use nonlin3d::newton::{NewtonError, NewtonSettings, Stepping, StructuralProblem, follow_path};
+use nonlin3d::newton::{
+    NewtonError, NewtonSettings, PathSolver, Stepping, StructuralProblem, follow_path,
+    follow_path_from, follow_path_with,
+};
+use nonlin3d::solver::SolverKind;
 
 /// Cantilever 30 × 5 × 4 mm (6 × 2 × 2 Hex20), clamped at x = 0, tip load `p` (N) along z.
 fn cantilever(p: f64) -> (Mesh, StructuralProblem) {
@@ -236,6 +240,101 @@ fn kept_tangent_and_bfgs_reach_the_full_newton_state_with_fewer_factorisations()
         follow_path(&mut problem, &mut u, &[1.0], &bad, &stepping),
         Err(NewtonError::Setting { .. })
     ));
+}
+
+/// A `PathSolver` kept over two levels (as a scene sweep does): the stability test at the end
+/// of the first level leaves its factorisation, and with a kept tangent the second level's
+/// first iteration solves with it instead of factoring (a fresh solver per level factors
+/// there); the state is the full-Newton one. A session is remade for another solver kind.
+#[test]
+fn a_session_carries_the_stability_factorisation_into_the_next_level() {
+    let tight = NewtonSettings {
+        force_tolerance: 1e-7,
+        relative_tolerance: 0.0,
+        ..NewtonSettings::default()
+    };
+    let stepping = Stepping {
+        initial: 0.25,
+        max: 0.25,
+        ..Stepping::default()
+    };
+    let (_, mut full) = cantilever(-500.0);
+    let mut u_full = vec![0.0; full.assembler.n()];
+    follow_path(&mut full, &mut u_full, &[1.0], &tight, &stepping).unwrap();
+    let scale = u_full.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    let bfgs = NewtonSettings {
+        keep_tangent: true,
+        refactor_every: usize::MAX,
+        quasi_newton: 20,
+        line_search: false,
+        refactor_ratio: 2.0,
+        max_iterations: 100,
+        ..tight.clone()
+    };
+    // First iteration of the second level: factored there or not, for both ways.
+    let mut first_factors = Vec::new();
+    for carried in [true, false] {
+        let (_, mut problem) = cantilever(-500.0);
+        let mut u = vec![0.0; problem.assembler.n()];
+        let mut session = PathSolver::new(&problem, bfgs.solver).unwrap();
+        follow_path_with(
+            &mut problem,
+            &mut u,
+            0.0,
+            &[0.5],
+            &bfgs,
+            &stepping,
+            &mut session,
+        )
+        .unwrap();
+        assert_eq!(session.inertia_at(&mut problem, &u, 0.5).unwrap(), 0);
+        assert!(session.is_factored());
+        let second = if carried {
+            follow_path_with(
+                &mut problem,
+                &mut u,
+                0.5,
+                &[1.0],
+                &bfgs,
+                &stepping,
+                &mut session,
+            )
+        } else {
+            follow_path_from(&mut problem, &mut u, 0.5, &[1.0], &bfgs, &stepping)
+        }
+        .unwrap();
+        let first = &second.attempts[0].iterations[0];
+        first_factors.push(first.negative_pivots.is_some());
+        // Both at 1e-7 N on a stiffness of ~1e8 N/m: assert 1e-9 of the largest deflection.
+        let diff = u
+            .iter()
+            .zip(&u_full)
+            .fold(0.0f64, |a, (p, q)| a.max((p - q).abs()));
+        assert!(
+            diff < 1e-9 * scale,
+            "carried {carried}: {diff:e} vs {scale:e}"
+        );
+    }
+    assert_eq!(first_factors, [false, true]);
+    // Another solver kind: the session is made anew (and still converges).
+    let (_, mut problem) = cantilever(-500.0);
+    let mut u = vec![0.0; problem.assembler.n()];
+    let mut session = PathSolver::new(&problem, SolverKind::Profile).unwrap();
+    let faer = NewtonSettings {
+        solver: SolverKind::FaerLdlt,
+        ..tight
+    };
+    follow_path_with(
+        &mut problem,
+        &mut u,
+        0.0,
+        &[1.0],
+        &faer,
+        &stepping,
+        &mut session,
+    )
+    .unwrap();
+    assert_eq!(session.kind(), SolverKind::FaerLdlt);
 }
 
 #[test]

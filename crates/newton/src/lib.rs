@@ -7,6 +7,7 @@
 //! | [`NewtonSettings`], [`solve_increment`] | one load level: full, modified or quasi-Newton (BFGS), line search, convergence records |
 //! | [`TangentCache`], [`solve_increment_with`] | a factorised tangent (and BFGS pairs) kept across increments |
 //! | [`Stepping`], [`follow_path`] | load stepping to a list of targets with cutback and regrowth |
+//! | [`PathSolver`], [`follow_path_with`] | a solver, tangent and kept factorisation carried over the levels of a sweep |
 //! | [`perturbed_path`] | the thesis's perturbation load, converged with the first level and then removed (§3.2) |
 //! | [`IncrementReport`], [`Termination`] | what happened, iteration by iteration, with the inertia |
 #![deny(missing_docs)]
@@ -18,13 +19,16 @@
 mod error;
 mod path;
 mod problem;
+mod session;
 mod solve;
 
 pub use error::NewtonError;
 pub use path::{
-    PathReport, Stepping, follow_path, follow_path_from, perturbed_path, perturbed_step,
+    PathReport, Stepping, follow_path, follow_path_from, follow_path_with, perturbed_path,
+    perturbed_step,
 };
 pub use problem::{NonlinearProblem, StructuralProblem};
+pub use session::PathSolver;
 pub use solve::{
     IncrementReport, IterationRecord, NewtonSettings, TangentCache, Termination,
     negative_pivots_at, solve_increment, solve_increment_with,

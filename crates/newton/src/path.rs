@@ -1,7 +1,7 @@
 //! Load stepping to a list of load-factor targets with cutback and regrowth.
 
 use crate::{
-    IncrementReport, NewtonError, NewtonSettings, NonlinearProblem, TangentCache, solve_increment,
+    IncrementReport, NewtonError, NewtonSettings, NonlinearProblem, PathSolver, solve_increment,
     solve_increment_with,
 };
 
@@ -93,22 +93,30 @@ pub fn follow_path_from(
     settings: &NewtonSettings,
     stepping: &Stepping,
 ) -> Result<PathReport, NewtonError> {
-    let ok = |v: f64| v.is_finite() && v > 0.0;
-    if !(ok(stepping.initial)
-        && ok(stepping.min)
-        && stepping.max >= stepping.min
-        && stepping.cutback > 0.0
-        && stepping.cutback < 1.0
-        && stepping.grow >= 1.0)
-    {
-        return Err(NewtonError::Setting {
-            name: "stepping",
-            reason: format!("{stepping:?}"),
-        });
-    }
-    let mut solver = settings.solver.build();
-    solver.analyze(&problem.pattern())?;
-    let mut k = nonlin3d_solver::SymmetricMatrix::zeros(problem.pattern());
+    check_stepping(stepping)?;
+    let mut session = PathSolver::new(problem, settings.solver)?;
+    follow_path_with(problem, u, start, targets, settings, stepping, &mut session)
+}
+
+/// [`follow_path_from`] with a [`PathSolver`] kept by the caller over several calls (the levels
+/// of a sweep): no new symbolic analysis, and with `settings.keep_tangent` the first increment
+/// starts from the session's factorisation (the last increment's, or the one
+/// [`PathSolver::inertia_at`] left) instead of factoring anew. A session made for another
+/// pattern or solver kind is made anew.
+pub fn follow_path_with(
+    problem: &mut dyn NonlinearProblem,
+    u: &mut Vec<f64>,
+    start: f64,
+    targets: &[f64],
+    settings: &NewtonSettings,
+    stepping: &Stepping,
+    session: &mut PathSolver,
+) -> Result<PathReport, NewtonError> {
+    check_stepping(stepping)?;
+    session.fit(problem, settings.solver)?;
+    let PathSolver {
+        solver, k, cache, ..
+    } = session;
     let mut report = PathReport::default();
     let mut lambda = start;
     let mut step = stepping.initial.min(stepping.max);
@@ -117,7 +125,6 @@ pub fn follow_path_from(
     let mut previous: Option<(Vec<f64>, f64)> = None;
     // The factorised tangent (and BFGS pairs) carried between increments when
     // `settings.keep_tangent`; a failed attempt clears it, so its retry starts afresh.
-    let mut cache = TangentCache::new();
     for &target in targets {
         while (target - lambda).abs() > 1e-12 * target.abs().max(1.0) {
             let dir = (target - lambda).signum();
@@ -135,8 +142,8 @@ pub fn follow_path_from(
                 lambda + dir * delta,
                 settings,
                 solver.as_mut(),
-                &mut k,
-                &mut cache,
+                k,
+                cache,
             )?;
             let converged = attempt.converged();
             let iterations = attempt.iterations.len();
@@ -165,6 +172,26 @@ pub fn follow_path_from(
         report.states.push((target, u.clone()));
     }
     Ok(report)
+}
+
+/// Refuses increments that are not finite and positive, a largest step below the smallest, a
+/// cutback outside (0, 1) and a growth below 1.
+fn check_stepping(stepping: &Stepping) -> Result<(), NewtonError> {
+    let ok = |v: f64| v.is_finite() && v > 0.0;
+    if ok(stepping.initial)
+        && ok(stepping.min)
+        && stepping.max >= stepping.min
+        && stepping.cutback > 0.0
+        && stepping.cutback < 1.0
+        && stepping.grow >= 1.0
+    {
+        Ok(())
+    } else {
+        Err(NewtonError::Setting {
+            name: "stepping",
+            reason: format!("{stepping:?}"),
+        })
+    }
 }
 
 /// The thesis's way onto the postbuckled branch (§3.2): the transverse `perturbation` loads

@@ -144,6 +144,14 @@ impl TangentCache {
         *self = Self::default();
     }
 
+    /// A cache vouching for a factorisation just made (age 0, no BFGS pairs).
+    pub(crate) fn factored_now() -> Self {
+        Self {
+            factored: true,
+            ..Self::default()
+        }
+    }
+
     /// Whether the solver holds a factorisation this cache vouches for.
     pub fn is_factored(&self) -> bool {
         self.factored
@@ -198,19 +206,15 @@ fn axpy(a: f64, x: &[f64], y: &mut [f64]) {
 /// new solver of `kind`: the stability test of a converged state (thesis §3.2: the trivial
 /// path past a bifurcation has K_T with negative eigenvalues) for strategies whose last
 /// factorisation belongs to an older state (a kept tangent, BFGS). `u` is taken as it is.
+/// [`PathSolver::inertia_at`](crate::PathSolver::inertia_at) does the same with a solver kept
+/// over the levels of a sweep, and keeps the factorisation for the next one.
 pub fn negative_pivots_at(
     problem: &mut dyn NonlinearProblem,
     u: &[f64],
     lambda: f64,
     kind: SolverKind,
 ) -> Result<usize, NewtonError> {
-    let pattern = problem.pattern();
-    let mut solver = kind.build();
-    solver.analyze(&pattern)?;
-    let mut k = SymmetricMatrix::zeros(pattern);
-    let mut r = vec![0.0; problem.n()];
-    problem.evaluate(u, lambda, &mut r, Some(&mut k))?;
-    Ok(solver.factorize(&k)?.negative_pivots)
+    crate::PathSolver::new(problem, kind)?.inertia_at(problem, u, lambda)
 }
 
 /// Solves r(u, λ) = 0 from the current `u` (updated in place, also when not converged; the
@@ -301,10 +305,7 @@ pub fn solve_increment_with(
                     return Ok(report);
                 }
             }
-            *cache = TangentCache {
-                factored: true,
-                ..TangentCache::default()
-            };
+            *cache = TangentCache::factored_now();
         }
         cache.age += 1;
         let bfgs_pairs = cache.pairs.len();
