@@ -972,6 +972,16 @@ mod tests {
         (asm, u)
     }
 
+    /// A Hex20 box of 2 × 1 × 1 (m) in `cells` cells.
+    fn hex20_box(cells: [usize; 3]) -> Mesh {
+        structured_box(&BoxParams::new(ElementKind::Hex20, cells, [2.0, 1.0, 1.0])).unwrap()
+    }
+
+    /// Steel's stiffness.
+    fn steel() -> Stiffness {
+        nonlin3d_laminate::materials::steel().stiffness().unwrap()
+    }
+
     /// A rayon pool of `threads` threads.
     fn pool_of(threads: usize) -> rayon::ThreadPool {
         rayon::ThreadPoolBuilder::new()
@@ -1087,13 +1097,12 @@ mod tests {
     /// evaluated by either part.
     #[test]
     fn a_bad_cell_is_named_on_any_thread_count() {
-        use nonlin3d_laminate::materials;
         let mesh = embedded_delamination(&EmbeddedParams {
             slices: 4,
             ..EmbeddedParams::thesis_reference()
         })
         .unwrap();
-        let steel = materials::steel().stiffness().unwrap();
+        let steel = steel();
         let (asm, mut u) = nonlinear_gauss2(&mesh, &[steel], 1e-6);
         for bad in [0, mesh.cells.len() / 2, mesh.cells.len() - 1] {
             let v = mesh.cells[bad].nodes[5];
@@ -1128,17 +1137,11 @@ mod tests {
     /// entries are those of the mesh without it (1e-12 of the largest: summation order).
     #[test]
     fn a_node_in_no_cell_gets_a_zero_block() {
-        use nonlin3d_laminate::materials;
-        let mesh = structured_box(&BoxParams::new(
-            ElementKind::Hex20,
-            [2, 1, 1],
-            [2.0, 1.0, 1.0],
-        ))
-        .unwrap();
+        let mesh = hex20_box([2, 1, 1]);
         let mut stray = mesh.clone();
         stray.nodes.push([5.0, 5.0, 5.0]);
         let v = mesh.nodes.len();
-        let steel = materials::steel().stiffness().unwrap();
+        let steel = steel();
         let (plain, u) = nonlinear_gauss2(&mesh, std::slice::from_ref(&steel), 1e-3);
         let (asm, mut us) = nonlinear_gauss2(&stray, &[steel], 1e-3);
         us[..u.len()].copy_from_slice(&u);
@@ -1166,14 +1169,8 @@ mod tests {
     /// and the two halves of a split cell list add up to them (to rounding: 1e-12 relative).
     #[test]
     fn partial_internal_adds_up_to_the_assembly() {
-        use nonlin3d_laminate::materials;
-        let mesh = structured_box(&BoxParams::new(
-            ElementKind::Hex20,
-            [3, 2, 2],
-            [2.0, 1.0, 1.0],
-        ))
-        .unwrap();
-        let steel = materials::steel().stiffness().unwrap();
+        let mesh = hex20_box([3, 2, 2]);
+        let steel = steel();
         let (asm, u) = nonlinear_gauss2(&mesh, &[steel], 1e-3);
         let full = asm.assemble(&u, None).unwrap().internal;
         let all: Vec<usize> = (0..mesh.cells.len()).collect();
@@ -1197,14 +1194,8 @@ mod tests {
     /// set B after set A on one assembler gives bitwise what a fresh assembler gives for B.
     #[test]
     fn a_new_tie_set_gets_its_own_slave_positions() {
-        use nonlin3d_laminate::materials;
-        let mesh = structured_box(&BoxParams::new(
-            ElementKind::Hex20,
-            [2, 1, 1],
-            [2.0, 1.0, 1.0],
-        ))
-        .unwrap();
-        let steel = materials::steel().stiffness().unwrap();
+        let mesh = hex20_box([2, 1, 1]);
+        let steel = steel();
         let (mut asm, u) = nonlinear_gauss2(&mesh, &[steel], 1e-3);
         let n = asm.n();
         // The pattern is extended for both sets at once; each is then folded on its own.
