@@ -32,6 +32,7 @@
 #![warn(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
 pub mod analysis;
+mod checks;
 pub mod deck;
 pub mod eigen_check;
 pub mod export;

@@ -4,6 +4,7 @@
 
 use crate::Error;
 use crate::results::{FrontRow, Results};
+use plotters::element::DashedPathElement;
 use plotters::prelude::*;
 use std::path::Path;
 
@@ -24,7 +25,9 @@ fn range(values: impl Iterator<Item = f64>) -> (f64, f64) {
     (lo - pad, hi + pad)
 }
 
-/// One line per level: `g` of each front row against S (overlapping points hollow).
+/// One line per level: `g` of each front row against S. Stretches where the crack faces
+/// overlap are dashed and their markers hollow (the thesis's dashed stretches, §5.1), with a
+/// legend entry saying that G there is not physical without contact.
 pub fn release_rate_plot(
     results: &Results,
     path: &Path,
@@ -59,22 +62,39 @@ pub fn release_rate_plot(
         .map_err(|e| plot_err(path, e))?;
     for (k, level) in results.levels.iter().enumerate() {
         let colour = Palette99::pick(k).to_rgba();
-        let pts: Vec<(f64, f64)> = level.front.iter().map(|r| (r.s_mm, g(r))).collect();
-        chart
-            .draw_series(LineSeries::new(pts.clone(), colour.stroke_width(2)))
-            .map_err(|e| plot_err(path, e))?
-            .label(format!("{} = {:.4}", results.quantity, level.value))
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour));
+        // Consecutive pairs: solid where both ends are open, dashed where either overlaps.
+        for pair in level.front.windows(2) {
+            let pts = [(pair[0].s_mm, g(&pair[0])), (pair[1].s_mm, g(&pair[1]))];
+            if pair[0].is_open() && pair[1].is_open() {
+                chart.draw_series(LineSeries::new(pts, colour.stroke_width(2)))
+            } else {
+                chart.draw_series(DashedLineSeries::new(pts, 6, 4, colour.stroke_width(2)))
+            }
+            .map_err(|e| plot_err(path, e))?;
+        }
         chart
             .draw_series(level.front.iter().map(|r| {
-                let style = if r.open {
+                let style = if r.is_open() {
                     colour.filled()
                 } else {
                     colour.stroke_width(1)
                 };
                 Circle::new((r.s_mm, g(r)), 3, style)
             }))
-            .map_err(|e| plot_err(path, e))?;
+            .map_err(|e| plot_err(path, e))?
+            .label(format!("{} = {:.4}", results.quantity, level.value))
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour));
+    }
+    if results.levels.iter().any(|l| l.overlapped() > 0) {
+        chart
+            .draw_series(std::iter::empty::<Circle<(f64, f64), i32>>())
+            .map_err(|e| plot_err(path, e))?
+            .label("dashed, hollow: faces overlap — G not physical (no contact)")
+            .legend(|(x, y)| {
+                EmptyElement::at((x, y))
+                    + DashedPathElement::new(vec![(0, 0), (20, 0)], 4, 3, BLACK.stroke_width(2))
+                    + Circle::new((10, 0), 3, BLACK.stroke_width(1))
+            });
     }
     chart
         .configure_series_labels()
@@ -86,7 +106,7 @@ pub fn release_rate_plot(
     Ok(())
 }
 
-/// Peak deflection against |strain| (or load), Fig. 5.1.1.
+/// Largest crack-face separation against |strain| (or load), Fig. 5.1.1.
 pub fn deflection_plot(results: &Results, path: &Path) -> Result<(), Error> {
     let root = SVGBackend::new(path, (720, 480)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| plot_err(path, e))?;
@@ -95,7 +115,7 @@ pub fn deflection_plot(results: &Results, path: &Path) -> Result<(), Error> {
             results
                 .levels
                 .iter()
-                .map(|l| (l.value.abs(), l.peak_deflection_mm.abs())),
+                .map(|l| (l.value.abs(), l.max_face_separation_mm.abs())),
         )
         .collect();
     let (_, x_hi) = range(pts.iter().map(|p| p.0));
@@ -107,7 +127,7 @@ pub fn deflection_plot(results: &Results, path: &Path) -> Result<(), Error> {
     };
     let mut chart = ChartBuilder::on(&root)
         .caption(
-            format!("Peak deflection — {}", results.title),
+            format!("Sublaminate deflection off the base — {}", results.title),
             ("sans-serif", 16),
         )
         .margin(12)
@@ -118,7 +138,7 @@ pub fn deflection_plot(results: &Results, path: &Path) -> Result<(), Error> {
     chart
         .configure_mesh()
         .x_desc(x_desc)
-        .y_desc("peak transverse deflection (mm)")
+        .y_desc("largest crack-face separation |w_upper − w_lower| (mm)")
         .draw()
         .map_err(|e| plot_err(path, e))?;
     chart

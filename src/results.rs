@@ -5,6 +5,27 @@ use nonlin3d_newton::IncrementReport;
 use nonlin3d_vcct::FrontRelease;
 use serde::Serialize;
 
+/// The state of the crack faces one element behind a front point.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Faces {
+    /// Apart (opening ≥ 0): G is the closure energy of a physical state.
+    Open,
+    /// Passing through each other (opening < 0): contact would act there, which this analysis
+    /// does not model (thesis §2.7), so G at the point is not physical.
+    Overlapped,
+}
+
+impl Faces {
+    /// `open` or `overlapped`, as written in results.json and the front CSVs.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Self::Open => "open",
+            Self::Overlapped => "overlapped",
+        }
+    }
+}
+
 /// One front corner node in a results table (lengths in mm, G in J/m²).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct FrontRow {
@@ -18,23 +39,27 @@ pub struct FrontRow {
     pub y_mm: f64,
     /// Δa, mm.
     pub delta_a_mm: f64,
-    /// G_I, J/m² (negative: overlap).
+    /// G_I, J/m². Physical only where `faces` is [`Faces::Open`]; at an overlapped point it is
+    /// the closure product of a state whose faces penetrate, of either sign and no meaning.
     pub g_i: f64,
-    /// G_II, J/m².
+    /// G_II, J/m² (physical only where `faces` is [`Faces::Open`]).
     pub g_ii: f64,
-    /// G_III, J/m².
+    /// G_III, J/m² (physical only where `faces` is [`Faces::Open`]).
     pub g_iii: f64,
-    /// G_T, J/m².
+    /// G_T, J/m² (physical only where `faces` is [`Faces::Open`]).
     pub g_t: f64,
-    /// Faces open behind this point (false: overlapping; the thesis's dashed stretches).
-    pub open: bool,
-    /// Opening one element behind the front, mm.
+    /// Whether the crack faces one element behind this point are apart (`open`) or pass
+    /// through each other (`overlapped`: the thesis's dashed stretches, §5.1). Without contact
+    /// (§2.7) an overlapped point's G values are not physical.
+    pub faces: Faces,
+    /// Opening w(upper) − w(lower) one element behind the front, mm (negative: overlap).
     pub opening_mm: f64,
     /// Closure area, mm².
     pub area_mm2: f64,
     /// Front node (0-based mesh index).
     pub node: usize,
-    /// Failure index of the scene's mixed-mode criterion (≥ 1: growth), if one was given.
+    /// Failure index of the scene's mixed-mode criterion (≥ 1: growth), if one was given and
+    /// the faces here are open.
     pub failure_index: Option<f64>,
 }
 
@@ -51,12 +76,21 @@ impl FrontRow {
             g_ii: r.g_ii,
             g_iii: r.g_iii,
             g_t: r.g_t,
-            open: r.open(),
+            faces: if r.open() {
+                Faces::Open
+            } else {
+                Faces::Overlapped
+            },
             opening_mm: r.opening * 1e3,
             area_mm2: r.area * 1e6,
             node: r.node,
             failure_index: None,
         }
+    }
+
+    /// Whether the faces behind this point are apart, so that its G values are physical.
+    pub fn is_open(&self) -> bool {
+        self.faces == Faces::Open
     }
 
     /// Back to SI (for criteria).
@@ -101,11 +135,13 @@ pub struct Convergence {
 pub struct LevelResult {
     /// Applied strain ε_x (or, for the plate, the load P in N).
     pub value: f64,
-    /// w at the top of the sublaminate centre, mm.
+    /// Transverse displacement w of the sublaminate's top surface at the centre of the
+    /// delamination (x = y = 0), mm: the base's deflection included.
     pub centre_deflection_mm: f64,
-    /// Largest transverse separation of the crack faces, mm (the sublaminate's deflection off
-    /// the base; Fig. 5.1.1).
-    pub peak_deflection_mm: f64,
+    /// Largest crack-face separation w(upper face) − w(lower face) over the delamination, mm
+    /// (the sublaminate's deflection off the base, Fig. 5.1.1); negative when the largest is an
+    /// overlap.
+    pub max_face_separation_mm: f64,
     /// Convergence data.
     pub convergence: Convergence,
     /// The front table.
@@ -130,7 +166,7 @@ impl LevelResult {
         Self {
             value,
             centre_deflection_mm: centre * 1e3,
-            peak_deflection_mm: peak * 1e3,
+            max_face_separation_mm: peak * 1e3,
             convergence: Convergence {
                 attempts: attempts.len(),
                 increments: converged.len(),
@@ -147,9 +183,18 @@ impl LevelResult {
         }
     }
 
-    /// The front row with the largest value of `g`.
+    /// The front row with the largest value of `g` among the points whose faces are open (the
+    /// physical ones); `None` if there is none.
     pub fn peak(&self, g: impl Fn(&FrontRow) -> f64) -> Option<&FrontRow> {
-        self.front.iter().max_by(|a, b| g(a).total_cmp(&g(b)))
+        self.front
+            .iter()
+            .filter(|r| r.is_open())
+            .max_by(|a, b| g(a).total_cmp(&g(b)))
+    }
+
+    /// Front points whose crack faces overlap (G there not physical without contact).
+    pub fn overlapped(&self) -> usize {
+        self.front.iter().filter(|r| !r.is_open()).count()
     }
 }
 

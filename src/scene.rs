@@ -520,60 +520,11 @@ impl Scene {
         Self::from_toml(DEFAULT_SCENE)
     }
 
-    /// Checks what the type system cannot: positive sizes, loads present, sensible options.
+    /// Checks what the type system cannot, in the scene's words (field names as written, mm):
+    /// positive sizes, a delamination that fits the model, mesh counts in range, loads present
+    /// and used, sensible options (`checks.rs`).
     pub fn validate(&self) -> Result<(), Error> {
-        let bad = |m: String| Err(Error::Scene(m));
-        let positive = |name: &str, v: f64| -> Result<(), Error> {
-            if v.is_finite() && v > 0.0 {
-                Ok(())
-            } else {
-                Err(Error::Scene(format!("{name} = {v}: must be positive")))
-            }
-        };
-        for (name, v) in self.geometry.lengths_mm() {
-            positive(&format!("geometry.{name}"), v)?;
-        }
-        if matches!(self.geometry, Geometry::Plate { .. }) {
-            if self.loads.transverse_n.is_empty() {
-                return bad("loads.transverse_n: at least one load for a plate".into());
-            }
-        } else if self.loads.strains.is_empty() {
-            return bad("loads.strains: at least one strain level".into());
-        }
-        for (k, e) in self.loads.strains.iter().enumerate() {
-            if !e.is_finite() || *e == 0.0 {
-                return bad(format!(
-                    "loads.strains[{k}] = {e}: must be finite and non-zero"
-                ));
-            }
-        }
-        for (k, p) in self.loads.transverse_n.iter().enumerate() {
-            if !p.is_finite() || *p == 0.0 {
-                return bad(format!(
-                    "loads.transverse_n[{k}] = {p}: must be finite and non-zero"
-                ));
-            }
-        }
-        if let Some(p) = self.loads.perturbation_n
-            && !p.is_finite()
-        {
-            return bad(format!("loads.perturbation_n = {p}: must be finite"));
-        }
-        if !self.loads.imperfection_mm.is_finite() {
-            return bad("loads.imperfection_mm: must be finite".into());
-        }
-        let a = &self.analysis;
-        positive("analysis.tolerance_n", a.tolerance_n)?;
-        positive("analysis.max_increment", a.max_increment)?;
-        if a.refactor_every == 0 {
-            return bad("analysis.refactor_every: must be ≥ 1".into());
-        }
-        if let Some(c) = &self.criterion {
-            c.criterion()
-                .validate()
-                .map_err(|e| Error::Scene(format!("criterion: {e}")))?;
-        }
-        Ok(())
+        crate::checks::scene(self)
     }
 
     /// The material's ply-axis constants (before homogenisation), and whether it is to be

@@ -48,14 +48,14 @@ fn run_writes_every_output() {
     let levels = json["levels"].as_array().unwrap();
     assert_eq!(levels.len(), 2);
     assert_eq!(levels[1]["value"].as_f64(), Some(-0.003));
-    assert!(levels[1]["peak_deflection_mm"].as_f64().unwrap() > 0.2);
+    assert!(levels[1]["max_face_separation_mm"].as_f64().unwrap() > 0.2);
     assert_eq!(
         levels[1]["convergence"]["negative_pivots"].as_u64(),
         Some(0)
     );
     let front = levels[1]["front"].as_array().unwrap();
     assert_eq!(front.len(), 5, "4 slices: 5 corner nodes");
-    for key in ["s_mm", "theta_deg", "g_i", "g_ii", "g_iii", "g_t", "open"] {
+    for key in ["s_mm", "theta_deg", "g_i", "g_ii", "g_iii", "g_t", "faces"] {
         assert!(front[0].get(key).is_some(), "front row lacks {key}");
     }
     assert!(json["timings"]["solve_s"].as_f64().unwrap() > 0.0);
@@ -241,9 +241,9 @@ fn bfgs_scenes_match_full_newton() {
     for (la, lb) in a.levels.iter().zip(&b.levels) {
         assert_eq!(la.convergence.negative_pivots, Some(0));
         assert_eq!(lb.convergence.negative_pivots, Some(0));
-        let dw = (la.peak_deflection_mm - lb.peak_deflection_mm).abs();
+        let dw = (la.max_face_separation_mm - lb.max_face_separation_mm).abs();
         assert!(
-            dw <= 1e-3 * la.peak_deflection_mm.abs().max(1e-3),
+            dw <= 1e-3 * la.max_face_separation_mm.abs().max(1e-3),
             "{dw} mm"
         );
         for (ra, rb) in la.front.iter().zip(&lb.front) {

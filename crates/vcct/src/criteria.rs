@@ -5,7 +5,9 @@ use crate::{FrontRelease, VcctError};
 
 /// A mixed-mode criterion; [`MixedMode::index`] is 1 at the onset of growth.
 ///
-/// Negative G_I (overlapping faces, where contact would act) counts as 0 in every criterion.
+/// Negative G_I counts as 0 in every criterion. Points whose faces overlap
+/// ([`FrontRelease::open`] false) are not physical without contact and are left out of
+/// [`critical_strain`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum MixedMode {
     /// Power law: (G_I/G_Ic)^α + (G_II/G_IIc)^β + (G_III/G_IIIc)^β.
@@ -104,7 +106,8 @@ pub struct CriticalStrain {
 }
 
 /// The critical applied strain of a sweep: `levels` are (applied strain, front table) in the
-/// order applied (|strain| growing). The largest index over the front is followed from level to
+/// order applied (|strain| growing). The largest index over the front's open points (where the
+/// faces overlap, G is not physical without contact) is followed from level to
 /// level; between the two levels where it first crosses 1, √index is interpolated linearly in
 /// strain (G grows with the square of the load where the response is linear, so √index is
 /// linear there). `None` if the index stays below 1; the first level if it is already ≥ 1
@@ -115,10 +118,11 @@ pub fn critical_strain(
 ) -> Result<Option<CriticalStrain>, VcctError> {
     criterion.validate()?;
     let peak = |rates: &[FrontRelease]| -> Option<(usize, f64)> {
-        criterion
-            .indices(rates)
-            .into_iter()
+        rates
+            .iter()
             .enumerate()
+            .filter(|(_, r)| r.open())
+            .map(|(i, r)| (i, criterion.index(r)))
             .max_by(|a, b| a.1.total_cmp(&b.1))
     };
     let mut last: Option<(f64, f64)> = None;
@@ -228,5 +232,35 @@ mod tests {
         assert_relative_eq!(hit.strain, star, epsilon = 1e-15);
         assert_eq!(hit.point, 1);
         assert!(critical_strain(&c, &levels[..3]).unwrap().is_none());
+    }
+
+    /// A point whose faces overlap carries no physical G: a large G_I there does not trigger
+    /// growth; the open point does, later.
+    #[test]
+    fn overlapped_points_do_not_trigger_growth() {
+        let c = MixedMode::PowerLaw {
+            g_ic: 100.0,
+            g_iic: 100.0,
+            g_iiic: 100.0,
+            alpha: 1.0,
+            beta: 1.0,
+        };
+        let overlapped = FrontRelease {
+            opening: -1e-6,
+            ..point(500.0, 0.0, 0.0)
+        };
+        let levels = vec![
+            (-0.001, vec![overlapped, point(50.0, 0.0, 0.0)]),
+            (-0.002, vec![overlapped, point(200.0, 0.0, 0.0)]),
+        ];
+        let hit = critical_strain(&c, &levels).unwrap().unwrap();
+        assert_eq!(hit.point, 1);
+        // √index 0.707 → 1.414: crossing 1 at ε = −0.001 − 0.001·(1 − 0.707)/(1.414 − 0.707).
+        let (r0, r1) = (0.5_f64.sqrt(), 2.0_f64.sqrt());
+        assert_relative_eq!(
+            hit.strain,
+            -0.001 - 0.001 * (1.0 - r0) / (r1 - r0),
+            epsilon = 1e-15
+        );
     }
 }

@@ -32,4 +32,4 @@ mod release;
 
 pub use criteria::{CriticalStrain, MixedMode, critical_strain};
 pub use error::VcctError;
-pub use release::{FrontRelease, cells_above, closure_energy, release_rates};
+pub use release::{FrontRelease, OPEN_ALLOWANCE, cells_above, closure_energy, release_rates};

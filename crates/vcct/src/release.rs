@@ -21,7 +21,9 @@ pub struct FrontRelease {
     pub delta_a: f64,
     /// Closure area Δa × (distance between the neighbouring midside nodes) (m²).
     pub area: f64,
-    /// Mode I (opening, z′) release rate, J/m²; negative where the faces overlap.
+    /// Mode I (opening, z′) release rate, J/m². Physical only where the faces behind the point
+    /// are apart ([`FrontRelease::open`]); where they overlap the state penetrates (no contact
+    /// is modelled) and G_I — of either sign there — and the mode split mean nothing.
     pub g_i: f64,
     /// Mode II (sliding normal to the front, y′), J/m².
     pub g_ii: f64,
@@ -34,13 +36,18 @@ pub struct FrontRelease {
 }
 
 impl FrontRelease {
-    /// Whether the faces behind the front are apart (opening ≥ 0); `false` marks the
-    /// overlapping stretches the thesis draws dashed (§5.1) — there contact would act and the
-    /// mode split is not physical.
+    /// Whether the faces behind the front are apart: opening ≥ −1e-8·Δa. The allowance is round-off
+    /// (an unbuckled state's openings are ~1e-17 mm), eight orders below the element; `false`
+    /// marks the overlapping stretches the thesis draws dashed (§5.1) — there contact would act
+    /// and G is not physical.
     pub fn open(&self) -> bool {
-        self.opening >= 0.0
+        self.opening >= -OPEN_ALLOWANCE * self.delta_a
     }
 }
+
+/// Round-off allowance of [`FrontRelease::open`], relative to the element length behind the
+/// front.
+pub const OPEN_ALLOWANCE: f64 = 1e-8;
 
 /// A vector (F or Δu) in the local front frame of eq. 2.8.2: [x′ (tangent), y′ (normal), z′].
 fn local(v: [f64; 3], p: &FrontPoint) -> [f64; 3] {
@@ -214,4 +221,37 @@ pub fn release_rates(
 /// advance by one element ring, to compare with the energy difference of two solutions.
 pub fn closure_energy(rates: &[FrontRelease]) -> f64 {
     rates.iter().map(|r| r.g_t * r.area).sum()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn with_opening(opening: f64) -> FrontRelease {
+        FrontRelease {
+            node: 0,
+            s: 0.0,
+            theta_deg: 0.0,
+            x: 0.0,
+            y: 0.0,
+            delta_a: 0.5e-3,
+            area: 1e-6,
+            g_i: 0.0,
+            g_ii: 0.0,
+            g_iii: 0.0,
+            g_t: 0.0,
+            opening,
+        }
+    }
+
+    /// An unbuckled state's openings are round-off (−1.4e-20 m seen on the reference scene):
+    /// open. An overlap of a micrometre behind a 0.5 mm element is an overlap.
+    #[test]
+    fn round_off_is_open_and_a_real_overlap_is_not() {
+        assert!(with_opening(-1.4e-20).open());
+        assert!(with_opening(0.0).open());
+        assert!(with_opening(2e-5).open());
+        assert!(!with_opening(-1e-6).open());
+        assert!(!with_opening(-1e-11).open());
+    }
 }

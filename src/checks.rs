@@ -1,0 +1,308 @@
+//! What a scene must satisfy before anything is meshed, checked in the scene's own words: field
+//! names as written in the TOML (`geometry.w_mm`, `mesh.slices`) and lengths in mm. The mesh
+//! generators check their parameters too, but in SI units and with their internal names; a scene
+//! that passes these checks never reaches those messages.
+
+use crate::Error;
+use crate::scene::{Geometry, Scene};
+use nonlin3d_mesh::EmbeddedParams;
+
+/// Element counts above this along one mesh axis are refused before anything is allocated
+/// (10 000 slices alone would give about 10⁸ nodes).
+pub const MAX_COUNT: usize = 10_000;
+
+fn bad<T>(message: String) -> Result<T, Error> {
+    Err(Error::Scene(message))
+}
+
+fn positive(name: &str, v: f64) -> Result<(), Error> {
+    if v.is_finite() && v > 0.0 {
+        Ok(())
+    } else {
+        bad(format!("{name} = {v}: must be positive and finite"))
+    }
+}
+
+/// All checks of [`Scene::validate`].
+pub(crate) fn scene(s: &Scene) -> Result<(), Error> {
+    for (name, v) in s.geometry.lengths_mm() {
+        positive(&format!("geometry.{name}"), v)?;
+    }
+    geometry_fits(&s.geometry)?;
+    mesh_controls(s)?;
+    layup(s)?;
+    loads(s)?;
+    let a = &s.analysis;
+    positive("analysis.tolerance_n", a.tolerance_n)?;
+    positive("analysis.max_increment", a.max_increment)?;
+    if a.refactor_every == 0 {
+        return bad("analysis.refactor_every = 0: must be at least 1".into());
+    }
+    if let Some(c) = &s.criterion {
+        c.criterion()
+            .validate()
+            .map_err(|e| Error::Scene(format!("criterion: {e}")))?;
+    }
+    Ok(())
+}
+
+/// The delamination must fit in the model: the embedded and edge meshes keep the rings around
+/// the front elliptic out to `transition` (1.4) times the larger semi-axis and then blend into
+/// the square boundary, so W must exceed that; the through-width front must lie inside the slab.
+fn geometry_fits(g: &Geometry) -> Result<(), Error> {
+    let transition = EmbeddedParams::thesis_reference().transition;
+    let room = |a: f64, b: f64, w: f64, axes: &str| {
+        let need = transition * a.max(b);
+        if need < w {
+            Ok(())
+        } else {
+            bad(format!(
+                "geometry.w_mm = {w} mm is too small for the delamination: the mesh needs \
+                 w_mm > {transition} × {axes} = {transition} × {} = {need} mm (the rings around \
+                 the front stay elliptic out to {transition} times the larger semi-axis); raise \
+                 w_mm or make the delamination smaller",
+                a.max(b)
+            ))
+        }
+    };
+    match *g {
+        Geometry::Embedded {
+            a_mm, b_mm, w_mm, ..
+        }
+        | Geometry::Edge {
+            a_mm, b_mm, w_mm, ..
+        } => room(a_mm, b_mm, w_mm, "max(a_mm, b_mm)"),
+        Geometry::Plate { a_mm, w_mm, .. } => room(a_mm, a_mm, w_mm, "a_mm"),
+        Geometry::ThroughWidth {
+            a_mm, length_mm, ..
+        } => {
+            if a_mm < length_mm {
+                Ok(())
+            } else {
+                bad(format!(
+                    "geometry.a_mm = {a_mm} mm must be smaller than geometry.length_mm = \
+                     {length_mm} mm: the front x = a_mm has to lie inside the model"
+                ))
+            }
+        }
+    }
+}
+
+/// Mesh controls: counts at least 1 (slices even) and at most [`MAX_COUNT`], the grading
+/// positive, and no control that the scene's model does not use (it would be ignored).
+fn mesh_controls(s: &Scene) -> Result<(), Error> {
+    let c = &s.mesh;
+    let through = matches!(s.geometry, Geometry::ThroughWidth { .. });
+    if through && let Some(n) = c.slices {
+        return bad(format!(
+            "mesh.slices = {n}: a through-width model has a straight front; its elements across \
+             the width are set by mesh.across"
+        ));
+    }
+    if !through && let Some(n) = c.across {
+        return bad(format!(
+            "mesh.across = {n}: only through-width models have elements across a width; \
+             embedded, edge and plate models are refined along the front by mesh.slices"
+        ));
+    }
+    for (name, n) in [
+        ("slices", c.slices),
+        ("inside", c.inside),
+        ("outside", c.outside),
+        ("sub_layers", c.sub_layers),
+        ("base_layers", c.base_layers),
+        ("across", c.across),
+    ] {
+        let Some(n) = n else { continue };
+        if n == 0 || n > MAX_COUNT {
+            return bad(format!(
+                "mesh.{name} = {n}: must lie between 1 and {MAX_COUNT} elements"
+            ));
+        }
+    }
+    if let Some(n) = c.slices
+        && n % 2 == 1
+    {
+        return bad(format!(
+            "mesh.slices = {n}: must be even (the centre's O-grid takes slices/2 cells a side)"
+        ));
+    }
+    if let Some(g) = c.front_grading
+        && !(g.is_finite() && g > 0.0)
+    {
+        return bad(format!(
+            "mesh.front_grading = {g}: must be positive (the element next to the front over the \
+             one farthest from it; below 1 refines towards the front)"
+        ));
+    }
+    Ok(())
+}
+
+/// A layup's plies must make up the sublaminate exactly and leave some homogenised base.
+fn layup(s: &Scene) -> Result<(), Error> {
+    let Some(l) = &s.layup else { return Ok(()) };
+    if matches!(s.geometry, Geometry::ThroughWidth { .. }) {
+        return bad(
+            "layup: ply-level layers are available for embedded, edge and plate models only".into(),
+        );
+    }
+    positive("layup.ply_mm", l.ply_mm)?;
+    if l.sublaminate.is_empty() {
+        return bad("layup.sublaminate: at least one ply angle".into());
+    }
+    if let Some(a) = l
+        .sublaminate
+        .iter()
+        .chain(&l.base_below)
+        .find(|a| !a.is_finite())
+    {
+        return bad(format!("layup: ply angle {a}: must be finite (degrees)"));
+    }
+    let h = match s.geometry {
+        Geometry::Embedded { h_mm, .. }
+        | Geometry::Edge { h_mm, .. }
+        | Geometry::Plate { h_mm, .. }
+        | Geometry::ThroughWidth { h_mm, .. } => h_mm,
+    };
+    let plies = l.sublaminate.len() as f64 * l.ply_mm;
+    if (plies - h).abs() > 1e-9 * h {
+        return bad(format!(
+            "layup: {} sublaminate plies × ply_mm = {} mm make {plies} mm, but geometry.h_mm = \
+             {h} mm",
+            l.sublaminate.len(),
+            l.ply_mm
+        ));
+    }
+    let below = l.base_below.len() as f64 * l.ply_mm;
+    let base = s.geometry.base_mm();
+    if below >= base {
+        return bad(format!(
+            "layup.base_below: {} plies × {} mm = {below} mm leave nothing of geometry.base_mm = \
+             {base} mm to homogenise",
+            l.base_below.len(),
+            l.ply_mm
+        ));
+    }
+    Ok(())
+}
+
+/// Loads present, finite and non-zero, and only the loads the model uses: strains for the
+/// delamination models, transverse loads for the plate (anything else would be ignored).
+fn loads(s: &Scene) -> Result<(), Error> {
+    let l = &s.loads;
+    if matches!(s.geometry, Geometry::Plate { .. }) {
+        if l.transverse_n.is_empty() {
+            return bad("loads.transverse_n: at least one load for a plate".into());
+        }
+        if !l.strains.is_empty() {
+            return bad(
+                "loads.strains: a plate model is loaded by loads.transverse_n only; remove \
+                 loads.strains (it would be ignored)"
+                    .into(),
+            );
+        }
+        if l.perturbation_n.is_some() {
+            return bad(
+                "loads.perturbation_n: a plate model is loaded transversely already and gets no \
+                 perturbation load; remove it (it would be ignored)"
+                    .into(),
+            );
+        }
+    } else {
+        if l.strains.is_empty() {
+            return bad("loads.strains: at least one strain level".into());
+        }
+        if !l.transverse_n.is_empty() {
+            return bad(
+                "loads.transverse_n: only plate models take transverse loads; this model is \
+                 loaded by loads.strains (transverse_n would be ignored)"
+                    .into(),
+            );
+        }
+    }
+    for (k, e) in l.strains.iter().enumerate() {
+        if !e.is_finite() || *e == 0.0 {
+            return bad(format!(
+                "loads.strains[{k}] = {e}: must be finite and non-zero"
+            ));
+        }
+    }
+    for (k, p) in l.transverse_n.iter().enumerate() {
+        if !p.is_finite() || *p == 0.0 {
+            return bad(format!(
+                "loads.transverse_n[{k}] = {p}: must be finite and non-zero"
+            ));
+        }
+    }
+    if let Some(p) = l.perturbation_n
+        && !p.is_finite()
+    {
+        return bad(format!("loads.perturbation_n = {p}: must be finite"));
+    }
+    if !l.imperfection_mm.is_finite() {
+        return bad(format!(
+            "loads.imperfection_mm = {}: must be finite",
+            l.imperfection_mm
+        ));
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)]
+mod tests {
+    use crate::Scene;
+
+    fn reference() -> Scene {
+        Scene::thesis_reference().unwrap()
+    }
+
+    fn message(s: &Scene) -> String {
+        s.validate().unwrap_err().to_string()
+    }
+
+    #[test]
+    fn a_delamination_too_large_for_the_model_is_named_in_mm() {
+        let mut s = reference();
+        if let crate::scene::Geometry::Embedded { a_mm, b_mm, .. } = &mut s.geometry {
+            *a_mm = 30.0;
+            *b_mm = 42.0;
+        }
+        let m = message(&s);
+        // W = 50 mm, 1.4 × 42 = 58.8 mm: the fields and the numbers in mm.
+        assert!(m.contains("geometry.w_mm = 50 mm"), "{m}");
+        assert!(m.contains("max(a_mm, b_mm)"), "{m}");
+        assert!(m.contains("58.8"), "{m}");
+        assert!(!m.contains("transition·"), "{m}");
+    }
+
+    #[test]
+    fn counts_out_of_range_are_refused_before_meshing() {
+        for (field, value) in [
+            ("sub_layers", usize::MAX),
+            ("inside", 4_294_967_297),
+            ("slices", 0),
+            ("slices", 7),
+        ] {
+            let mut s = reference();
+            let slot = match field {
+                "sub_layers" => &mut s.mesh.sub_layers,
+                "inside" => &mut s.mesh.inside,
+                _ => &mut s.mesh.slices,
+            };
+            *slot = Some(value);
+            let m = message(&s);
+            assert!(m.contains(&format!("mesh.{field} = {value}")), "{m}");
+        }
+    }
+
+    #[test]
+    fn controls_and_loads_the_model_would_ignore_are_refused() {
+        let mut s = reference();
+        s.mesh.across = Some(2);
+        assert!(message(&s).contains("mesh.across"));
+        let mut s = reference();
+        s.loads.transverse_n = vec![10.0];
+        assert!(message(&s).contains("loads.transverse_n"));
+    }
+}
