@@ -9,7 +9,9 @@ use crate::{ElementKind, IntegrationRule};
 pub enum ElementError {
     /// det J ≤ 0 (or not finite) at a quadrature point: the element is inverted or degenerate.
     #[error(
-        "element {element:?}: Jacobian determinant {det} ≤ 0 at quadrature point {point} (ξ = {xi:?})"
+        "{}: Jacobian determinant {det:e} ≤ 0 at quadrature point {point} (ξ, η, ζ) = {}: the element is inverted or degenerate",
+        which(*element),
+        triple(xi)
     )]
     NonPositiveJacobian {
         /// Element index in a batch.
@@ -22,7 +24,7 @@ pub enum ElementError {
         det: f64,
     },
     /// A coordinate or displacement is NaN or infinite.
-    #[error("element {element:?}: {what} of node {node} is not finite: {value:?}")]
+    #[error("{}: {what} of its node {node} are not finite: {}", which(*element), triple(value))]
     NonFiniteInput {
         /// Element index in a batch.
         element: Option<usize>,
@@ -44,7 +46,7 @@ pub enum ElementError {
         got: usize,
     },
     /// The rule does not exist for this element (the selective-reduced rule is Hex8-only).
-    #[error("integration rule {rule:?} is not defined for {kind:?}")]
+    #[error("the {} integration rule is not defined for {} elements", rule_name(*rule), kind_name(*kind))]
     UnsupportedRule {
         /// The element kind.
         kind: ElementKind,
@@ -54,7 +56,8 @@ pub enum ElementError {
     /// The selective-reduced rule splits the energy into ε1–ε4 and ε5–ε6 parts; it needs
     /// C_ij = 0 between the two groups (the thesis's assumption, eq. 2.1.5).
     #[error(
-        "element {element:?}: material {material} couples γyz/γxz with ε1–ε4 (relative {coupling:e}); the selective-reduced rule needs them decoupled"
+        "{}: material {material} couples γyz/γxz with ε1–ε4 (relative {coupling:e}); the selective-reduced rule needs them decoupled",
+        which(*element)
     )]
     CoupledTransverseShear {
         /// Element index in a batch.
@@ -74,6 +77,31 @@ pub enum ElementError {
         /// Number of materials.
         count: usize,
     },
+}
+
+/// "element 19", or "the element" for a single-element call.
+fn which(element: Option<usize>) -> String {
+    element.map_or_else(|| "the element".to_string(), |e| format!("element {e}"))
+}
+
+/// "(x, y, z)" with each entry in shortest round-trip form.
+fn triple(v: &[f64; 3]) -> String {
+    format!("({}, {}, {})", v[0], v[1], v[2])
+}
+
+fn kind_name(kind: ElementKind) -> &'static str {
+    match kind {
+        ElementKind::Hex8 => "Hex8",
+        ElementKind::Hex20 => "Hex20",
+    }
+}
+
+fn rule_name(rule: IntegrationRule) -> &'static str {
+    match rule {
+        IntegrationRule::Gauss2 => "2×2×2 Gauss",
+        IntegrationRule::Gauss3 => "3×3×3 Gauss",
+        IntegrationRule::SelectiveReduced => "selective-reduced",
+    }
 }
 
 impl ElementError {
@@ -103,5 +131,51 @@ impl ElementError {
             },
             other => other,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Messages are for users: no `Some(…)`, `None` or `[…]` from Debug formatting.
+    #[test]
+    fn messages_read_as_words() {
+        let errors = [
+            ElementError::NonPositiveJacobian {
+                element: Some(19),
+                point: 3,
+                xi: [0.5, -0.5, 0.5],
+                det: -2e-9,
+            },
+            ElementError::NonFiniteInput {
+                element: None,
+                what: "displacements",
+                node: 4,
+                value: [f64::NAN, 0.0, 1.0],
+            },
+            ElementError::UnsupportedRule {
+                kind: ElementKind::Hex20,
+                rule: IntegrationRule::SelectiveReduced,
+            },
+            ElementError::NonPositiveJacobian {
+                element: None,
+                point: 0,
+                xi: [0.0; 3],
+                det: 0.0,
+            }
+            .at_element(7),
+        ];
+        let text: Vec<String> = errors.iter().map(|e| e.to_string()).collect();
+        for t in &text {
+            assert!(
+                !t.contains("Some(") && !t.contains("None") && !t.contains('['),
+                "{t}"
+            );
+        }
+        assert!(text[0].starts_with("element 19: "), "{}", text[0]);
+        assert!(text[1].starts_with("the element: "), "{}", text[1]);
+        assert!(text[2].contains("selective-reduced") && text[2].contains("Hex20"));
+        assert!(text[3].starts_with("element 7: "), "{}", text[3]);
     }
 }

@@ -50,18 +50,17 @@ impl Orthotropic {
     /// |ν_ij| < √(E_i/E_j), and 1 − ν12ν21 − ν23ν32 − ν13ν31 − 2ν21ν32ν13 > 0, which together
     /// are the conditions for a positive definite compliance.
     pub fn validate(&self) -> Result<(), LaminateError> {
-        let moduli = [
-            ("E11", self.e11),
-            ("E22", self.e22),
-            ("E33", self.e33),
-            ("G12", self.g12),
-            ("G23", self.g23),
-            ("G13", self.g13),
-        ];
-        for (name, value) in moduli {
-            if !(value.is_finite() && value > 0.0) {
-                return Err(LaminateError::InvalidModulus { name, value });
+        // Young's moduli, then the Poisson ratios, then the shear moduli: an isotropic ν = −1
+        // gives G = E/(2(1 + ν)) = ∞, and the message must name ν, the cause.
+        let positive = |name: &'static str, value: f64| {
+            if value.is_finite() && value > 0.0 {
+                Ok(())
+            } else {
+                Err(LaminateError::InvalidModulus { name, value })
             }
+        };
+        for (name, value) in [("E11", self.e11), ("E22", self.e22), ("E33", self.e33)] {
+            positive(name, value)?;
         }
         let ratios = [
             ("nu12", self.nu12, self.e11, self.e22),
@@ -76,6 +75,9 @@ impl Orthotropic {
             if value.abs() >= limit {
                 return Err(LaminateError::PoissonTooLarge { name, value, limit });
             }
+        }
+        for (name, value) in [("G12", self.g12), ("G23", self.g23), ("G13", self.g13)] {
+            positive(name, value)?;
         }
         let nu21 = self.nu12 * self.e22 / self.e11;
         let nu32 = self.nu23 * self.e33 / self.e22;
@@ -138,6 +140,16 @@ impl Orthotropic {
 mod tests {
     use super::*;
     use approx::assert_relative_eq;
+
+    /// ν = −1 makes G = E/(2(1 + ν)) infinite; the error names ν, not G.
+    #[test]
+    fn an_isotropic_poisson_ratio_of_minus_one_is_named() {
+        let e = Orthotropic::isotropic(70e9, -1.0).validate().unwrap_err();
+        assert!(
+            matches!(e, LaminateError::PoissonTooLarge { name: "nu12", .. }),
+            "{e}"
+        );
+    }
 
     #[test]
     fn isotropic_stiffness_matches_lame_constants() {
