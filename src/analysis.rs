@@ -569,7 +569,7 @@ pub fn run(scene: &Scene, progress: &mut dyn FnMut(Progress)) -> Result<Results,
             &front,
             u.clone(),
         );
-        level.convergence.negative_pivots = pivots;
+        level.set_negative_pivots(pivots);
         level.convergence.full_newton_fallback = fallback;
         levels.push(level);
         progress(Progress::Level {
@@ -600,7 +600,7 @@ pub fn run(scene: &Scene, progress: &mut dyn FnMut(Progress)) -> Result<Results,
         }
         _ => None,
     };
-    Ok(Results {
+    let mut results = Results {
         title: scene.title.clone(),
         quantity: if plate { "load_n" } else { "strain" }.into(),
         model: ModelSummary {
@@ -621,7 +621,10 @@ pub fn run(scene: &Scene, progress: &mut dyn FnMut(Progress)) -> Result<Results,
             output_s: 0.0,
         },
         model_data: Some(model),
-    })
+        warnings: Vec::new(),
+    };
+    results.warnings = results.stability_warnings();
+    Ok(results)
 }
 
 /// A scene ready to run, stage by stage or all at once: `Analysis::new(scene)?.run()`.

@@ -45,11 +45,54 @@ pub fn front_csv(results: &Results, level: usize) -> String {
     s
 }
 
+/// `yes`, `NO` (unstable: negative pivots) or `?` (not computed).
+fn stability_word(l: &crate::results::LevelResult) -> &'static str {
+    match l.convergence.stable {
+        Some(true) => "yes",
+        Some(false) => "NO",
+        None => "?",
+    }
+}
+
+/// The CSV of the levels: applied value, deflections, largest G_I/G_II/G_T over the open front
+/// points, overlapped points, negative pivots, stability and Newton iterations.
+pub fn levels_csv(results: &Results) -> String {
+    let mut s = format!(
+        "{},centre_deflection_mm,max_face_separation_mm,g_i_max,g_ii_max,g_t_max,overlapped_points,front_points,negative_pivots,stable,iterations\n",
+        results.quantity
+    );
+    let opt = |v: Option<f64>| v.map_or(String::new(), |v| format!("{v:e}"));
+    for l in &results.levels {
+        let _ = writeln!(
+            s,
+            "{},{:e},{:e},{},{},{},{},{},{},{},{}",
+            l.value,
+            l.centre_deflection_mm,
+            l.max_face_separation_mm,
+            opt(l.peak(|r| r.g_i).map(|r| r.g_i)),
+            opt(l.peak(|r| r.g_ii).map(|r| r.g_ii)),
+            opt(l.peak(|r| r.g_t).map(|r| r.g_t)),
+            l.overlapped(),
+            l.front.len(),
+            l.convergence
+                .negative_pivots
+                .map_or(String::new(), |p| p.to_string()),
+            l.convergence
+                .stable
+                .map_or(String::new(), |b| b.to_string()),
+            l.convergence.iterations
+        );
+    }
+    s
+}
+
 /// Writes everything into `dir` (created if needed) and records the time in
 /// `results.timings.output_s`.
 pub fn write_all(results: &mut Results, dir: &Path) -> Result<(), Error> {
     let t = Instant::now();
     std::fs::create_dir_all(dir).map_err(io(dir))?;
+    let p = dir.join("levels.csv");
+    std::fs::write(&p, levels_csv(results)).map_err(io(&p))?;
     for k in 0..results.levels.len() {
         let p = dir.join(format!("front_{k}.csv"));
         std::fs::write(&p, front_csv(results, k)).map_err(io(&p))?;
@@ -96,7 +139,7 @@ pub fn table(results: &Results) -> String {
     };
     let _ = writeln!(
         s,
-        "{head:>9} | w centre top (mm) | max face separation (mm) | G_I max (J/m²) at S (mm) | G_II max (J/m²) at S (mm) | overlapped | iterations"
+        "{head:>9} | w centre top (mm) | max face separation (mm) | G_I max (J/m²) at S (mm) | G_II max (J/m²) at S (mm) | overlapped | stable | iterations"
     );
     let cell = |row: Option<&crate::results::FrontRow>, g: fn(&crate::results::FrontRow) -> f64| {
         row.map_or(format!("{:>24}", "— (no open point)"), |r| {
@@ -108,13 +151,14 @@ pub fn table(results: &Results) -> String {
     for l in &results.levels {
         let _ = writeln!(
             s,
-            "{:>9.5} | {:>16.4} | {:>24.4} | {} | {} | {:>10} | {:>10}",
+            "{:>9.5} | {:>16.4} | {:>24.4} | {} | {} | {:>10} | {:>6} | {:>10}",
             l.value,
             tidy(l.centre_deflection_mm),
             tidy(l.max_face_separation_mm),
             cell(l.peak(|r| r.g_i), |r| r.g_i),
             cell(l.peak(|r| r.g_ii), |r| r.g_ii),
             format!("{}/{}", l.overlapped(), l.front.len()),
+            stability_word(l),
             l.convergence.iterations
         );
     }
@@ -125,6 +169,9 @@ pub fn table(results: &Results) -> String {
              is modelled); their G is not physical and is left out of the maxima above and of \
              the growth criterion (faces = overlapped in front_K.csv and results.json)"
         );
+    }
+    for w in &results.warnings {
+        let _ = writeln!(s, "warning: {w}");
     }
     if let Some(c) = results.critical {
         let _ = writeln!(

@@ -123,8 +123,12 @@ pub struct Convergence {
     pub iterations: usize,
     /// Final residual ‖r‖∞, N.
     pub residual_n: f64,
-    /// Negative pivots of the last factorisation (0: stable equilibrium on this branch).
+    /// Negative pivots of the tangent at the level's converged state (0: stable equilibrium;
+    /// more: the state is unstable — e.g. the unbuckled path past a bifurcation — and is not
+    /// what a real structure would show). None: not computed.
     pub negative_pivots: Option<usize>,
+    /// `negative_pivots == 0`: the converged state is a stable equilibrium. None: unknown.
+    pub stable: Option<bool>,
     /// The level was redone with full Newton after BFGS landed on the branch buckled into
     /// the base (`newton = "bfgs"` only).
     pub full_newton_fallback: bool,
@@ -176,6 +180,7 @@ impl LevelResult {
                     .or(last.map(|a| a.initial_residual))
                     .unwrap_or(0.0),
                 negative_pivots: converged.last().and_then(|a| a.negative_pivots()),
+                stable: None,
                 full_newton_fallback: false,
             },
             front: front.iter().map(FrontRow::new).collect(),
@@ -190,6 +195,13 @@ impl LevelResult {
             .iter()
             .filter(|r| r.is_open())
             .max_by(|a, b| g(a).total_cmp(&g(b)))
+    }
+
+    /// Records the negative pivots of the tangent at the converged state and whether it is
+    /// stable (none: a stable equilibrium, Sylvester's law of inertia).
+    pub fn set_negative_pivots(&mut self, pivots: Option<usize>) {
+        self.convergence.negative_pivots = pivots;
+        self.convergence.stable = pivots.map(|p| p == 0);
     }
 
     /// Front points whose crack faces overlap (G there not physical without contact).
@@ -240,6 +252,44 @@ pub struct Critical {
     pub s_mm: f64,
 }
 
+impl Results {
+    /// Warnings that follow from the levels: every level whose converged state is unstable
+    /// (negative pivots), and a stronger one when the last level is.
+    pub fn stability_warnings(&self) -> Vec<String> {
+        let what = if self.quantity == "strain" {
+            "strain"
+        } else {
+            "load (N)"
+        };
+        let mut out = Vec::new();
+        let unstable: Vec<&LevelResult> = self
+            .levels
+            .iter()
+            .filter(|l| l.convergence.stable == Some(false))
+            .collect();
+        for l in &unstable {
+            out.push(format!(
+                "level at {what} {}: the converged state is unstable ({} negative pivots of the \
+                 tangent): a real structure would not stay in it; its deflection and G describe \
+                 an equilibrium it would leave",
+                l.value,
+                l.convergence.negative_pivots.unwrap_or(0)
+            ));
+        }
+        if let Some(last) = self.levels.last()
+            && last.convergence.stable == Some(false)
+        {
+            out.push(format!(
+                "the run ends on an unstable state (at {what} {}); with loads.perturbation_n = 0 \
+                 the unbuckled path is followed past its bifurcation — give a perturbation load \
+                 (or leave it unset for the automatic one) to follow the buckled branch",
+                last.value
+            ));
+        }
+        out
+    }
+}
+
 /// Everything a run produces.
 #[derive(Debug, Clone, Serialize)]
 pub struct Results {
@@ -251,6 +301,9 @@ pub struct Results {
     pub model: ModelSummary,
     /// Per level.
     pub levels: Vec<LevelResult>,
+    /// What the reader must know before trusting the numbers (unstable levels, …); also
+    /// printed under the terminal table.
+    pub warnings: Vec<String>,
     /// Critical strain by the scene's criterion, if one was given and reached.
     pub critical: Option<Critical>,
     /// Stage timings.

@@ -153,3 +153,65 @@ fn a_geometry_error_names_the_scene_fields_in_mm() {
     assert!(err.contains("84 mm"), "{err}");
     assert!(!err.contains("0.06"), "metres leaked: {err}");
 }
+
+/// With `perturbation_n = 0` the unbuckled path is followed past its bifurcation: each level
+/// there is reported unstable (negative pivots, `stable = false`) in results.json, levels.csv
+/// and the table, and the run says in a warning that it ends on an unstable state.
+#[test]
+fn unstable_levels_are_flagged_everywhere() {
+    let text = DEFAULT_SCENE
+        .replace("slices = 8", "slices = 4")
+        .replace(
+            "strains = [-0.001, -0.002, -0.003, -0.004, -0.005]",
+            "strains = [-0.001, -0.003]",
+        )
+        .replace("[loads]", "[loads]\nperturbation_n = 0.0");
+    let dir = tmp("unstable");
+    let scene = dir.join("scene.toml");
+    std::fs::write(&scene, text).unwrap();
+    let out = dir.join("out");
+    let run = Command::new(env!("CARGO_BIN_EXE_nonlin3d"))
+        .args(["run", "--quiet", "--out"])
+        .arg(&out)
+        .arg(&scene)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&run.stdout);
+    assert!(run.status.success(), "{stdout}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("results.json")).unwrap()).unwrap();
+    let levels = json["levels"].as_array().unwrap();
+    // −0.001 is below the circle's bifurcation (≈ −0.0017), −0.003 above it.
+    assert_eq!(levels[0]["convergence"]["stable"], true);
+    assert_eq!(levels[1]["convergence"]["stable"], false);
+    assert!(
+        levels[1]["convergence"]["negative_pivots"]
+            .as_u64()
+            .unwrap()
+            > 0
+    );
+    let warnings = json["warnings"].as_array().unwrap();
+    assert!(
+        warnings
+            .iter()
+            .any(|w| w.as_str().unwrap().contains("ends on an unstable state"))
+    );
+    let row = stdout
+        .lines()
+        .find(|l| l.trim_start().starts_with("-0.00300"))
+        .unwrap();
+    assert!(row.contains(" NO "), "{row}");
+    assert!(
+        stdout.contains("warning: the run ends on an unstable state"),
+        "{stdout}"
+    );
+    let csv = std::fs::read_to_string(out.join("levels.csv")).unwrap();
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let col = header.iter().position(|h| *h == "stable").unwrap();
+    let stable: Vec<&str> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').nth(col).unwrap())
+        .collect();
+    assert_eq!(stable, ["true", "false"]);
+}
