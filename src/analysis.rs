@@ -436,12 +436,12 @@ pub fn deflections(model: &Model, u: &[f64]) -> (f64, f64) {
 }
 
 /// What [`run`] reports as it goes.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Progress {
+#[derive(Debug, Clone, Copy)]
+pub enum Progress<'a> {
     /// The model is built: nodes, cells, DOFs, levels to solve.
     Built {
-        /// Nodes.
-        nodes: usize,
+        /// The model (mesh and front).
+        model: &'a Model,
         /// DOFs.
         dofs: usize,
         /// Levels.
@@ -453,11 +453,18 @@ pub enum Progress {
         index: usize,
         /// Applied strain (or load, N).
         value: f64,
+        /// The level's record, as it will appear in the results (without the criterion).
+        result: &'a LevelResult,
     },
 }
 
-/// Runs a scene end to end; `progress` is told after the model is built and after each level.
-pub fn run(scene: &Scene, progress: &mut dyn FnMut(Progress)) -> Result<Results, Error> {
+/// Runs a scene end to end; `progress` is told after the model is built and after each level
+/// (to show progress, or to write each level's output as it converges: [`crate::output`]); an
+/// error it returns stops the run.
+pub fn run(
+    scene: &Scene,
+    progress: &mut dyn FnMut(Progress) -> Result<(), Error>,
+) -> Result<Results, Error> {
     let t0 = Instant::now();
     let model = build_model(scene)?;
     let t_mesh = t0.elapsed().as_secs_f64();
@@ -466,10 +473,10 @@ pub fn run(scene: &Scene, progress: &mut dyn FnMut(Progress)) -> Result<Results,
     let t_setup = t1.elapsed().as_secs_f64();
     let (factors, reference) = load_factors(scene);
     progress(Progress::Built {
-        nodes: model.mesh.nodes.len(),
+        model: &model,
         dofs: problem.assembler.n(),
         levels: factors.len(),
-    });
+    })?;
     let (newton, stepping) = settings(scene);
     let plate = model.kind == ModelKind::Plate;
     let perturbation = if plate {
@@ -571,11 +578,12 @@ pub fn run(scene: &Scene, progress: &mut dyn FnMut(Progress)) -> Result<Results,
         );
         level.set_negative_pivots(pivots);
         level.convergence.full_newton_fallback = fallback;
-        levels.push(level);
         progress(Progress::Level {
             index: k,
             value: lambda * reference,
-        });
+            result: &level,
+        })?;
+        levels.push(level);
         from = lambda;
     }
     if let Some(c) = &scene.criterion {
@@ -602,6 +610,8 @@ pub fn run(scene: &Scene, progress: &mut dyn FnMut(Progress)) -> Result<Results,
     };
     let mut results = Results {
         title: scene.title.clone(),
+        complete: true,
+        stopped: None,
         quantity: if plate { "load_n" } else { "strain" }.into(),
         model: ModelSummary {
             nodes: model.mesh.nodes.len(),
@@ -667,11 +677,14 @@ impl Analysis {
 
     /// All stages ([`run`]), silently.
     pub fn run(&self) -> Result<Results, Error> {
-        run(&self.scene, &mut |_| {})
+        run(&self.scene, &mut |_| Ok(()))
     }
 
-    /// All stages, reporting [`Progress`].
-    pub fn run_with(&self, progress: &mut dyn FnMut(Progress)) -> Result<Results, Error> {
+    /// All stages, reporting [`Progress`]; an error from `progress` stops the run.
+    pub fn run_with(
+        &self,
+        progress: &mut dyn FnMut(Progress) -> Result<(), Error>,
+    ) -> Result<Results, Error> {
         run(&self.scene, progress)
     }
 }

@@ -14,7 +14,7 @@
 //! | [`vcct`] | `nonlin3d-vcct` | G_I, G_II, G_III along the front by virtual crack closure, mixed-mode criteria (§2.8) |
 //! | [`scene`] | this crate | `Scene`: the serde/TOML description of an analysis (docs/SCENES.md) |
 //! | [`analysis`] | this crate | the pipeline scene → mesh → constraints → Newton (perturbation, strain sweep) → VCCT (§3.2, ch. 5) |
-//! | [`results`], [`report`], [`plot`] | this crate | `results.json`, front CSVs, VTU/PVD series, SVG plots |
+//! | [`results`], [`report`], [`plot`], [`output`] | this crate | `results.json`, front CSVs, VTU/PVD series, SVG plots; the output folder written level by level, atomically |
 //! | [`export`] | this crate | a scene as a CalculiX deck: the `nonlin3d export` command |
 //! | [`deck`] | this crate | solving an Abaqus/CalculiX deck: the `nonlin3d solve` command |
 //! | [`eigen_check`] | this crate | the element eigen-check (§2.5): `nonlin3d eigen-check` |
@@ -36,6 +36,7 @@ mod checks;
 pub mod deck;
 pub mod eigen_check;
 pub mod export;
+pub mod output;
 pub mod plot;
 pub mod report;
 pub mod results;

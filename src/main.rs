@@ -8,6 +8,11 @@
 //! - `nonlin3d solve DECK.inp --out DIR`: solves an Abaqus/CalculiX deck (the subset
 //!   documented in `nonlin3d_mesh::read_inp`; linear or NLGEOM static steps) and writes
 //!   `DIR/displacements.csv`, `DIR/step-K/displacements.csv` and `DIR/summary.json`.
+//!
+//! Exit status: 0 complete; 1 the analysis (or writing its results) failed; 2 bad input (scene,
+//! deck, arguments, an output folder that cannot be written); 130 interrupted by SIGINT, 143 by
+//! SIGTERM. `run` writes each level as it converges, so a failed or interrupted run leaves every
+//! converged level with `"complete": false` in results.json.
 
 use clap::{Parser, Subcommand};
 use nonlin3d::newton::{NewtonSettings, Stepping};
@@ -18,7 +23,9 @@ use std::process::ExitCode;
 #[command(
     name = "nonlin3d",
     version,
-    about = "Geometrically nonlinear 3-D FE analysis of delaminated composite laminates"
+    about = "Geometrically nonlinear 3-D FE analysis of delaminated composite laminates",
+    after_help = "Exit status: 0 complete; 1 analysis failed (converged levels kept, results.json \
+                  \"complete\": false); 2 bad input; 130 interrupted (SIGINT), 143 (SIGTERM)."
 )]
 struct Cli {
     #[command(subcommand)]
@@ -105,10 +112,87 @@ fn read_scene(path: Option<&Path>) -> Result<nonlin3d::Scene, nonlin3d::Error> {
     }
 }
 
-fn run(scene: Option<&Path>, out: &Path, quiet: bool) -> Result<(), nonlin3d::Error> {
+/// How a command failed, for the exit status (README, `--help`): bad input exits 2, a failure
+/// of the analysis or of writing its results 1.
+enum Failure {
+    /// The scene, deck or arguments are wrong: nothing was computed.
+    Input(nonlin3d::Error),
+    /// The analysis or the writing of its results failed.
+    Run(nonlin3d::Error),
+}
+
+impl Failure {
+    fn code(&self) -> u8 {
+        match self {
+            Self::Input(_) => 2,
+            Self::Run(_) => 1,
+        }
+    }
+
+    fn error(&self) -> &nonlin3d::Error {
+        match self {
+            Self::Input(e) | Self::Run(e) => e,
+        }
+    }
+}
+
+/// On the first SIGINT or SIGTERM: write the run's results.json as it stands with
+/// `"stopped": "interrupted by …"` (every converged level is already on disk) and exit 130
+/// (SIGINT) or 143 (SIGTERM). A second signal exits at once.
+#[cfg(unix)]
+fn stop_on_signals(handle: nonlin3d::output::InterruptHandle) -> Result<(), nonlin3d::Error> {
+    use signal_hook::consts::{SIGINT, SIGTERM};
+    use std::sync::Arc;
+    use std::sync::atomic::AtomicBool;
+    let err = |e: std::io::Error| nonlin3d::Error::Numerical(format!("signal handler: {e}"));
+    let armed = Arc::new(AtomicBool::new(false));
+    for (sig, code) in [(SIGINT, 130), (SIGTERM, 143)] {
+        // The shutdown goes first: it fires only once the flag is set by an earlier signal.
+        signal_hook::flag::register_conditional_shutdown(sig, code, armed.clone()).map_err(err)?;
+        signal_hook::flag::register(sig, armed.clone()).map_err(err)?;
+    }
+    let mut signals = signal_hook::iterator::Signals::new([SIGINT, SIGTERM]).map_err(err)?;
+    std::thread::spawn(move || {
+        if let Some(sig) = signals.forever().next() {
+            let (name, code) = if sig == SIGINT {
+                ("SIGINT", 130)
+            } else {
+                ("SIGTERM", 143)
+            };
+            let kept = handle.stop(name);
+            eprintln!(
+                "\nnonlin3d: interrupted by {name}{}",
+                if kept {
+                    "; the levels converged so far are kept (results.json: \"complete\": false)"
+                } else {
+                    ""
+                }
+            );
+            std::process::exit(code);
+        }
+    });
+    Ok(())
+}
+
+#[cfg(not(unix))]
+fn stop_on_signals(_: nonlin3d::output::InterruptHandle) -> Result<(), nonlin3d::Error> {
+    Ok(())
+}
+
+fn run(scene: Option<&Path>, out: &Path, quiet: bool) -> Result<(), Failure> {
     use indicatif::{ProgressBar, ProgressStyle};
     use nonlin3d::analysis::Progress;
-    let scene = read_scene(scene)?;
+    let scene = read_scene(scene).map_err(Failure::Input)?;
+    let quantity = if matches!(scene.geometry, nonlin3d::scene::Geometry::Plate { .. }) {
+        "load_n"
+    } else {
+        "strain"
+    };
+    // The folder is made and tested before anything is computed; each level lands there as
+    // it converges.
+    let mut output =
+        nonlin3d::output::RunOutput::create(out, &scene.title, quantity).map_err(Failure::Input)?;
+    stop_on_signals(output.interrupt_handle()).map_err(Failure::Run)?;
     println!("{}", scene.title);
     let bar = if quiet {
         ProgressBar::hidden()
@@ -122,34 +206,53 @@ fn run(scene: Option<&Path>, out: &Path, quiet: bool) -> Result<(), nonlin3d::Er
         .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
     bar.set_message("building the model");
-    let mut results = nonlin3d::analysis::run(&scene, &mut |p| match p {
+    let outcome = nonlin3d::analysis::run(&scene, &mut |p| match p {
         Progress::Built {
-            nodes,
+            model,
             dofs,
             levels,
         } => {
             bar.set_length(levels as u64);
-            bar.set_message(format!("{nodes} nodes, {dofs} DOFs"));
+            bar.set_message(format!("{} nodes, {dofs} DOFs", model.mesh.nodes.len()));
+            output.built(model, dofs)
         }
-        Progress::Level { index, value } => {
+        Progress::Level {
+            index,
+            value,
+            result,
+        } => {
             bar.set_position(index as u64 + 1);
             bar.set_message(format!("level {value} converged"));
+            output.level(result)
         }
-    })?;
+    });
     bar.finish_and_clear();
-    nonlin3d::report::write_all(&mut results, out)?;
+    let mut results = match outcome {
+        Ok(r) => r,
+        Err(e) => {
+            // Keep what converged, say why it stopped; the write error (if any) is secondary.
+            let _ = output.failed(&e);
+            let input = matches!(e, nonlin3d::Error::Scene(_) | nonlin3d::Error::Laminate(_));
+            return Err(if input {
+                Failure::Input(e)
+            } else {
+                Failure::Run(nonlin3d::Error::Numerical(format!(
+                    "{e}\n(the levels converged before are in {}, results.json \"complete\": false)",
+                    out.display()
+                )))
+            });
+        }
+    };
+    output.finish(&mut results).map_err(Failure::Run)?;
     print!("{}", nonlin3d::report::table(&results));
     println!("results in {}", out.display());
     Ok(())
 }
 
-fn export(scene: &Path, inp: &Path) -> Result<(), nonlin3d::Error> {
-    let scene = read_scene(Some(scene))?;
-    let text = nonlin3d::export::deck(&scene)?;
-    std::fs::write(inp, text).map_err(|source| nonlin3d::Error::Io {
-        path: inp.to_path_buf(),
-        source,
-    })?;
+fn export(scene: &Path, inp: &Path) -> Result<(), Failure> {
+    let scene = read_scene(Some(scene)).map_err(Failure::Input)?;
+    let text = nonlin3d::export::deck(&scene).map_err(Failure::Input)?;
+    nonlin3d::output::write_atomic(inp, text.as_bytes()).map_err(Failure::Run)?;
     println!("wrote {}", inp.display());
     Ok(())
 }
@@ -161,19 +264,20 @@ fn main() -> ExitCode {
         Some(Command::Run { scene, out, quiet }) => run(scene.as_deref(), &out, quiet),
         Some(Command::Export { scene, inp }) => export(&scene, &inp),
         Some(Command::EigenCheck) => nonlin3d::eigen_check::run()
-            .map(|rows| print!("{}", nonlin3d::eigen_check::report(&rows))),
+            .map(|rows| print!("{}", nonlin3d::eigen_check::report(&rows)))
+            .map_err(Failure::Run),
         Some(Command::Solve {
             deck,
             out,
             tolerance,
             increment,
-        }) => solve(&deck, &out, tolerance, increment),
+        }) => solve(&deck, &out, tolerance, increment).map_err(Failure::Run),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("nonlin3d: {e}");
-            ExitCode::FAILURE
+        Err(f) => {
+            eprintln!("nonlin3d: {}", f.error());
+            ExitCode::from(f.code())
         }
     }
 }

@@ -3,7 +3,7 @@
 
 use crate::Error;
 use crate::results::Results;
-use nonlin3d_mesh::vtu::{Field, write_pvd, write_vtu};
+use nonlin3d_mesh::vtu::{Field, pvd_string, vtu_string};
 use std::fmt::Write as _;
 use std::path::Path;
 use std::time::Instant;
@@ -86,23 +86,23 @@ pub fn levels_csv(results: &Results) -> String {
     s
 }
 
-/// Writes everything into `dir` (created if needed) and records the time in
+/// Writes everything into `dir` (created if needed), each file atomically
+/// ([`crate::output::write_atomic`]) and `results.json` last, and records the time in
 /// `results.timings.output_s`.
 pub fn write_all(results: &mut Results, dir: &Path) -> Result<(), Error> {
+    use crate::output::{atomically, write_atomic};
     let t = Instant::now();
     std::fs::create_dir_all(dir).map_err(io(dir))?;
-    let p = dir.join("levels.csv");
-    std::fs::write(&p, levels_csv(results)).map_err(io(&p))?;
+    write_atomic(&dir.join("levels.csv"), levels_csv(results).as_bytes())?;
     for k in 0..results.levels.len() {
         let p = dir.join(format!("front_{k}.csv"));
-        std::fs::write(&p, front_csv(results, k)).map_err(io(&p))?;
+        write_atomic(&p, front_csv(results, k).as_bytes())?;
     }
     if let Some(model) = &results.model_data {
         let mut steps = Vec::new();
         for (k, l) in results.levels.iter().enumerate() {
             let name = format!("model_{k}.vtu");
-            write_vtu(
-                &dir.join(&name),
+            let text = vtu_string(
                 &model.mesh,
                 &[Field {
                     name: "displacement",
@@ -111,20 +111,29 @@ pub fn write_all(results: &mut Results, dir: &Path) -> Result<(), Error> {
                 }],
                 &[],
             )?;
+            write_atomic(&dir.join(&name), text.as_bytes())?;
             steps.push((l.value.abs(), name));
         }
-        write_pvd(&dir.join("model.pvd"), &steps)?;
+        write_atomic(&dir.join("model.pvd"), pvd_string(&steps)?.as_bytes())?;
     }
-    crate::plot::release_rate_plot(results, &dir.join("g_i.svg"), "G_I", |r| r.g_i)?;
-    crate::plot::release_rate_plot(results, &dir.join("g_ii.svg"), "G_II", |r| r.g_ii)?;
-    crate::plot::release_rate_plot(results, &dir.join("g_t.svg"), "G_T", |r| r.g_t)?;
-    crate::plot::deflection_plot(results, &dir.join("deflection.svg"))?;
+    type Plot = (&'static str, &'static str, fn(&crate::results::FrontRow) -> f64);
+    let plots: [Plot; 3] = [
+        ("g_i.svg", "G_I", |r| r.g_i),
+        ("g_ii.svg", "G_II", |r| r.g_ii),
+        ("g_t.svg", "G_T", |r| r.g_t),
+    ];
+    for (file, label, g) in plots {
+        atomically(&dir.join(file), |tmp| {
+            crate::plot::release_rate_plot(results, tmp, label, g)
+        })?;
+    }
+    atomically(&dir.join("deflection.svg"), |tmp| {
+        crate::plot::deflection_plot(results, tmp)
+    })?;
     results.timings.output_s = t.elapsed().as_secs_f64();
-    let p = dir.join("results.json");
     let json =
         serde_json::to_string_pretty(results).map_err(|e| Error::Numerical(e.to_string()))?;
-    std::fs::write(&p, json).map_err(io(&p))?;
-    Ok(())
+    write_atomic(&dir.join("results.json"), json.as_bytes())
 }
 
 /// The short table: per level the applied value, the centre deflection, the largest crack-face

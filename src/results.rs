@@ -297,6 +297,11 @@ pub struct Results {
     pub title: String,
     /// What `value` of each level is: `strain` or `load_n`.
     pub quantity: String,
+    /// Every requested level converged and every output was written. `false` in files written
+    /// while the run goes, and in those a failed or interrupted run leaves.
+    pub complete: bool,
+    /// Why the run stopped early (`error: …`, `interrupted by SIGINT`); null when complete.
+    pub stopped: Option<String>,
     /// Model size.
     pub model: ModelSummary,
     /// Per level.

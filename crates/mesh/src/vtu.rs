@@ -157,6 +157,15 @@ pub fn write_vtu(
 /// Writes a PVD collection: one (time, VTU file name relative to the PVD) per step, e.g. per
 /// applied strain level.
 pub fn write_pvd(path: &Path, steps: &[(f64, String)]) -> Result<(), MeshError> {
+    let s = pvd_string(steps)?;
+    std::fs::write(path, s).map_err(|source| MeshError::Io {
+        path: path.display().to_string(),
+        source,
+    })
+}
+
+/// The text of a PVD collection ([`write_pvd`] without the file).
+pub fn pvd_string(steps: &[(f64, String)]) -> Result<String, MeshError> {
     let mut s = String::from(
         "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"1.0\" byte_order=\"LittleEndian\">\n  <Collection>\n",
     );
@@ -173,10 +182,7 @@ pub fn write_pvd(path: &Path, steps: &[(f64, String)]) -> Result<(), MeshError> 
         );
     }
     s.push_str("  </Collection>\n</VTKFile>\n");
-    std::fs::write(path, s).map_err(|source| MeshError::Io {
-        path: path.display().to_string(),
-        source,
-    })
+    Ok(s)
 }
 
 #[cfg(test)]
