@@ -12,7 +12,7 @@ fn scene(file: &str) -> Scene {
 }
 
 fn solve(s: &Scene) -> Results {
-    run(s, &mut |_| {}).unwrap()
+    run(s, &mut |_| Ok(())).unwrap()
 }
 
 /// S of the largest value of `g` along the front.
