@@ -4,16 +4,18 @@
 //! on z = H inside the ellipse (x/a)² + (y/b)² < 1. Built as the thesis builds it, with one
 //! change at the axis:
 //!
-//! 1. A 2-D quarter section: circular rings at radii ρ graded towards the front ρ = a, each ring
+//! 1. A 2-D quarter section: circular rings at radii ρ graded towards the front circle
+//!    ρ = r₀ = min(a, b) (the short semi-axis: the maps stretch along the long one), each ring
 //!    divided into `slices` arcs; the thesis collapsed the innermost elements onto the axis (nodes
 //!    shifted to a 1e-9 m arc, degenerate elements). Here the inside of the first ring is an
 //!    O-grid: a square core [0, ρ₀/2]² of (slices/2)² cells and one ring of cells joining its
 //!    boundary to the circle ρ₀: no degenerate cell (docs/MESH.md compares the quality).
-//! 2. Rings beyond `transition`·a blend linearly into the square boundary x = W or y = W
+//! 2. Rings beyond `transition`·r₀ blend linearly into the square boundary x = W or y = W
 //!    (Fig. 3.1.1c).
 //! 3. The elliptic map (eq. 3.1.1, conformal; or eq. 3.1.2 with parameter r) turns the front
-//!    circle of radius a into the ellipse with semi-axes a (x) and b (y); the rectangular planform
-//!    stretches it onto a rectangle (Fig. 3.1.3). The thesis applied the map to every node, which
+//!    circle of radius r₀ into the ellipse with semi-axes a (x) and b (y), stretching y when
+//!    b > a and x when a > b (module `planform`); the rectangular planform stretches it onto a
+//!    rectangle (Fig. 3.1.3). The thesis applied the map to every node, which
 //!    bends the outer boundary; here the rings are mapped first and the rings beyond the
 //!    transition then blend into the square, so the boundary stays the square while the region
 //!    around the front keeps the exact map (and its orthogonality).
@@ -24,289 +26,18 @@
 //!    the mid-edge nodes between duplicated corners, or between a duplicated corner and the
 //!    front, are duplicated too. Everything else is shared.
 
+mod params;
+mod planform;
+
+pub use params::{Centre, EmbeddedParams, PlyLayout};
+pub use planform::EllipticMap;
+
 use crate::MeshError;
 use crate::front::{CellsTouching, Front, FrontPoint};
-use crate::generate::{graded_coordinates, graded_from_first};
 use crate::model::{Cell, Mesh};
 use nonlin3d_element::ElementKind;
+use planform::{front_radius, planform, radial_stations};
 use std::collections::HashMap;
-
-/// Which elliptic map turns the front circle into the ellipse.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum EllipticMap {
-    /// Eq. 3.1.1: y′ = y·√(1 + (b² − a²)/(x² + y²)) (x and y swapped when a > b). Conformal.
-    Conformal,
-    /// Eq. 3.1.2 with stretch factor F = ρ/r for ρ ≤ r, 1 beyond; `r` a little below a keeps the
-    /// front region conformal and spreads the refinement more evenly.
-    Modified {
-        /// The radius r of eq. 3.1.2 (m), 0 < r.
-        r: f64,
-    },
-    /// Not elliptic: a square or rectangular delamination of half-sides a × b (§5.3,
-    /// Fig. 3.1.3): the circular arcs are stretched radially onto the sides of a square of
-    /// half-side a, then y is magnified by b/a. Not conformal (the thesis notes the loss of
-    /// orthogonality at the front).
-    Rectangle,
-}
-
-/// Parameters of [`embedded_delamination`] (SI units).
-#[derive(Debug, Clone, PartialEq)]
-pub struct EmbeddedParams {
-    /// Hex20 (the thesis's) or Hex8.
-    pub kind: ElementKind,
-    /// Delamination semi-axis along x (load direction), m.
-    pub a: f64,
-    /// Delamination semi-axis along y, m.
-    pub b: f64,
-    /// Sublaminate thickness h, m.
-    pub h: f64,
-    /// Base laminate thickness H, m.
-    pub base: f64,
-    /// Half-width W of the square specimen (quarter model 0 ≤ x, y ≤ W), m.
-    pub w: f64,
-    /// Arcs per quarter ring (thesis: 4, 8, 12); even.
-    pub slices: usize,
-    /// Radial elements between the core and the front.
-    pub radial_inside: usize,
-    /// Radial elements between the front and the square boundary.
-    pub radial_outside: usize,
-    /// Inside the delamination: the element next to the front over the one farthest from it
-    /// (< 1 refines towards the front). Outside, the first element is as long as the last one
-    /// inside (the single-solution VCCT pairs them, §2.8) and the sizes grow geometrically.
-    pub front_grading: f64,
-    /// Core (first ring) radius as a fraction of a.
-    pub core_fraction: f64,
-    /// Rings out to `transition`·a stay circular; beyond they blend into the square.
-    pub transition: f64,
-    /// Elements through the sublaminate.
-    pub sub_layers: usize,
-    /// Elements through the base laminate (graded towards z = H).
-    pub base_layers: usize,
-    /// Ratio of the base element at z = H to the one at z = 0.
-    pub base_grading: f64,
-    /// The elliptic map (or the rectangular planform).
-    pub map: EllipticMap,
-    /// Ply-level modelling (chapter 7); `None`: homogeneous layers, material 0.
-    pub plies: Option<PlyLayout>,
-    /// How the centre (the axis r = 0) is meshed.
-    pub centre: Centre,
-}
-
-/// The centre of the swept section.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum Centre {
-    /// A square core of (slices/2)² cells and one joining ring (the default): no degenerate cell.
-    #[default]
-    OGrid,
-    /// The thesis's construction (§3.1): the first ring of cells reaches the axis, whose nodes
-    /// are moved onto an arc of radius 1e-9 m; those cells are nearly triangular.
-    ThesisArc,
-}
-
-/// Ply-level layers (chapter 7): one element through each ply of the sublaminate and of the
-/// base plies just below the delamination; the rest of the base as homogenised layers.
-/// Cells in plies get material 1 and their ply angle; homogenised cells material 0, angle 0.
-#[derive(Debug, Clone, PartialEq)]
-pub struct PlyLayout {
-    /// Ply thickness, m.
-    pub ply_thickness: f64,
-    /// Sublaminate ply angles (degrees), bottom (at z = H) to top; their count × thickness
-    /// must equal h.
-    pub sublaminate: Vec<f64>,
-    /// Base ply angles modelled ply by ply, from z = H downwards.
-    pub base_below: Vec<f64>,
-}
-
-impl EmbeddedParams {
-    /// The thesis's reference case (§4.3, §5.1): 30 mm circular delamination (a = b = 15 mm),
-    /// h = 0.4 mm, H = 4 mm, W = 50 mm, Hex20, 8 slices, refined like Table 2's model 4
-    /// (2 085 nodes, 336 cells); here 2 263 nodes, 384 cells. 4 and 12 slices give Table 2's
-    /// model 3 and 5 sizes (docs/MESH.md).
-    pub fn thesis_reference() -> Self {
-        Self {
-            kind: ElementKind::Hex20,
-            a: 15e-3,
-            b: 15e-3,
-            h: 0.4e-3,
-            base: 4e-3,
-            w: 50e-3,
-            slices: 8,
-            radial_inside: 4,
-            radial_outside: 5,
-            front_grading: 0.25,
-            core_fraction: 0.3,
-            transition: 1.4,
-            sub_layers: 1,
-            base_layers: 3,
-            base_grading: 0.25,
-            map: EllipticMap::Conformal,
-            plies: None,
-            centre: Centre::OGrid,
-        }
-    }
-
-    fn check(&self) -> Result<(), MeshError> {
-        let bad = |name: &'static str, reason: String| Err(MeshError::Parameter { name, reason });
-        for (name, v) in [
-            ("a", self.a),
-            ("b", self.b),
-            ("h", self.h),
-            ("base", self.base),
-            ("w", self.w),
-        ] {
-            if !(v.is_finite() && v > 0.0) {
-                return bad(name, format!("{v} must be positive and finite"));
-            }
-        }
-        if self.slices < 2 || self.slices % 2 == 1 {
-            return bad("slices", format!("{} must be even and ≥ 2", self.slices));
-        }
-        for (name, n) in [
-            ("radial_inside", self.radial_inside),
-            ("radial_outside", self.radial_outside),
-            ("sub_layers", self.sub_layers),
-            ("base_layers", self.base_layers),
-        ] {
-            if n == 0 {
-                return bad(name, "at least one element".into());
-            }
-        }
-        if !(self.core_fraction > 0.0 && self.core_fraction < 1.0) {
-            return bad(
-                "core_fraction",
-                format!("{} must lie in (0, 1)", self.core_fraction),
-            );
-        }
-        let big = self.a.max(self.b);
-        if !(self.transition >= 1.0 && self.transition * big < self.w) {
-            return bad(
-                "transition",
-                format!(
-                    "need 1 ≤ transition and transition·max(a, b) < W ({} · {big} vs {})",
-                    self.transition, self.w
-                ),
-            );
-        }
-        if let EllipticMap::Modified { r } = self.map
-            && !(r.is_finite() && r > 0.0)
-        {
-            return bad("map.r", format!("{r} must be positive"));
-        }
-        if let Some(pl) = &self.plies {
-            let t = pl.ply_thickness;
-            if !(t.is_finite() && t > 0.0) || pl.sublaminate.is_empty() {
-                return bad(
-                    "plies",
-                    "positive ply thickness and at least one sublaminate ply".into(),
-                );
-            }
-            if ((pl.sublaminate.len() as f64 * t) - self.h).abs() > 1e-9 * self.h {
-                return bad(
-                    "plies",
-                    format!("{} plies × {t} m ≠ h = {} m", pl.sublaminate.len(), self.h),
-                );
-            }
-            if pl.base_below.len() as f64 * t >= self.base {
-                return bad("plies", "base plies leave no homogenised base".into());
-            }
-            if pl
-                .sublaminate
-                .iter()
-                .chain(&pl.base_below)
-                .any(|a| !a.is_finite())
-            {
-                return bad("plies", "ply angles must be finite".into());
-            }
-        }
-        Ok(())
-    }
-
-    /// z stations and, per layer between them, (material, ply angle); and the index of z = H.
-    fn layers(&self) -> Result<Layers, MeshError> {
-        let Some(pl) = &self.plies else {
-            let zb = graded_coordinates(self.base_layers, self.base, self.base_grading)?;
-            let zs = graded_coordinates(self.sub_layers, self.h, 1.0)?;
-            let mut z = zb.clone();
-            z.extend(zs.iter().skip(1).map(|d| self.base + d));
-            let layers = vec![(0, 0.0); z.len() - 1];
-            return Ok((z, layers, self.base_layers));
-        };
-        let t = pl.ply_thickness;
-        let homog = self.base - pl.base_below.len() as f64 * t;
-        let mut z = graded_coordinates(self.base_layers, homog, self.base_grading)?;
-        let mut layers = vec![(0, 0.0); self.base_layers];
-        for (k, &angle) in pl.base_below.iter().rev().enumerate() {
-            z.push(homog + (k + 1) as f64 * t);
-            layers.push((1, angle));
-        }
-        if let Some(last) = z.last_mut() {
-            *last = self.base;
-        }
-        let zh = z.len() - 1;
-        for (k, &angle) in pl.sublaminate.iter().enumerate() {
-            z.push(self.base + (k + 1) as f64 * t);
-            layers.push((1, angle));
-        }
-        Ok((z, layers, zh))
-    }
-}
-
-/// Thickness stations, (material, ply angle) of each layer, index of z = H.
-type Layers = (Vec<f64>, Vec<(usize, f64)>, usize);
-
-/// Radial stations: core radius … a (graded finer towards a), a … W (finer at a), as radii of
-/// the undeformed circular mesh (the outer ones become blend parameters towards the square).
-fn radial_stations(p: &EmbeddedParams) -> Result<(Vec<f64>, usize), MeshError> {
-    let rc = p.core_fraction * p.a;
-    let inside = graded_coordinates(p.radial_inside, p.a - rc, p.front_grading)?;
-    // The ring ahead of the front as wide as the one behind it (VCCT pairs them, §2.8).
-    let behind = inside[inside.len() - 1] - inside[inside.len() - 2];
-    let outside = graded_from_first(p.radial_outside, p.w - p.a, behind)?;
-    let mut rho: Vec<f64> = inside.iter().map(|d| rc + d).collect();
-    let front = rho.len() - 1;
-    rho.extend(outside.iter().skip(1).map(|d| p.a + d));
-    Ok((rho, front))
-}
-
-/// The planform map of a point of the circular mesh (eq. 3.1.1 / 3.1.2, or the rectangle),
-/// its stretch scaled by `fade` (1 = the full map).
-fn elliptic(p: &EmbeddedParams, x: f64, y: f64, fade: f64) -> (f64, f64) {
-    let (a, b) = (p.a, p.b);
-    if p.map == EllipticMap::Rectangle {
-        let rho = x.hypot(y);
-        let s = if rho > 0.0 {
-            rho / x.abs().max(y.abs())
-        } else {
-            1.0
-        };
-        return (
-            x * (1.0 + fade * (s - 1.0)),
-            y * (1.0 + fade * (s * b / a - 1.0)),
-        );
-    }
-    if a == b {
-        return (x, y);
-    }
-    // Stretch the coordinate along the long axis; eq. 3.1.1 is written for b > a.
-    let (long, short) = if b > a { (b, a) } else { (a, b) };
-    let (s, t) = if b > a { (x, y) } else { (y, x) };
-    let rho2 = s * s + t * t;
-    let factor = if rho2 > 0.0 {
-        let root = (1.0 + (long * long - short * short) / rho2).sqrt();
-        match p.map {
-            EllipticMap::Conformal => root,
-            EllipticMap::Modified { r } => {
-                let f = (rho2.sqrt() / r).min(1.0);
-                root * f - f + 1.0
-            }
-            EllipticMap::Rectangle => 1.0,
-        }
-    } else {
-        long / short
-    };
-    let t2 = t * (1.0 + fade * (factor - 1.0));
-    if b > a { (s, t2) } else { (t2, s) }
-}
 
 /// The embedded delamination mesh. Node sets: `x0`, `y0`, `z0`, `x1` (x = W), `y1` (y = W),
 /// `center_top` (the node at (0, 0, H + h), where the thesis applies its perturbation load),
@@ -365,11 +96,11 @@ pub fn embedded_delamination_with_front(p: &EmbeddedParams) -> Result<(Mesh, Fro
     // transition ring; beyond it, points on the straight line from the mapped transition ring to
     // the square boundary, reached on the last ring. Monotone whenever the mapped transition
     // ring lies inside the square, which `check` ensures: it needs transition·max(a, b) < W, and
-    // both maps send the ring ρ = t·a (t ≥ 1) inside |x| ≤ t·a, |y| ≤ t·b (for a ≤ b; swapped
-    // otherwise).
-    let wt = p.transition * p.a;
-    let planform = |x: f64, y: f64| {
-        let (u, v) = elliptic(p, x, y, 1.0);
+    // every map sends the ring ρ = t·r₀ (t ≥ 1) inside |x| ≤ t·a, |y| ≤ t·b (eq. 3.1.1 for
+    // a ≤ b: semi-axes t·a and √(t²a² + b² − a²) ≤ t·b; mirrored for a > b).
+    let wt = p.transition * front_radius(p);
+    let to_planform = |x: f64, y: f64| {
+        let (u, v) = planform(p.map, p.a, p.b, x, y);
         [u, v]
     };
     for (m0, &r) in rho.iter().enumerate() {
@@ -377,10 +108,10 @@ pub fn embedded_delamination_with_front(p: &EmbeddedParams) -> Result<(Mesh, Fro
         for q in 0..=p.slices {
             let phi = angle(q);
             let pt = if r <= wt {
-                planform(r * phi.cos(), r * phi.sin())
+                to_planform(r * phi.cos(), r * phi.sin())
             } else {
                 // Straight from the mapped transition ring to the square boundary.
-                let mapped = planform(wt * phi.cos(), wt * phi.sin());
+                let mapped = to_planform(wt * phi.cos(), wt * phi.sin());
                 let beta = (r - wt) / (p.w - wt);
                 let sq = if q == p.slices {
                     [0.0, p.w]
@@ -409,7 +140,7 @@ pub fn embedded_delamination_with_front(p: &EmbeddedParams) -> Result<(Mesh, Fro
         .enumerate()
         .map(|(v, pt)| {
             if v < core_nodes {
-                planform(pt[0], pt[1])
+                to_planform(pt[0], pt[1])
             } else {
                 *pt
             }

@@ -1,0 +1,221 @@
+//! Parameters of the embedded delamination model (thesis §3.1–3.2, chapter 7 ply layers).
+
+use super::EllipticMap;
+use crate::MeshError;
+use crate::generate::graded_coordinates;
+use nonlin3d_element::ElementKind;
+
+/// Parameters of [`embedded_delamination`](crate::embedded_delamination) (SI units).
+#[derive(Debug, Clone, PartialEq)]
+pub struct EmbeddedParams {
+    /// Hex20 (the thesis's) or Hex8.
+    pub kind: ElementKind,
+    /// Delamination semi-axis along x (load direction), m.
+    pub a: f64,
+    /// Delamination semi-axis along y, m.
+    pub b: f64,
+    /// Sublaminate thickness h, m.
+    pub h: f64,
+    /// Base laminate thickness H, m.
+    pub base: f64,
+    /// Half-width W of the square specimen (quarter model 0 ≤ x, y ≤ W), m.
+    pub w: f64,
+    /// Arcs per quarter ring (thesis: 4, 8, 12); even.
+    pub slices: usize,
+    /// Radial elements between the core and the front.
+    pub radial_inside: usize,
+    /// Radial elements between the front and the square boundary.
+    pub radial_outside: usize,
+    /// Inside the delamination: the element next to the front over the one farthest from it
+    /// (< 1 refines towards the front). Outside, the first element is as long as the last one
+    /// inside (the single-solution VCCT pairs them, §2.8) and the sizes grow geometrically.
+    pub front_grading: f64,
+    /// Core (first ring) radius as a fraction of the front circle's radius min(a, b).
+    pub core_fraction: f64,
+    /// Rings out to `transition`·min(a, b) (radii of the circular mesh, whose front circle has
+    /// radius min(a, b)) take the planform map; beyond they blend into the square.
+    pub transition: f64,
+    /// Elements through the sublaminate.
+    pub sub_layers: usize,
+    /// Elements through the base laminate (graded towards z = H).
+    pub base_layers: usize,
+    /// Ratio of the base element at z = H to the one at z = 0.
+    pub base_grading: f64,
+    /// The elliptic map (or the rectangular planform).
+    pub map: EllipticMap,
+    /// Ply-level modelling (chapter 7); `None`: homogeneous layers, material 0.
+    pub plies: Option<PlyLayout>,
+    /// How the centre (the axis r = 0) is meshed.
+    pub centre: Centre,
+}
+
+/// The centre of the swept section.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Centre {
+    /// A square core of (slices/2)² cells and one joining ring (the default): no degenerate cell.
+    #[default]
+    OGrid,
+    /// The thesis's construction (§3.1): the first ring of cells reaches the axis, whose nodes
+    /// are moved onto an arc of radius 1e-9 m; those cells are nearly triangular.
+    ThesisArc,
+}
+
+/// Ply-level layers (chapter 7): one element through each ply of the sublaminate and of the
+/// base plies just below the delamination; the rest of the base as homogenised layers.
+/// Cells in plies get material 1 and their ply angle; homogenised cells material 0, angle 0.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PlyLayout {
+    /// Ply thickness, m.
+    pub ply_thickness: f64,
+    /// Sublaminate ply angles (degrees), bottom (at z = H) to top; their count × thickness
+    /// must equal h.
+    pub sublaminate: Vec<f64>,
+    /// Base ply angles modelled ply by ply, from z = H downwards.
+    pub base_below: Vec<f64>,
+}
+
+impl EmbeddedParams {
+    /// The thesis's reference case (§4.3, §5.1): 30 mm circular delamination (a = b = 15 mm),
+    /// h = 0.4 mm, H = 4 mm, W = 50 mm, Hex20, 8 slices, refined like Table 2's model 4
+    /// (2 085 nodes, 336 cells); here 2 263 nodes, 384 cells. 4 and 12 slices give Table 2's
+    /// model 3 and 5 sizes (docs/MESH.md).
+    pub fn thesis_reference() -> Self {
+        Self {
+            kind: ElementKind::Hex20,
+            a: 15e-3,
+            b: 15e-3,
+            h: 0.4e-3,
+            base: 4e-3,
+            w: 50e-3,
+            slices: 8,
+            radial_inside: 4,
+            radial_outside: 5,
+            front_grading: 0.25,
+            core_fraction: 0.3,
+            transition: 1.4,
+            sub_layers: 1,
+            base_layers: 3,
+            base_grading: 0.25,
+            map: EllipticMap::Conformal,
+            plies: None,
+            centre: Centre::OGrid,
+        }
+    }
+
+    pub(super) fn check(&self) -> Result<(), MeshError> {
+        let bad = |name: &'static str, reason: String| Err(MeshError::Parameter { name, reason });
+        for (name, v) in [
+            ("a", self.a),
+            ("b", self.b),
+            ("h", self.h),
+            ("base", self.base),
+            ("w", self.w),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                return bad(name, format!("{v} must be positive and finite"));
+            }
+        }
+        if self.slices < 2 || self.slices % 2 == 1 {
+            return bad("slices", format!("{} must be even and ≥ 2", self.slices));
+        }
+        for (name, n) in [
+            ("radial_inside", self.radial_inside),
+            ("radial_outside", self.radial_outside),
+            ("sub_layers", self.sub_layers),
+            ("base_layers", self.base_layers),
+        ] {
+            if n == 0 {
+                return bad(name, "at least one element".into());
+            }
+        }
+        if !(self.core_fraction > 0.0 && self.core_fraction < 1.0) {
+            return bad(
+                "core_fraction",
+                format!("{} must lie in (0, 1)", self.core_fraction),
+            );
+        }
+        let big = self.a.max(self.b);
+        if !(self.transition >= 1.0 && self.transition * big < self.w) {
+            return bad(
+                "transition",
+                format!(
+                    "need 1 ≤ transition and transition·max(a, b) < W ({} · {big} vs {})",
+                    self.transition, self.w
+                ),
+            );
+        }
+        // Eq. 3.1.2 reaches the ellipse only where F = 1, so r must not exceed the front
+        // circle's radius min(a, b); a larger r would leave the front off the ellipse.
+        let short = self.a.min(self.b);
+        if let EllipticMap::Modified { r } = self.map
+            && !(r.is_finite() && r > 0.0 && r <= short)
+        {
+            return bad(
+                "map.r",
+                format!(
+                    "{r} m must be positive and at most min(a, b) = {short} m, the radius of \
+                     the front circle that eq. 3.1.2 maps onto the ellipse"
+                ),
+            );
+        }
+        if let Some(pl) = &self.plies {
+            let t = pl.ply_thickness;
+            if !(t.is_finite() && t > 0.0) || pl.sublaminate.is_empty() {
+                return bad(
+                    "plies",
+                    "positive ply thickness and at least one sublaminate ply".into(),
+                );
+            }
+            if ((pl.sublaminate.len() as f64 * t) - self.h).abs() > 1e-9 * self.h {
+                return bad(
+                    "plies",
+                    format!("{} plies × {t} m ≠ h = {} m", pl.sublaminate.len(), self.h),
+                );
+            }
+            if pl.base_below.len() as f64 * t >= self.base {
+                return bad("plies", "base plies leave no homogenised base".into());
+            }
+            if pl
+                .sublaminate
+                .iter()
+                .chain(&pl.base_below)
+                .any(|a| !a.is_finite())
+            {
+                return bad("plies", "ply angles must be finite".into());
+            }
+        }
+        Ok(())
+    }
+
+    /// z stations and, per layer between them, (material, ply angle); and the index of z = H.
+    pub(super) fn layers(&self) -> Result<Layers, MeshError> {
+        let Some(pl) = &self.plies else {
+            let zb = graded_coordinates(self.base_layers, self.base, self.base_grading)?;
+            let zs = graded_coordinates(self.sub_layers, self.h, 1.0)?;
+            let mut z = zb.clone();
+            z.extend(zs.iter().skip(1).map(|d| self.base + d));
+            let layers = vec![(0, 0.0); z.len() - 1];
+            return Ok((z, layers, self.base_layers));
+        };
+        let t = pl.ply_thickness;
+        let homog = self.base - pl.base_below.len() as f64 * t;
+        let mut z = graded_coordinates(self.base_layers, homog, self.base_grading)?;
+        let mut layers = vec![(0, 0.0); self.base_layers];
+        for (k, &angle) in pl.base_below.iter().rev().enumerate() {
+            z.push(homog + (k + 1) as f64 * t);
+            layers.push((1, angle));
+        }
+        if let Some(last) = z.last_mut() {
+            *last = self.base;
+        }
+        let zh = z.len() - 1;
+        for (k, &angle) in pl.sublaminate.iter().enumerate() {
+            z.push(self.base + (k + 1) as f64 * t);
+            layers.push((1, angle));
+        }
+        Ok((z, layers, zh))
+    }
+}
+
+/// Thickness stations, (material, ply angle) of each layer, index of z = H.
+pub(super) type Layers = (Vec<f64>, Vec<(usize, f64)>, usize);
