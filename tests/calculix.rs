@@ -434,7 +434,7 @@ fn calculix_runs_the_exported_scene_and_lands_on_the_same_buckled_branch() {
             ),
     )
     .unwrap();
-    let ours = nonlin3d::analysis::run(&scene, &mut |_| {}).unwrap();
+    let ours = nonlin3d::analysis::run(&scene, &mut |_| Ok(())).unwrap();
     let model = ours.model_data.as_ref().unwrap();
     let deck = nonlin3d::export::deck_of(&scene, model).unwrap();
     let blocks = run_ccx_blocks("scene", &deck, model.mesh.nodes.len());

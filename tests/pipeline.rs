@@ -107,7 +107,7 @@ fn export_writes_a_readable_deck() {
 fn buckling_into_the_base_is_an_error_not_a_result() {
     let text = coarse_text().replace("[loads]", "[loads]\nperturbation_n = -2.0");
     let scene = Scene::from_toml(&text).unwrap();
-    let err = nonlin3d::analysis::run(&scene, &mut |_| {})
+    let err = nonlin3d::analysis::run(&scene, &mut |_| Ok(()))
         .unwrap_err()
         .to_string();
     assert!(err.contains("buckled into the base"), "{err}");
@@ -172,7 +172,7 @@ fn criterion_gives_the_critical_strain() {
         "strains = [-0.001, -0.003, -0.005]",
     ) + "\n[criterion]\nkind = \"benzeggagh-kenane\"\ng_ic = 100.0\ng_iic = 500.0\neta = 2.0\n";
     let scene = Scene::from_toml(&text).unwrap();
-    let r = nonlin3d::analysis::run(&scene, &mut |_| {}).unwrap();
+    let r = nonlin3d::analysis::run(&scene, &mut |_| Ok(())).unwrap();
     let c = r.critical.expect("onset within the sweep");
     eprintln!("critical strain {} at S = {} mm", c.strain, c.s_mm);
     assert!(c.strain < -0.003 && c.strain > -0.005, "{}", c.strain);
@@ -209,8 +209,8 @@ fn bfgs_scenes_match_full_newton() {
     ))
     .unwrap();
     assert_eq!(bfgs.analysis.newton, nonlin3d::scene::NewtonName::Bfgs);
-    let a = nonlin3d::analysis::run(&full, &mut |_| {}).unwrap();
-    let b = nonlin3d::analysis::run(&bfgs, &mut |_| {}).unwrap();
+    let a = nonlin3d::analysis::run(&full, &mut |_| Ok(())).unwrap();
+    let b = nonlin3d::analysis::run(&bfgs, &mut |_| Ok(())).unwrap();
     assert!(a.model.perturbed_at.is_some());
     assert_eq!(a.model.perturbed_at, b.model.perturbed_at);
     let g_max = a
