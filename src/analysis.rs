@@ -4,7 +4,7 @@
 //! Each stage is callable alone: [`build_model`], [`build_problem`], [`solve_level`],
 //! [`front_table`]; [`run`] (or [`Analysis::run`]) strings them together and times them.
 
-use crate::scene::{ForceKinematics, Geometry, NewtonName, Scene, Shape, SolverName};
+use crate::scene::{ForceKinematics, Geometry, MapName, NewtonName, Scene, Shape, SolverName};
 use crate::{Error, results::*};
 use nonlin3d_assembly::{Assembler, Constraints};
 use nonlin3d_element::Kinematics;
@@ -77,13 +77,18 @@ pub fn build_model(scene: &Scene) -> Result<Model, Error> {
             base: base * mm,
             w: w * mm,
             slices: c.slices.unwrap_or(d.slices),
-            radial_inside: c.inside.unwrap_or(d.radial_inside),
+            radial_inside: c
+                .inside
+                .unwrap_or_else(|| EmbeddedParams::radial_inside_for(a, b)),
             radial_outside: c.outside.unwrap_or(d.radial_outside),
             front_grading: c.front_grading.unwrap_or(d.front_grading),
             sub_layers: c.sub_layers.unwrap_or(d.sub_layers),
             base_layers: c.base_layers.unwrap_or(d.base_layers),
             map: match shape {
-                Shape::Ellipse => EllipticMap::Conformal,
+                Shape::Ellipse => match c.elliptic_map {
+                    Some(MapName::Conformal) => EllipticMap::Conformal,
+                    Some(MapName::Modified) | None => EllipticMap::modified_for(a * mm, b * mm),
+                },
                 Shape::Rectangle => EllipticMap::Rectangle,
             },
             plies,

@@ -4,7 +4,7 @@
 //! that passes these checks never reaches those messages.
 
 use crate::Error;
-use crate::scene::{Geometry, Scene};
+use crate::scene::{Geometry, Scene, Shape};
 use nonlin3d_mesh::EmbeddedParams;
 
 /// Element counts above this along one mesh axis are refused before anything is allocated
@@ -98,6 +98,23 @@ fn mesh_controls(s: &Scene) -> Result<(), Error> {
             "mesh.slices = {n}: a through-width model has a straight front; its elements across \
              the width are set by mesh.across"
         ));
+    }
+    let elliptic = matches!(
+        s.geometry,
+        Geometry::Embedded {
+            shape: Shape::Ellipse,
+            ..
+        } | Geometry::Edge {
+            shape: Shape::Ellipse,
+            ..
+        }
+    );
+    if !elliptic && c.elliptic_map.is_some() {
+        return bad(
+            "mesh.elliptic_map: only elliptic embedded and edge delaminations are mapped (the \
+             plate is circular, rectangles and through-width fronts are not elliptic)"
+                .into(),
+        );
     }
     if !through && let Some(n) = c.across {
         return bad(format!(

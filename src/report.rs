@@ -116,7 +116,11 @@ pub fn write_all(results: &mut Results, dir: &Path) -> Result<(), Error> {
         }
         write_atomic(&dir.join("model.pvd"), pvd_string(&steps)?.as_bytes())?;
     }
-    type Plot = (&'static str, &'static str, fn(&crate::results::FrontRow) -> f64);
+    type Plot = (
+        &'static str,
+        &'static str,
+        fn(&crate::results::FrontRow) -> f64,
+    );
     let plots: [Plot; 3] = [
         ("g_i.svg", "G_I", |r| r.g_i),
         ("g_ii.svg", "G_II", |r| r.g_ii),

@@ -261,7 +261,9 @@ pub struct MeshControls {
     /// Slices through the 90° sweep (even), embedded/edge/plate.
     #[serde(default)]
     pub slices: Option<usize>,
-    /// Elements between the centre and the front (along x for through-width).
+    /// Elements between the centre and the front (along x for through-width). Default: 4 for
+    /// a ≤ b, 4·⌈a/b⌉ for a delamination longer along the load than across it
+    /// (`EmbeddedParams::radial_inside_for`); through-width: 10.
     #[serde(default)]
     pub inside: Option<usize>,
     /// Elements between the front and the boundary.
@@ -279,6 +281,22 @@ pub struct MeshControls {
     /// Elements across the width (through-width only).
     #[serde(default)]
     pub across: Option<usize>,
+    /// The map that turns the circular mesh into an elliptic one (elliptic embedded and edge
+    /// delaminations): `modified` (default, eq. 3.1.2 with r = 0.9·min(a, b)) or `conformal`
+    /// (eq. 3.1.1, to reproduce the thesis's Fig. 3.1.2b; its inner cells degrade with the
+    /// aspect ratio).
+    #[serde(default)]
+    pub elliptic_map: Option<MapName>,
+}
+
+/// Elliptic map names in scenes (thesis §3.1).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum MapName {
+    /// Eq. 3.1.2 with r = 0.9·min(a, b).
+    Modified,
+    /// Eq. 3.1.1.
+    Conformal,
 }
 
 /// Element names in scenes.

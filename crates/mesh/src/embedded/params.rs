@@ -75,6 +75,21 @@ pub struct PlyLayout {
 }
 
 impl EmbeddedParams {
+    /// Radial elements inside the front for semi-axes a (along the load) and b: the reference
+    /// mesh's 4 times ⌈a/b⌉. The rings are laid out on the circle of radius min(a, b) and
+    /// stretched along the long axis; when that is the load direction (a > b) the sublaminate
+    /// buckles in about a/b half-waves along it, which 4 rings resolve badly: onset +11.8 % at
+    /// a/b = 3 with 4, +0.9 % with 12 (docs/VALIDATION.md). For a ≤ b the mode varies slowly
+    /// along the stretched direction and 4 suffice (−0.5 % at a/b = 1/3).
+    pub fn radial_inside_for(a: f64, b: f64) -> usize {
+        let ratio = if a > 0.0 && b > 0.0 && (a / b).is_finite() {
+            a / b
+        } else {
+            1.0
+        };
+        4 * (ratio - 1e-9).ceil().clamp(1.0, 64.0) as usize
+    }
+
     /// The thesis's reference case (§4.3, §5.1): 30 mm circular delamination (a = b = 15 mm),
     /// h = 0.4 mm, H = 4 mm, W = 50 mm, Hex20, 8 slices, refined like Table 2's model 4
     /// (2 085 nodes, 336 cells); here 2 263 nodes, 384 cells. 4 and 12 slices give Table 2's
