@@ -63,7 +63,7 @@ pub fn release_rate_plot(
         chart
             .draw_series(LineSeries::new(pts.clone(), colour.stroke_width(2)))
             .map_err(|e| plot_err(path, e))?
-            .label(format!("{} = {:.4}", results.quantity, level.value))
+            .label(format!("{} = {}", results.quantity, level.value))
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour));
         chart
             .draw_series(level.front.iter().map(|r| {
