@@ -3,7 +3,9 @@
 //! CalculiX can run the analysis unchanged (§3.2 protocol as deck steps).
 
 use crate::Error;
-use crate::analysis::{Model, ModelKind, build_model, load_factors, perturbation_force};
+use crate::analysis::{
+    Model, ModelKind, build_model, load_factors, perturbation_force, perturbation_loads,
+};
 use crate::scene::Scene;
 use nonlin3d_mesh::inp::{
     InpBoundary, InpCload, InpDeck, InpElastic, InpMaterial, InpStep, inp_string,
@@ -23,7 +25,9 @@ fn boundary(nset: &str, dof: u8, value: f64) -> InpBoundary {
 /// within the step); the second step's state is the level's answer. Re-applying the force at
 /// every level stands in for nonlin3d's inertia check (which applies it at the first level
 /// whose trivial state is unstable): below buckling the removal returns to the flat state,
-/// above it the sublaminate stays on the buckled branch. A plate gets one step per load.
+/// above it the sublaminate stays on the buckled branch. The force is split over the
+/// `center_top` nodes as in [`perturbation_loads`] (two nodes on a Hex8 through-width strip
+/// with an odd number of elements across). A plate gets one step per load.
 /// Hex20 cells become C3D20R under the 2×2×2 rule (CalculiX's reduced rule is the same
 /// 2×2×2 Gauss rule) and C3D20 under 3×3×3.
 pub fn deck(scene: &Scene) -> Result<String, Error> {
@@ -63,11 +67,6 @@ pub fn deck_of(scene: &Scene, model: &Model) -> Result<String, Error> {
         ModelKind::Embedded | ModelKind::Plate => supports.push(boundary("y0", 2, 0.0)),
     }
     let (factors, reference) = load_factors(scene);
-    let top = mesh
-        .node_sets
-        .get("center_top")
-        .and_then(|s| s.first().copied())
-        .ok_or_else(|| Error::Numerical("the model has no node set 'center_top'".into()))?;
     let inc = scene.analysis.max_increment.min(1.0);
     let step = |boundaries: Vec<InpBoundary>, cloads: Vec<InpCload>| InpStep {
         nlgeom: true,
@@ -76,26 +75,34 @@ pub fn deck_of(scene: &Scene, model: &Model) -> Result<String, Error> {
         boundaries,
         cloads,
     };
-    let load = |value: f64| InpCload {
-        node: top,
-        dof: 3,
-        value,
+    // (DOF, force) pairs as CLOADs on node DOF 3, scaled.
+    let cloads = |loads: &[(usize, f64)], scale: f64| -> Vec<InpCload> {
+        loads
+            .iter()
+            .map(|&(dof, f)| InpCload {
+                node: dof / 3,
+                dof: 3,
+                value: scale * f,
+            })
+            .collect()
     };
     let mut steps = Vec::new();
     if model.kind == ModelKind::Plate {
+        // The whole plate's load P, a quarter of it on the quarter model's centre node.
+        let centre = perturbation_loads(model, 1.0)?;
         for (k, f) in factors.iter().enumerate() {
             let b = if k == 0 { supports.clone() } else { Vec::new() };
-            steps.push(step(b, vec![load(0.25 * f * reference)]));
+            steps.push(step(b, cloads(&centre, 0.25 * f * reference)));
         }
     } else {
-        let p = perturbation_force(scene, model)?;
+        // The perturbation split over the `center_top` nodes; none (and no set needed) for 0.
+        let p = perturbation_loads(model, perturbation_force(scene, model)?)?;
         for (k, f) in factors.iter().enumerate() {
             let mut b = if k == 0 { supports.clone() } else { Vec::new() };
             b.push(boundary("x1", 1, model.x_end * f * reference));
-            let cl = if p != 0.0 { vec![load(p)] } else { Vec::new() };
-            steps.push(step(b, cl));
-            if p != 0.0 {
-                steps.push(step(Vec::new(), vec![load(0.0)]));
+            steps.push(step(b, cloads(&p, 1.0)));
+            if !p.is_empty() {
+                steps.push(step(Vec::new(), cloads(&p, 0.0)));
             }
         }
     }

@@ -82,7 +82,7 @@ pub fn release_rate_plot(
                 Circle::new((r.s_mm, g(r)), 3, style)
             }))
             .map_err(|e| plot_err(path, e))?
-            .label(format!("{} = {:.4}", results.quantity, level.value))
+            .label(format!("{} = {}", results.quantity, level.value))
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour));
     }
     if results.levels.iter().any(|l| l.overlapped() > 0) {

@@ -10,6 +10,20 @@ use crate::model::{Cell, Mesh};
 use nonlin3d_element::ElementKind;
 use std::collections::HashMap;
 
+/// Doubled grid indices across the width (y = W·g/(2·across)) of the `center_top` nodes: the
+/// sublaminate top at x = 0 (the symmetry plane, the thesis's perturbation point, §3.2) at
+/// mid-width, g = across. Hex20 always has a node there (a corner for even `across`, a mid-edge
+/// node for odd); Hex8 has one for even `across` only, otherwise the two nodes either side of
+/// the centre line (g = across ± 1; for across = 1 the edge nodes y = 0 and y = W), over which
+/// a perturbation force is split equally.
+fn centre_top_nodes(p: &ThroughWidthParams) -> Vec<usize> {
+    if p.kind == ElementKind::Hex20 || p.across.is_multiple_of(2) {
+        vec![p.across]
+    } else {
+        vec![p.across - 1, p.across + 1]
+    }
+}
+
 /// Parameters of [`through_width_delamination`] (SI units).
 #[derive(Debug, Clone, PartialEq)]
 pub struct ThroughWidthParams {
@@ -66,8 +80,10 @@ impl ThroughWidthParams {
 }
 
 /// The through-width delamination mesh and its front (from y = W to y = 0: tangent −y,
-/// θ = −90°, normal +x). Node sets `x0 x1 y0 y1 z0`, `crack_upper`/`crack_lower` (paired),
-/// `front`; cell sets `base`, `sublaminate`, `all`.
+/// θ = −90°, normal +x, so S = W − y). Node sets `x0 x1 y0 y1 z0`, `crack_upper`/`crack_lower`
+/// (paired), `front`, `center_top` (the sublaminate top at x = 0, mid-width: one node, or for
+/// Hex8 with an odd `across` the two either side of the centre line); cell sets `base`,
+/// `sublaminate`, `all`.
 pub fn through_width_delamination(p: &ThroughWidthParams) -> Result<(Mesh, Front), MeshError> {
     if !(p.a > 0.0 && p.length > p.a && p.length.is_finite()) {
         return Err(MeshError::Parameter {
@@ -183,6 +199,12 @@ pub fn through_width_delamination(p: &ThroughWidthParams) -> Result<(Mesh, Front
             cells_of.touching(c, d),
         ));
     }
+    let top = 2 * (p.base_layers + p.sub_layers);
+    let centre = centre_top_nodes(p)
+        .iter()
+        .map(|&gy| get([0, gy, top], false).ok_or_else(|| missing("centre top")))
+        .collect::<Result<Vec<_>, _>>()?;
+    mesh.node_sets.insert("center_top".into(), centre);
     mesh.node_sets.insert("crack_upper".into(), up);
     mesh.node_sets.insert("crack_lower".into(), lo);
     mesh.node_sets.insert("front".into(), front_nodes);
@@ -194,4 +216,47 @@ pub fn through_width_delamination(p: &ThroughWidthParams) -> Result<(Mesh, Front
     mesh.check_geometry()?;
     let front = Front { points }.finish_straight(&mesh.nodes, [0.0, -1.0]);
     Ok((mesh, front))
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)]
+mod tests {
+    use super::*;
+
+    /// `center_top`: on the sublaminate top (z = H + h) at x = 0, at mid-width — one node, or
+    /// (Hex8, odd `across`) two placed symmetrically about it.
+    #[test]
+    fn centre_top_is_on_the_sublaminate_top_at_x0_mid_width() {
+        for (kind, across, count) in [
+            (ElementKind::Hex20, 1, 1),
+            (ElementKind::Hex20, 2, 1),
+            (ElementKind::Hex20, 3, 1),
+            (ElementKind::Hex8, 1, 2),
+            (ElementKind::Hex8, 2, 1),
+            (ElementKind::Hex8, 3, 2),
+        ] {
+            let p = ThroughWidthParams {
+                kind,
+                across,
+                ..ThroughWidthParams::example()
+            };
+            let (m, _) = through_width_delamination(&p).unwrap();
+            let set = &m.node_sets["center_top"];
+            assert_eq!(set.len(), count, "{kind:?} across {across}");
+            let mean_y = set.iter().map(|&n| m.nodes[n][1]).sum::<f64>() / count as f64;
+            assert!(
+                (mean_y - 0.5 * p.width).abs() < 1e-15,
+                "{kind:?} across {across}"
+            );
+            for &n in set {
+                let [x, _, z] = m.nodes[n];
+                assert!(x == 0.0 && (z - (p.base + p.h)).abs() < 1e-15);
+            }
+            if count == 2 {
+                // One element apart: y = W·(across ∓ 1)/(2·across).
+                let gap = m.nodes[set[1]][1] - m.nodes[set[0]][1];
+                assert!((gap - p.width / across as f64).abs() < 1e-15);
+            }
+        }
+    }
 }
