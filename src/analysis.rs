@@ -651,6 +651,7 @@ pub fn run(
                 .collect();
             nonlin3d_vcct::critical_strain(&c.criterion(), &sweep)?.map(|c| Critical {
                 strain: c.strain,
+                after: c.after,
                 s_mm: c.s * 1e3,
             })
         }

@@ -186,12 +186,25 @@ pub fn table(results: &Results) -> String {
     for w in &results.warnings {
         let _ = writeln!(s, "warning: {w}");
     }
-    if let Some(c) = results.critical {
-        let _ = writeln!(
-            s,
-            "growth onset by the criterion at strain {:.5}, S = {:.2} mm",
-            c.strain, c.s_mm
-        );
+    match results.critical {
+        Some(c) if c.after.is_some() => {
+            let _ = writeln!(
+                s,
+                "growth onset by the criterion between strain {} (unbuckled, nothing released) \
+                 and {} (at S = {:.2} mm); add levels between them to locate it",
+                c.after.unwrap_or(f64::NAN),
+                c.strain,
+                c.s_mm
+            );
+        }
+        Some(c) => {
+            let _ = writeln!(
+                s,
+                "growth onset by the criterion at strain {:.5}, S = {:.2} mm",
+                c.strain, c.s_mm
+            );
+        }
+        None => {}
     }
     let t = &results.timings;
     let _ = writeln!(

@@ -246,8 +246,13 @@ pub struct Timings {
 /// Onset of growth by the scene's criterion.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Critical {
-    /// Critical applied strain (interpolated).
+    /// Critical applied strain, interpolated between the levels around the onset — or, when
+    /// `after` is set, the first level whose failure index is ≥ 1.
     pub strain: f64,
+    /// Set when the level before released nothing (still below the bifurcation): the onset
+    /// then lies between `after` and `strain` and is not interpolated (it would fall below the
+    /// bifurcation); add levels between them to locate it.
+    pub after: Option<f64>,
     /// Where: S, mm.
     pub s_mm: f64,
 }

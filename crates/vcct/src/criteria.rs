@@ -97,8 +97,15 @@ impl MixedMode {
 /// Where and at which applied strain a strain sweep first reaches a failure index of 1.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CriticalStrain {
-    /// The applied strain at onset (interpolated).
+    /// The applied strain at onset, interpolated — or, when [`CriticalStrain::after`] is set,
+    /// the first level whose index is ≥ 1 (the onset lies between the two).
     pub strain: f64,
+    /// Set when the onset cannot be interpolated: the level before released nothing (the
+    /// sublaminate still flat, index < 1e-6 of the next level's), so G started growing at an
+    /// unknown bifurcation strain between the two levels and the √index interpolation, which
+    /// assumes growth from the lower level, would place the onset too early. The onset lies in
+    /// (after, strain]; levels between them locate it.
+    pub after: Option<f64>,
     /// Index of the front point that reaches 1 first (in the sweep's front tables).
     pub point: usize,
     /// S of that point (m).
@@ -131,15 +138,17 @@ pub fn critical_strain(
             continue;
         };
         if f >= 1.0 {
-            let at = match last {
-                None => *strain,
+            let (at, after) = match last {
+                None => (*strain, None),
+                Some((e0, f0)) if f0 < 1e-6 * f => (*strain, Some(e0)),
                 Some((e0, f0)) => {
                     let (r0, r1) = (f0.sqrt(), f.sqrt());
-                    e0 + (strain - e0) * (1.0 - r0) / (r1 - r0)
+                    (e0 + (strain - e0) * (1.0 - r0) / (r1 - r0), None)
                 }
             };
             return Ok(Some(CriticalStrain {
                 strain: at,
+                after,
                 point: i,
                 s: rates[i].s,
             }));
@@ -231,7 +240,28 @@ mod tests {
         let hit = critical_strain(&c, &levels).unwrap().unwrap();
         assert_relative_eq!(hit.strain, star, epsilon = 1e-15);
         assert_eq!(hit.point, 1);
+        assert_eq!(hit.after, None);
         assert!(critical_strain(&c, &levels[..3]).unwrap().is_none());
+    }
+
+    /// A flat level (nothing released: below the bifurcation) followed by one past the onset:
+    /// the onset is bracketed, not interpolated from the flat level.
+    #[test]
+    fn an_onset_after_a_flat_level_is_bracketed() {
+        let c = MixedMode::PowerLaw {
+            g_ic: 100.0,
+            g_iic: 100.0,
+            g_iiic: 100.0,
+            alpha: 1.0,
+            beta: 1.0,
+        };
+        let levels = vec![
+            (-0.004, vec![point(1e-25, 0.0, 0.0)]),
+            (-0.0065, vec![point(230.0, 0.0, 0.0)]),
+        ];
+        let hit = critical_strain(&c, &levels).unwrap().unwrap();
+        assert_eq!(hit.strain, -0.0065);
+        assert_eq!(hit.after, Some(-0.004));
     }
 
     /// A point whose faces overlap carries no physical G: a large G_I there does not trigger
