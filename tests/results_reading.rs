@@ -215,3 +215,24 @@ fn unstable_levels_are_flagged_everywhere() {
         .collect();
     assert_eq!(stable, ["true", "false"]);
 }
+
+/// A criterion reached at the first buckled level after a flat one: G was zero until the
+/// bifurcation somewhere between them, so the onset is reported as the bracket, not interpolated
+/// (the √index interpolation from the flat level placed it below the bifurcation).
+#[test]
+fn an_onset_right_after_a_flat_level_is_bracketed() {
+    let text = DEFAULT_SCENE.replace("slices = 8", "slices = 4").replace(
+        "strains = [-0.001, -0.002, -0.003, -0.004, -0.005]",
+        "strains = [-0.001, -0.004]",
+    );
+    let text = format!("{text}\n[criterion]\nkind = \"power-law\"\ng_ic = 100.0\ng_iic = 400.0\n");
+    let results = nonlin3d::Analysis::new(Scene::from_toml(&text).unwrap())
+        .unwrap()
+        .run()
+        .unwrap();
+    let c = results.critical.unwrap();
+    assert_eq!(c.after, Some(-0.001));
+    assert_eq!(c.strain, -0.004);
+    let table = nonlin3d::report::table(&results);
+    assert!(table.contains("between strain -0.001"), "{table}");
+}
