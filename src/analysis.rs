@@ -682,7 +682,8 @@ pub fn run(
         model_data: Some(model),
         warnings: Vec::new(),
     };
-    results.warnings = results.stability_warnings();
+    results.warnings = scene.warnings();
+    results.warnings.extend(results.stability_warnings());
     Ok(results)
 }
 

@@ -265,6 +265,63 @@ fn loads(s: &Scene) -> Result<(), Error> {
     Ok(())
 }
 
+/// Legal but suspicious input, in the scene's words: the run goes ahead, and these are printed
+/// and kept in results.json.
+pub(crate) fn warnings(s: &Scene) -> Vec<String> {
+    let mut out = Vec::new();
+    let plate = matches!(s.geometry, Geometry::Plate { .. });
+    if !plate {
+        for (k, e) in s.loads.strains.iter().enumerate() {
+            if *e > 0.0 {
+                out.push(format!(
+                    "loads.strains[{k}] = {e} is tensile: a sublaminate buckles under \
+                     compression (negative strains); under tension it stays flat and G = 0"
+                ));
+            }
+            if e.abs() > 0.05 {
+                out.push(format!(
+                    "loads.strains[{k}] = {e}: |ε| above 5 % is far beyond the failure strain \
+                     of any laminate this models"
+                ));
+            }
+        }
+        let mut sorted = s.loads.strains.iter().map(|e| e.abs()).collect::<Vec<_>>();
+        sorted.dedup();
+        if sorted.windows(2).any(|w| w[1] < w[0]) {
+            out.push(
+                "loads.strains are not in increasing magnitude: the path is followed in the \
+                 order given, so a later, smaller level unloads the buckled sublaminate"
+                    .into(),
+            );
+        }
+    }
+    let (h, base) = match s.geometry {
+        Geometry::Embedded { h_mm, base_mm, .. }
+        | Geometry::Edge { h_mm, base_mm, .. }
+        | Geometry::Plate { h_mm, base_mm, .. }
+        | Geometry::ThroughWidth { h_mm, base_mm, .. } => (h_mm, base_mm),
+    };
+    let span = match s.geometry {
+        Geometry::Embedded { a_mm, b_mm, .. } | Geometry::Edge { a_mm, b_mm, .. } => a_mm.min(b_mm),
+        Geometry::Plate { a_mm, .. } | Geometry::ThroughWidth { a_mm, .. } => a_mm,
+    };
+    if h >= base {
+        out.push(format!(
+            "geometry.h_mm = {h} mm is not thinner than geometry.base_mm = {base} mm: the \
+             models assume a thin sublaminate over a thicker base (thesis §3.2)"
+        ));
+    }
+    if h > 0.25 * span {
+        out.push(format!(
+            "geometry.h_mm = {h} mm is thick for a delamination of half-span {span} mm (h/a = \
+             {:.2}): it buckles, if at all, at strains well beyond any laminate's strength, and \
+             plate-like behaviour cannot be expected",
+            h / span
+        ));
+    }
+    out
+}
+
 #[cfg(test)]
 #[allow(clippy::unwrap_used)]
 mod tests {
@@ -310,6 +367,20 @@ mod tests {
             *slot = Some(value);
             let m = message(&s);
             assert!(m.contains(&format!("mesh.{field} = {value}")), "{m}");
+        }
+    }
+
+    #[test]
+    fn suspicious_input_is_warned_about() {
+        assert!(super::warnings(&reference()).is_empty());
+        let mut s = reference();
+        s.loads.strains = vec![0.002, -0.5];
+        if let crate::scene::Geometry::Embedded { h_mm, .. } = &mut s.geometry {
+            *h_mm = 100.0;
+        }
+        let w = super::warnings(&s).join("\n");
+        for part in ["is tensile", "above 5 %", "not thinner than", "thick for"] {
+            assert!(w.contains(part), "{part}: {w}");
         }
     }
 

@@ -194,6 +194,9 @@ fn run(scene: Option<&Path>, out: &Path, quiet: bool) -> Result<(), Failure> {
         nonlin3d::output::RunOutput::create(out, &scene.title, quantity).map_err(Failure::Input)?;
     stop_on_signals(output.interrupt_handle()).map_err(Failure::Run)?;
     println!("{}", scene.title);
+    for w in scene.warnings() {
+        eprintln!("nonlin3d: warning: {w}");
+    }
     let bar = if quiet {
         ProgressBar::hidden()
     } else {
@@ -251,6 +254,9 @@ fn run(scene: Option<&Path>, out: &Path, quiet: bool) -> Result<(), Failure> {
 
 fn export(scene: &Path, inp: &Path) -> Result<(), Failure> {
     let scene = read_scene(Some(scene)).map_err(Failure::Input)?;
+    for w in scene.warnings() {
+        eprintln!("nonlin3d: warning: {w}");
+    }
     let text = nonlin3d::export::deck(&scene).map_err(Failure::Input)?;
     nonlin3d::output::write_atomic(inp, text.as_bytes()).map_err(Failure::Run)?;
     println!("wrote {}", inp.display());

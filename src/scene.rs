@@ -545,6 +545,13 @@ impl Scene {
         crate::checks::scene(self)
     }
 
+    /// Legal but suspicious input (tensile strains on a buckling model, a sublaminate thicker
+    /// than the base or its span, strains out of order): the run goes ahead; the command line
+    /// prints these and results.json keeps them.
+    pub fn warnings(&self) -> Vec<String> {
+        crate::checks::warnings(self)
+    }
+
     /// The material's ply-axis constants (before homogenisation), and whether it is to be
     /// homogenised quasi-isotropically.
     pub fn ply_material(&self) -> Result<(Orthotropic, Homogenize), Error> {
