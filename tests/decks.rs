@@ -2,9 +2,9 @@
 //! reader, step semantics, assembly, Newton and solver, through the library and the
 //! `nonlin3d solve` command.
 
-use nonlin3d::deck::solve_deck;
+use nonlin3d::deck::{StepOptions, solve_deck};
 use nonlin3d::mesh::read_inp;
-use nonlin3d::newton::{NewtonSettings, Stepping};
+use nonlin3d::newton::NewtonSettings;
 use std::collections::HashMap;
 use std::path::Path;
 
@@ -60,7 +60,14 @@ fn decks_match_calculix() {
             &std::fs::read_to_string(Path::new("tests/decks").join(format!("{name}.inp"))).unwrap(),
         )
         .unwrap();
-        let results = solve_deck(&model, &settings, &Stepping::default()).unwrap();
+        let results = solve_deck(
+            &model,
+            &StepOptions {
+                newton: settings.clone(),
+                initial_increment: None,
+            },
+        )
+        .unwrap();
         let last = results.last().unwrap();
         let rel = difference(&model.node_ids, &last.displacements, &reference(name));
         eprintln!(

@@ -111,7 +111,7 @@ fn structured_box_round_trips_exactly() {
     assert_eq!(model.steps.len(), 1);
     let s = &model.steps[0];
     assert!(s.nlgeom);
-    assert_eq!(s.static_line[..2], [0.1, 1.0]);
+    assert_eq!((s.procedure.initial, s.procedure.period), (0.1, 1.0));
     assert_eq!(s.boundaries.len(), 2);
     assert_eq!(s.boundaries[1].value, -1e-5);
     assert_eq!(s.cloads[0].target, NodeRef::Node(3));
