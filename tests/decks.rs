@@ -184,6 +184,7 @@ fn feature_decks_match_calculix_increment_by_increment() {
         "el_print_nlgeom",
         "ortho_tilted",
         "ortho_tilted_nlgeom",
+        "time_reset_fixed",
     ] {
         let dir = Path::new("tests/decks");
         let model = nonlin3d::mesh::read_inp_file(&dir.join(format!("{name}.inp"))).unwrap();
@@ -300,4 +301,37 @@ fn the_solve_command_refuses_by_line() {
         let want = format!("line {}, {what}", line_of(&deck, to));
         assert!(err.contains(&want), "{want} not in {err}");
     }
+}
+
+/// `INC=` is a limit, not a hint: a step that needs more increments stops with an error naming
+/// the step, its line and the limit (CalculiX stops too).
+#[test]
+fn more_increments_than_inc_is_an_error() {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("inc");
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::copy(
+        "tests/decks/cantilever_mesh.inp",
+        dir.join("cantilever_mesh.inp"),
+    )
+    .unwrap();
+    let deck = std::fs::read_to_string("tests/decks/static_control.inp")
+        .unwrap()
+        .replace("INC=20", "INC=4");
+    std::fs::write(dir.join("deck.inp"), &deck).unwrap();
+    let model = nonlin3d::mesh::read_inp_file(&dir.join("deck.inp")).unwrap();
+    let e = solve_deck(&model, &StepOptions::default())
+        .unwrap_err()
+        .to_string();
+    let line = deck.lines().position(|l| l.starts_with("*STEP")).unwrap() + 1;
+    assert!(
+        e.contains(&format!("step 1 (line {line})")) && e.contains("INC=4"),
+        "{e}"
+    );
+    // Six increments are needed (0.1, 0.2, 0.35, 0.575, 0.875, 1): INC=6 passes.
+    let model = read_inp(&deck.replace("INC=4", "INC=6").replace(
+        "*INCLUDE, INPUT=cantilever_mesh.inp",
+        &std::fs::read_to_string("tests/decks/cantilever_mesh.inp").unwrap(),
+    ))
+    .unwrap();
+    assert!(solve_deck(&model, &StepOptions::default()).is_ok());
 }

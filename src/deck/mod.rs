@@ -185,8 +185,13 @@ pub fn solve_deck(model: &InpModel, options: &StepOptions) -> Result<Vec<StepRes
                 kinematics,
             )?,
         };
+        // CalculiX: TOTAL TIME AT START sets the total time at the start; TIME RESET runs the
+        // step's total time from there minus the period, so that it ends where it began.
         if let Some(t) = step.procedure.total_time_at_start {
             start = t;
+        }
+        if step.procedure.time_reset {
+            start -= step.procedure.period;
         }
         let frame = loads::Frame {
             period: step.procedure.period,
@@ -223,9 +228,7 @@ pub fn solve_deck(model: &InpModel, options: &StepOptions) -> Result<Vec<StepRes
             outputs: tables,
         });
         assemblers.insert(step.nlgeom, problem.assembler);
-        if !step.procedure.time_reset {
-            start += frame.period;
-        }
+        start += frame.period;
     }
     Ok(results)
 }

@@ -13,6 +13,9 @@ pub struct Block {
     pub set: String,
     /// Total time.
     pub time: f64,
+    /// How many earlier blocks have the same what, set and time (a step with TIME RESET
+    /// repeats times).
+    pub repeat: usize,
     /// Values by key (node, or element and point; empty for totals).
     pub rows: BTreeMap<Vec<usize>, Vec<f64>>,
 }
@@ -33,6 +36,7 @@ pub fn parse_dat(text: &str) -> Vec<Block> {
                 what,
                 set,
                 time,
+                repeat: 0,
                 rows: BTreeMap::new(),
             });
             continue;
@@ -55,13 +59,26 @@ pub fn parse_dat(text: &str) -> Vec<Block> {
             .collect();
         b.rows.insert(key, values);
     }
+    number_repeats(&mut blocks);
     blocks
+}
+
+fn number_repeats(blocks: &mut [Block]) {
+    for i in 0..blocks.len() {
+        blocks[i].repeat = blocks[..i]
+            .iter()
+            .filter(|b| {
+                b.what == blocks[i].what && b.set == blocks[i].set && b.time == blocks[i].time
+            })
+            .count();
+    }
 }
 
 /// nonlin3d's output tables of `results` as blocks.
 pub fn our_blocks(results: &[StepResult]) -> Vec<Block> {
-    let mut out: Vec<Block> = Vec::new();
+    let mut all: Vec<Block> = Vec::new();
     for r in results {
+        let mut out: Vec<Block> = Vec::new();
         for t in &r.outputs {
             let set = t
                 .file
@@ -109,6 +126,7 @@ pub fn our_blocks(results: &[StepResult]) -> Vec<Block> {
                                 what: what.into(),
                                 set: set.clone(),
                                 time,
+                                repeat: 0,
                                 rows: BTreeMap::new(),
                             });
                             out.last_mut().unwrap()
@@ -118,14 +136,16 @@ pub fn our_blocks(results: &[StepResult]) -> Vec<Block> {
                 }
             }
         }
+        all.extend(out);
     }
-    out
+    number_repeats(&mut all);
+    all
 }
 
 /// Largest |ours − theirs| over a block relative to the block's largest |theirs|, for every
 /// CalculiX block; panics if a block has no counterpart or the printed times differ.
 pub fn compare(name: &str, ours: &[Block], theirs: &[Block]) -> Vec<(String, f64)> {
-    let key = |b: &Block| format!("{} {} t={:.6e}", b.what, b.set, b.time);
+    let key = |b: &Block| format!("{} {} t={:.6e} #{}", b.what, b.set, b.time, b.repeat);
     let mut ours_keys: Vec<String> = ours.iter().map(key).collect();
     let mut theirs_keys: Vec<String> = theirs.iter().map(key).collect();
     ours_keys.sort();
@@ -135,7 +155,12 @@ pub fn compare(name: &str, ours: &[Block], theirs: &[Block]) -> Vec<(String, f64
     for t in theirs {
         let o = ours
             .iter()
-            .find(|b| b.what == t.what && b.set == t.set && (b.time - t.time).abs() < 1e-9)
+            .find(|b| {
+                b.what == t.what
+                    && b.set == t.set
+                    && b.repeat == t.repeat
+                    && (b.time - t.time).abs() < 1e-9
+            })
             .unwrap();
         assert_eq!(
             o.rows.keys().collect::<Vec<_>>(),

@@ -79,7 +79,8 @@ pub struct StaticData {
     pub max: f64,
     /// `DIRECT`: fixed increments of `initial`, no cutback.
     pub direct: bool,
-    /// `TIME RESET`: the total time does not advance over this step.
+    /// `TIME RESET`: the step's total time runs from (total time at its start − period), so the
+    /// total time does not advance over it (CalculiX's reading).
     pub time_reset: bool,
     /// `TOTAL TIME AT START=`.
     pub total_time_at_start: Option<f64>,

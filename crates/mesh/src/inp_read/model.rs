@@ -33,11 +33,11 @@ impl Reader {
     /// Handles `kw` if it is model data; Ok(false) if it is not one of these keywords.
     pub(crate) fn model_keyword(&mut self, kw: &Keyword, data: &[Line]) -> Result<bool, MeshError> {
         if let Some((_, reason)) = NOT_USED.iter().find(|(k, _)| *k == kw.name) {
-            let what = match kw.name.as_str() {
-                "HEADING" => format!("*HEADING {}", data.first().map_or("", |l| l.text.as_str())),
-                _ => kw.what(),
+            let reason = match (kw.name.as_str(), data.first()) {
+                ("HEADING", Some(l)) => format!("{reason}: {}", l.text),
+                _ => reason.to_string(),
             };
-            self.not_used(&kw.at, what, reason);
+            self.not_used(&kw.at, kw.what(), &reason);
             return Ok(true);
         }
         let mesh_data = matches!(

@@ -244,7 +244,16 @@ impl Reader {
                 p.initial = p.initial.min(p.max.abs());
             }
         }
+        let linear_detail = !st.step.nlgeom && (direct || !data.is_empty());
         st.step.procedure = p;
+        if linear_detail {
+            self.not_used(
+                &kw.at,
+                "*STATIC increments".into(),
+                "a linear step is solved in one increment to the end of its period, as CalculiX \
+                 does",
+            );
+        }
         Ok(())
     }
 
@@ -504,6 +513,13 @@ impl Reader {
         }
         // Element variables in material axes: CalculiX's default for *EL PRINT, GLOBAL=NO for
         // *EL FILE; node variables have no local systems here (*TRANSFORM is refused).
+        if let (OutputKind::NodePrint | OutputKind::NodeFile, Some(g)) = (kind, kw.get("GLOBAL")) {
+            self.not_used(
+                &kw.at,
+                format!("{}, GLOBAL={g}", kw.what()),
+                "no node has a local system (*TRANSFORM is refused): global either way",
+            );
+        }
         let local_axes = matches!(
             (kind, kw.choice("GLOBAL", &["YES", "NO"])?.as_deref()),
             (OutputKind::ElPrint, None) | (OutputKind::ElPrint | OutputKind::ElFile, Some("NO"))
