@@ -13,6 +13,7 @@
 
 mod lexer;
 mod model;
+mod output;
 mod sections;
 mod step;
 
