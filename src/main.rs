@@ -59,8 +59,8 @@ enum Command {
         /// Residual tolerance in N (the thesis used 1e-4 N, §4.4).
         #[arg(long, default_value_t = 1e-4)]
         tolerance: f64,
-        /// First increment of every NLGEOM step as a fraction of its period (default: the
-        /// deck's *STATIC initial increment).
+        /// First increment of every NLGEOM step as a fraction of its period, every increment
+        /// with DIRECT (default: the deck's *STATIC initial increment).
         #[arg(long)]
         increment: Option<f64>,
     },

@@ -91,10 +91,18 @@ pub(crate) fn run_step(
     let mut kmat = SymmetricMatrix::zeros(problem.pattern());
     let mut attempts = Vec::new();
     let mut t = 0.0;
-    let mut dt = if step.nlgeom {
-        options.initial_increment.map_or(p.initial, |f| f * period)
-    } else {
-        period
+    if let Some(f) = options.initial_increment
+        && !(f > 0.0 && f <= 1.0)
+    {
+        return Err(Error::Numerical(format!(
+            "initial increment {f}: expected a fraction of the step period in (0, 1]"
+        )));
+    }
+    let mut dt = match (step.nlgeom, options.initial_increment) {
+        (false, _) => period,
+        (true, None) => p.initial,
+        (true, Some(f)) if p.direct => f * period,
+        (true, Some(f)) => (f * period).clamp(p.min, p.max),
     };
     let mut increment = 0;
     let mut easy_before = false;

@@ -296,9 +296,10 @@ pub fn read_inp(text: &str) -> Result<InpModel, MeshError> {
 
 /// Reads a deck file, resolving `*INCLUDE, INPUT=` relative to the including file.
 pub fn read_inp_file(path: &Path) -> Result<InpModel, MeshError> {
-    let text = std::fs::read_to_string(path).map_err(|source| MeshError::Io {
-        path: path.display().to_string(),
-        source,
+    let text = std::fs::read_to_string(path).map_err(|e| MeshError::Deck {
+        at: path.display().to_string(),
+        what: "deck".into(),
+        reason: format!("cannot read it: {e}"),
     })?;
     read_lines(logical_lines(&text, Some(path))?)
 }
