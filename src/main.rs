@@ -5,9 +5,10 @@
 //!   writes `DIR/results.json`, `front_K.csv`, `model.pvd` + `model_K.vtu`, SVG plots.
 //! - `nonlin3d export SCENE.toml --inp FILE`: the scene as a CalculiX deck.
 //! - `nonlin3d eigen-check`: the element eigen-check of thesis §2.5.
-//! - `nonlin3d solve DECK.inp --out DIR`: solves an Abaqus/CalculiX deck (the subset
-//!   documented in `nonlin3d_mesh::read_inp`; linear or NLGEOM static steps) and writes
-//!   `DIR/displacements.csv`, `DIR/step-K/displacements.csv` and `DIR/summary.json`.
+//! - `nonlin3d solve DECK.inp --out DIR`: solves an Abaqus/CalculiX deck (the subset in
+//!   docs/DECKS.md; linear or NLGEOM static steps) and writes `DIR/displacements.csv`,
+//!   `DIR/step-K/displacements.csv`, the output requests per increment
+//!   (`DIR/step-K/node-print-SET.csv`, …) and `DIR/summary.json`.
 //!
 //! Exit status: 0 complete; 1 the analysis (or writing its results) failed; 2 bad input (scene,
 //! deck, arguments, an output folder that cannot be written); 130 interrupted by SIGINT, 143 by
@@ -15,7 +16,7 @@
 //! converged level with `"complete": false` in results.json.
 
 use clap::{Parser, Subcommand};
-use nonlin3d::newton::{NewtonSettings, Stepping};
+use nonlin3d::newton::NewtonSettings;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -65,34 +66,37 @@ enum Command {
         /// Residual tolerance in N (the thesis used 1e-4 N, §4.4).
         #[arg(long, default_value_t = 1e-4)]
         tolerance: f64,
-        /// First load-factor increment of each step.
-        #[arg(long, default_value_t = 0.25)]
-        increment: f64,
+        /// First increment of every NLGEOM step as a fraction of its period, every increment
+        /// with DIRECT (default: the deck's *STATIC initial increment).
+        #[arg(long)]
+        increment: Option<f64>,
     },
 }
 
-fn solve(deck: &Path, out: &Path, tolerance: f64, increment: f64) -> Result<(), nonlin3d::Error> {
-    let text = std::fs::read_to_string(deck)
-        .map_err(|e| nonlin3d::Error::Numerical(format!("reading {}: {e}", deck.display())))?;
-    let model = nonlin3d::mesh::read_inp(&text)?;
-    let settings = NewtonSettings {
-        force_tolerance: tolerance,
-        ..NewtonSettings::default()
+fn solve(deck: &Path, out: &Path, tolerance: f64, increment: Option<f64>) -> Result<(), Failure> {
+    let model = nonlin3d::mesh::read_inp_file(deck)
+        .map_err(|e| Failure::Input(nonlin3d::Error::from(e)))?;
+    let options = nonlin3d::deck::StepOptions {
+        newton: NewtonSettings {
+            force_tolerance: tolerance,
+            ..NewtonSettings::default()
+        },
+        initial_increment: increment,
     };
-    let stepping = Stepping {
-        initial: increment,
-        ..Stepping::default()
-    };
-    let results = nonlin3d::deck::solve_deck(&model, &settings, &stepping)?;
-    nonlin3d::deck::write_results(out, &model, &results)?;
+    let results = nonlin3d::deck::solve_deck(&model, &options).map_err(Failure::Run)?;
+    nonlin3d::deck::write_results(out, &model, &results).map_err(Failure::Run)?;
     for r in &results {
         let iterations: usize = r.increments.iter().map(|i| i.iterations).sum();
+        let done = r.increments.iter().filter(|i| i.converged).count();
         println!(
-            "step {}: {} increments, {iterations} iterations{}",
+            "step {}: {done} increments ({} attempts), {iterations} iterations{}",
             r.step,
             r.increments.len(),
             if r.nlgeom { " (NLGEOM)" } else { "" }
         );
+    }
+    for n in &model.not_used {
+        println!("not used: {}, {}: {}", n.at, n.keyword, n.reason);
     }
     println!("results in {}", out.display());
     Ok(())
@@ -277,7 +281,7 @@ fn main() -> ExitCode {
             out,
             tolerance,
             increment,
-        }) => solve(&deck, &out, tolerance, increment).map_err(Failure::Run),
+        }) => solve(&deck, &out, tolerance, increment),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

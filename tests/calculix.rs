@@ -456,3 +456,63 @@ fn calculix_runs_the_exported_scene_and_lands_on_the_same_buckled_branch() {
         assert!((w_ccx / w_ours - 1.0).abs() < 5e-3);
     }
 }
+
+#[path = "decks/dat.rs"]
+#[allow(dead_code)]
+mod dat;
+
+/// The feature decks' committed CalculiX answers (`tests/decks/NAME.ccx.dat`, which
+/// `tests/decks.rs` compares nonlin3d with) are what the installed CalculiX computes: each
+/// deck is run again in a scratch folder with its included mesh, and every block equals the
+/// committed one to the 7 printed digits (same program, same input: 1e-6 of the block's
+/// largest value leaves room for a last-digit difference from another build).
+#[test]
+fn calculix_reproduces_the_committed_deck_answers() {
+    if !ccx_available() {
+        return;
+    }
+    let decks = Path::new("tests/decks");
+    for name in [
+        "amplitude_cload",
+        "amplitude_total_time",
+        "op_new",
+        "static_control",
+        "sets_and_not_used",
+        "el_print_nlgeom",
+        "ortho_tilted",
+        "ortho_tilted_nlgeom",
+        "time_reset_fixed",
+    ] {
+        let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("ccx-{name}"));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        for f in [
+            "cantilever_mesh.inp",
+            "block_mesh.inp",
+            &format!("{name}.inp"),
+        ] {
+            std::fs::copy(decks.join(f), dir.join(f)).unwrap();
+        }
+        let out = Command::new("ccx")
+            .arg("-i")
+            .arg(name)
+            .current_dir(&dir)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{name}: {}",
+            String::from_utf8_lossy(&out.stdout)
+        );
+        let now =
+            dat::parse_dat(&std::fs::read_to_string(dir.join(format!("{name}.dat"))).unwrap());
+        let committed = dat::parse_dat(
+            &std::fs::read_to_string(decks.join(format!("{name}.ccx.dat"))).unwrap(),
+        );
+        let worst = dat::compare(name, &now, &committed)
+            .into_iter()
+            .fold(0.0f64, |a, b| a.max(b.1));
+        eprintln!("{name}: CalculiX now vs committed {worst:.1e}");
+        assert!(worst <= 1e-6, "{name}: {worst:e}");
+    }
+}

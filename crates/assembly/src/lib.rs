@@ -5,6 +5,7 @@
 //! |---|---|
 //! | [`Constraints`] | fixed and prescribed DOFs (values scaled by the load factor λ), linear ties ([`Tie`]), nodal loads |
 //! | [`Assembler`] | per-cell materials (ply rotation), shape tables, pattern, scatter maps; `assemble` |
+//! | [`station_stresses`] | Cauchy (or small-strain) stresses at the integration points of listed cells, for output |
 //!
 //! Constraints are imposed by prescription: before each Newton solve the constrained entries of
 //! u are set to their targets, so their increments are zero; the tangent gets identity rows
@@ -26,7 +27,9 @@ mod handover;
 mod prefetch;
 mod scatter;
 mod share;
+mod stresses;
 
 pub use assembler::{Assembler, Assembly};
 pub use constraints::{Constraints, Tie};
 pub use error::AssemblyError;
+pub use stresses::{StressRules, station_stresses};

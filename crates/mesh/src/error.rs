@@ -64,6 +64,17 @@ pub enum MeshError {
         /// Why.
         reason: String,
     },
+    /// An input deck line that cannot be read or asks for something not implemented: where
+    /// (file and line), what (keyword, parameter or data line) and why.
+    #[error("{at}, {what}: {reason}")]
+    Deck {
+        /// `line N`, or `FILE line N` in an included file.
+        at: String,
+        /// The keyword, with the parameter or data field concerned.
+        what: String,
+        /// Why.
+        reason: String,
+    },
     /// Writing a file failed.
     #[error("writing {path}: {source}")]
     Io {

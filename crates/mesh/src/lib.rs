@@ -43,7 +43,10 @@ pub use embedded::{
 pub use error::MeshError;
 pub use front::{Front, FrontPoint};
 pub use generate::{BoxParams, graded_coordinates, graded_from_first, structured_box};
-pub use inp_read::{InpModel, NodeRef, ReadBoundary, ReadCload, ReadStep, read_inp};
+pub use inp_read::{
+    Amplitude, Controls, InpModel, NodeRef, NotUsed, OutputKind, OutputRequest, OutputVariable,
+    ReadBoundary, ReadCload, ReadStep, StaticData, Totals, read_inp, read_inp_file,
+};
 pub use model::{Cell, Imperfection, Mesh};
 pub use quality::{CellQuality, quality};
 pub use through_width::{ThroughWidthParams, through_width_delamination};

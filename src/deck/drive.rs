@@ -1,0 +1,211 @@
+//! Time incrementation of a static step, after CalculiX: increments of step time from the
+//! `*STATIC` initial increment, cut back after a failed attempt and grown after easy ones,
+//! between the `*STATIC` minimum and maximum, at most `INC=` increments; `DIRECT` fixes the
+//! increment and allows no cutback. A linear step is one increment to the end of the period.
+//!
+//! Each increment is one Newton solve: the constraints take every value from step time t0
+//! (λ = 0) to t1 (λ = 1) and Newton solves λ = 1 from the last state (extrapolated by the
+//! previous increment's change, scaled to the new size). An amplitude is evaluated only at
+//! increment ends, so it is honoured however the increments fall (an elastic state does not
+//! depend on the path).
+
+use super::loads::{Frame, History};
+use super::{IncrementSummary, StepOptions};
+use crate::Error;
+use nonlin3d_mesh::{InpModel, ReadStep};
+use nonlin3d_newton::{
+    NewtonSettings, NonlinearProblem, StructuralProblem, TangentCache, Termination,
+    solve_increment_with,
+};
+use nonlin3d_solver::SymmetricMatrix;
+
+/// The increment control in force in a step: `*CONTROLS, PARAMETERS=TIME INCREMENTATION` or
+/// CalculiX's defaults.
+struct Control {
+    easy: usize,
+    slow: usize,
+    max_cutbacks: usize,
+    diverged_cutback: f64,
+    slow_cutback: f64,
+    slow_shrink: f64,
+    grow: f64,
+}
+
+impl Control {
+    fn of(step: &ReadStep) -> Self {
+        let c = &step.controls;
+        Self {
+            easy: c.easy_iterations.unwrap_or(4),
+            slow: c.slow_iterations.unwrap_or(10),
+            max_cutbacks: c.max_cutbacks.unwrap_or(5),
+            diverged_cutback: c.diverged_cutback.unwrap_or(0.25),
+            slow_cutback: c.slow_cutback.unwrap_or(0.5),
+            slow_shrink: c.slow_shrink.unwrap_or(0.75),
+            grow: c.grow.unwrap_or(1.5),
+        }
+    }
+}
+
+/// The Newton settings of a step: `base` with the deck's `*CONTROLS` (I_C → iterations, R_n →
+/// relative residual tolerance, C_n → displacement-correction tolerance).
+pub(crate) fn newton_settings(base: &NewtonSettings, step: &ReadStep) -> NewtonSettings {
+    let c = &step.controls;
+    NewtonSettings {
+        max_iterations: c.max_iterations.unwrap_or(base.max_iterations),
+        relative_tolerance: c.residual_ratio.unwrap_or(base.relative_tolerance),
+        displacement_tolerance: c.correction_ratio.unwrap_or(base.displacement_tolerance),
+        ..base.clone()
+    }
+}
+
+/// A converged increment, handed to the output writer.
+pub(crate) struct Converged<'a> {
+    pub increment: usize,
+    pub step_time: f64,
+    pub last: bool,
+    pub u: &'a [f64],
+    pub problem: &'a mut StructuralProblem,
+}
+
+/// Runs step `k` (0-based) from `u` (updated to its end), calling `on_increment` after each
+/// converged increment. Returns every attempt.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn run_step(
+    model: &InpModel,
+    k: usize,
+    history: &History,
+    frame: Frame,
+    problem: &mut StructuralProblem,
+    u: &mut Vec<f64>,
+    options: &StepOptions,
+    on_increment: &mut dyn FnMut(Converged<'_>) -> Result<(), Error>,
+) -> Result<Vec<IncrementSummary>, Error> {
+    let step = &model.steps[k];
+    let p = &step.procedure;
+    let settings = newton_settings(&options.newton, step);
+    let control = Control::of(step);
+    let period = frame.period;
+    let eps = 1e-12 * period;
+    let mut solver = settings.solver.build();
+    solver.analyze(&problem.pattern())?;
+    let mut kmat = SymmetricMatrix::zeros(problem.pattern());
+    let mut attempts = Vec::new();
+    let mut t = 0.0;
+    if let Some(f) = options.initial_increment
+        && !(f > 0.0 && f <= 1.0)
+    {
+        return Err(Error::Numerical(format!(
+            "initial increment {f}: expected a fraction of the step period in (0, 1]"
+        )));
+    }
+    let mut dt = match (step.nlgeom, options.initial_increment) {
+        (false, _) => period,
+        (true, None) => p.initial,
+        (true, Some(f)) if p.direct => f * period,
+        (true, Some(f)) => (f * period).clamp(p.min, p.max),
+    };
+    let mut increment = 0;
+    let mut easy_before = false;
+    let mut cutbacks = 0;
+    let mut previous: Option<(Vec<f64>, f64)> = None;
+    let fail =
+        |what: String| Error::Numerical(format!("step {} (line {}): {what}", k + 1, step.line));
+    while period - t > eps {
+        let size = if period - t - dt < eps {
+            period - t
+        } else {
+            dt
+        };
+        problem.constraints = history.constraints(model, frame, t, t + size)?;
+        let mut trial = u.clone();
+        if let Some((u_prev, d_prev)) = &previous {
+            let f = size / d_prev;
+            for ((x, &a), &b) in trial.iter_mut().zip(u.iter()).zip(u_prev) {
+                *x = a + f * (a - b);
+            }
+        }
+        let mut cache = TangentCache::new();
+        let report = solve_increment_with(
+            problem,
+            &mut trial,
+            1.0,
+            &settings,
+            solver.as_mut(),
+            &mut kmat,
+            &mut cache,
+        )?;
+        let iterations = report.iterations.len();
+        let converged = report.converged();
+        attempts.push(IncrementSummary::of(
+            &report,
+            increment + 1,
+            t + size,
+            frame.start,
+        ));
+        if converged {
+            increment += 1;
+            if increment > step.max_increments {
+                return Err(fail(format!(
+                    "more than INC={} increments needed (step time {t:.6} of {period})",
+                    step.max_increments
+                )));
+            }
+            previous = Some((std::mem::replace(u, trial), size));
+            t += size;
+            cutbacks = 0;
+            on_increment(Converged {
+                increment,
+                step_time: t,
+                last: period - t <= eps,
+                u,
+                problem,
+            })?;
+            if p.direct || !step.nlgeom {
+                continue;
+            }
+            let easy = iterations <= control.easy;
+            if iterations > control.slow {
+                dt = size * control.slow_shrink;
+            } else if easy && easy_before {
+                dt = (dt * control.grow).min(p.max);
+            }
+            dt = dt.max(p.min);
+            easy_before = easy;
+        } else {
+            let reason = match &report.termination {
+                Termination::MaxIterations => format!("no convergence in {iterations} iterations"),
+                other => format!("{other:?}"),
+            };
+            if p.direct || !step.nlgeom {
+                return Err(fail(format!(
+                    "increment {} (step time {:.6} → {:.6}) did not converge ({reason}){}",
+                    increment + 1,
+                    t,
+                    t + size,
+                    if p.direct {
+                        "; DIRECT allows no cutback"
+                    } else {
+                        ""
+                    }
+                )));
+            }
+            cutbacks += 1;
+            easy_before = false;
+            let factor = match report.termination {
+                Termination::MaxIterations => control.slow_cutback,
+                _ => control.diverged_cutback,
+            };
+            dt = size * factor;
+            if cutbacks > control.max_cutbacks || dt < p.min {
+                return Err(fail(format!(
+                    "increment {} from step time {t:.6} did not converge after {cutbacks} \
+                     attempts ({reason}; next size {dt:.3e}, minimum {:.3e}, I_A = {})",
+                    increment + 1,
+                    p.min,
+                    control.max_cutbacks
+                )));
+            }
+        }
+    }
+    Ok(attempts)
+}
