@@ -6,6 +6,8 @@
 //! Needs `ccx` on PATH. Outside CI the test is skipped with a notice when it is missing; in CI
 //! (`CI` set) a missing `ccx` fails it, and `.ci/run` installs it.
 
+mod common;
+
 use nonlin3d::element::{ElementKind, IntegrationRule, ShapeTable, linear_stiffness};
 use nonlin3d::laminate::{ShearCoupling, Stiffness, materials};
 use nonlin3d::mesh::inp::{
@@ -14,22 +16,7 @@ use nonlin3d::mesh::inp::{
 use nonlin3d::mesh::{BoxParams, Mesh, structured_box};
 use nonlin3d::solver::{SolverKind, SymmetricMatrix, SymmetricPattern, solve};
 use std::path::Path;
-use std::process::Command;
 use std::sync::Arc;
-
-fn ccx_available() -> bool {
-    let found = Command::new("ccx").arg("-v").output().is_ok();
-    if !found {
-        assert!(
-            std::env::var_os("CI").is_none(),
-            "CI must provide CalculiX (ccx); .ci/run installs calculix-ccx"
-        );
-        eprintln!(
-            "ccx not found: CalculiX cross-check skipped (apt-get install calculix-ccx to run it)"
-        );
-    }
-    found
-}
 
 /// Runs `ccx` on `deck` in a fresh directory and returns the node displacements of the last
 /// step from its .dat file, by node index.
@@ -47,20 +34,7 @@ fn run_ccx_blocks(name: &str, deck: &str, nodes: usize) -> Vec<(f64, Vec<[f64; 3
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     std::fs::write(dir.join(format!("{name}.inp")), deck).unwrap();
-    let out = Command::new("ccx")
-        .arg("-i")
-        .arg(name)
-        .current_dir(&dir)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "ccx failed ({:?}): {}\n{}",
-        out.status,
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let dat = std::fs::read_to_string(dir.join(format!("{name}.dat"))).unwrap();
+    let dat = common::ccx::run(&dir, name);
     let mut blocks = Vec::new();
     for block in dat.split("displacements").skip(1) {
         let mut lines = block.lines();
@@ -188,7 +162,7 @@ fn tip_loads(mesh: &Mesh, total: f64, dof: u8) -> Vec<InpCload> {
 
 #[test]
 fn calculix_runs_our_decks_and_agrees_with_our_linear_solution() {
-    if !ccx_available() {
+    if !common::ccx::available() {
         return;
     }
     // 1. Steel cantilever 30 × 5 × 4 mm, 6 × 2 × 2 C3D20, clamped at x = 0, 100 N down at x = L.
@@ -314,7 +288,7 @@ fn calculix_nlgeom_agrees_with_our_newton_solution() {
     use nonlin3d::assembly::{Assembler, Constraints};
     use nonlin3d::element::Kinematics;
     use nonlin3d::newton::{NewtonSettings, Stepping, StructuralProblem, follow_path};
-    if !ccx_available() {
+    if !common::ccx::available() {
         return;
     }
     let mesh = structured_box(&BoxParams::new(
@@ -422,7 +396,7 @@ fn calculix_nlgeom_agrees_with_our_newton_solution() {
 /// and NLGEOM total Lagrangian; the difference is each code's residual tolerance).
 #[test]
 fn calculix_runs_the_exported_scene_and_lands_on_the_same_buckled_branch() {
-    if !ccx_available() {
+    if !common::ccx::available() {
         return;
     }
     let scene = nonlin3d::Scene::from_toml(
@@ -468,21 +442,11 @@ mod dat;
 /// largest value leaves room for a last-digit difference from another build).
 #[test]
 fn calculix_reproduces_the_committed_deck_answers() {
-    if !ccx_available() {
+    if !common::ccx::available() {
         return;
     }
     let decks = Path::new("tests/decks");
-    for name in [
-        "amplitude_cload",
-        "amplitude_total_time",
-        "op_new",
-        "static_control",
-        "sets_and_not_used",
-        "el_print_nlgeom",
-        "ortho_tilted",
-        "ortho_tilted_nlgeom",
-        "time_reset_fixed",
-    ] {
+    for name in common::ccx::FEATURE_DECKS {
         let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("ccx-{name}"));
         let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(&dir).unwrap();
@@ -493,19 +457,7 @@ fn calculix_reproduces_the_committed_deck_answers() {
         ] {
             std::fs::copy(decks.join(f), dir.join(f)).unwrap();
         }
-        let out = Command::new("ccx")
-            .arg("-i")
-            .arg(name)
-            .current_dir(&dir)
-            .output()
-            .unwrap();
-        assert!(
-            out.status.success(),
-            "{name}: {}",
-            String::from_utf8_lossy(&out.stdout)
-        );
-        let now =
-            dat::parse_dat(&std::fs::read_to_string(dir.join(format!("{name}.dat"))).unwrap());
+        let now = dat::parse_dat(&common::ccx::run(&dir, name));
         let committed = dat::parse_dat(
             &std::fs::read_to_string(decks.join(format!("{name}.ccx.dat"))).unwrap(),
         );

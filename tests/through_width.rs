@@ -12,6 +12,8 @@
 //! CalculiX: as in tests/calculix.rs, skipped with a notice when `ccx` is missing outside CI;
 //! in CI (`CI` set) a missing `ccx` fails.
 
+mod common;
+
 use nonlin3d::Scene;
 use nonlin3d::analysis::{
     Analysis, build_model, deflections, perturbation_force, perturbation_loads, settings,
@@ -363,20 +365,6 @@ fn no_force_needs_no_centre_set() {
     assert!(!deck.contains("*CLOAD"));
 }
 
-fn ccx_available() -> bool {
-    let found = Command::new("ccx").arg("-v").output().is_ok();
-    if !found {
-        assert!(
-            std::env::var_os("CI").is_none(),
-            "CI must provide CalculiX (ccx); .ci/run installs calculix-ccx"
-        );
-        eprintln!(
-            "ccx not found: CalculiX run of the through-width deck skipped \
-             (apt-get install calculix-ccx to run it)"
-        );
-    }
-    found
-}
 
 /// w of `node` (1-based) at the ends of the steps (times 1, 2, …) in a CalculiX .dat file.
 fn ccx_w(dat: &str, node: usize) -> Vec<(f64, f64)> {
@@ -436,20 +424,10 @@ fn export_writes_a_deck_calculix_runs_to_the_same_branch() {
         deck.contains(&format!("*CLOAD\n{top}, 3,")),
         "no CLOAD on node {top}"
     );
-    if !ccx_available() {
+    if !common::ccx::available() {
         return;
     }
-    let out = Command::new("ccx")
-        .args(["-i", "tw"])
-        .current_dir(&dir)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "ccx failed: {}",
-        String::from_utf8_lossy(&out.stdout)
-    );
-    let dat = std::fs::read_to_string(dir.join("tw.dat")).unwrap();
+    let dat = common::ccx::run(&dir, "tw");
     let w = ccx_w(&dat, top);
     let json = run_cli(&path, &dir.join("out"));
     for (k, level) in json["levels"].as_array().unwrap().iter().enumerate() {

@@ -2,6 +2,8 @@
 //! tests and the solver benchmarks (`#[path]`-included there). The mesh crate will supersede it.
 #![allow(dead_code)]
 
+pub mod ccx;
+
 use nonlin3d::element::{ElementKind, IntegrationRule, ShapeTable, linear_stiffness};
 use nonlin3d::laminate::Stiffness;
 use nonlin3d::solver::{SymmetricMatrix, SymmetricPattern};
