@@ -365,7 +365,6 @@ fn no_force_needs_no_centre_set() {
     assert!(!deck.contains("*CLOAD"));
 }
 
-
 /// w of `node` (1-based) at the ends of the steps (times 1, 2, …) in a CalculiX .dat file.
 fn ccx_w(dat: &str, node: usize) -> Vec<(f64, f64)> {
     let mut out = Vec::new();

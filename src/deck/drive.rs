@@ -4,8 +4,11 @@
 //! increment and allows no cutback. A linear step is one increment to the end of the period.
 //!
 //! Each increment is one Newton solve: the constraints take every value from step time t0
-//! (λ = 0) to t1 (λ = 1) and Newton solves λ = 1 from the last state (extrapolated by the
-//! previous increment's change, scaled to the new size). An amplitude is evaluated only at
+//! (λ = 0) to t1 (λ = 1) and Newton solves λ = 1 from the last state, moved first by the tangent
+//! predictor when prescribed displacements change (K_ff Δu_f = −K_fc Δu_c, as CalculiX does for
+//! displacement-controlled steps: without it a large increment can land on a spurious
+//! equilibrium, docs/VALIDATION.md), else extrapolated by the previous increment's change,
+//! scaled to the new size. An amplitude is evaluated only at
 //! increment ends, so it is honoured however the increments fall (an elastic state does not
 //! depend on the path).
 
@@ -14,10 +17,8 @@ use super::{IncrementSummary, StepOptions};
 use crate::Error;
 use nonlin3d_mesh::{InpModel, ReadStep};
 use nonlin3d_newton::{
-    NewtonSettings, NonlinearProblem, StructuralProblem, TangentCache, Termination,
-    solve_increment_with,
+    NewtonSettings, PathSolver, StructuralProblem, Termination, predicted_increment,
 };
-use nonlin3d_solver::SymmetricMatrix;
 
 /// The increment control in force in a step: `*CONTROLS, PARAMETERS=TIME INCREMENTATION` or
 /// CalculiX's defaults.
@@ -86,9 +87,9 @@ pub(crate) fn run_step(
     let control = Control::of(step);
     let period = frame.period;
     let eps = 1e-12 * period;
-    let mut solver = settings.solver.build();
-    solver.analyze(&problem.pattern())?;
-    let mut kmat = SymmetricMatrix::zeros(problem.pattern());
+    // One session per step: its kept factorisation serves the next increment's predictor while
+    // the loads run continuously; a new step may change them at once (OP=NEW).
+    let mut session = PathSolver::new(problem, settings.solver)?;
     let mut attempts = Vec::new();
     let mut t = 0.0;
     if let Some(f) = options.initial_increment
@@ -117,23 +118,11 @@ pub(crate) fn run_step(
             dt
         };
         problem.constraints = history.constraints(model, frame, t, t + size)?;
-        let mut trial = u.clone();
-        if let Some((u_prev, d_prev)) = &previous {
-            let f = size / d_prev;
-            for ((x, &a), &b) in trial.iter_mut().zip(u.iter()).zip(u_prev) {
-                *x = a + f * (a - b);
-            }
-        }
-        let mut cache = TangentCache::new();
-        let report = solve_increment_with(
-            problem,
-            &mut trial,
-            1.0,
-            &settings,
-            solver.as_mut(),
-            &mut kmat,
-            &mut cache,
-        )?;
+        let start = u.clone();
+        let secant = previous
+            .as_ref()
+            .map(|(u_prev, d_prev)| (u_prev.as_slice(), size / d_prev));
+        let report = predicted_increment(problem, u, 0.0, 1.0, secant, &settings, &mut session)?;
         let iterations = report.iterations.len();
         let converged = report.converged();
         attempts.push(IncrementSummary::of(
@@ -150,7 +139,7 @@ pub(crate) fn run_step(
                     step.max_increments
                 )));
             }
-            previous = Some((std::mem::replace(u, trial), size));
+            previous = Some((start, size));
             t += size;
             cutbacks = 0;
             on_increment(Converged {

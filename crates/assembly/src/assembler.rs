@@ -20,6 +20,8 @@ use rayon::prelude::*;
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex, TryLockError};
 
+mod product;
+
 /// The cells of one element kind, in sweep order (by highest node rank, then lowest), with what the
 /// kernel and the scatter need of each.
 struct Group {

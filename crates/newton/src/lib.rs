@@ -10,6 +10,7 @@
 //! | [`PathSolver`], [`follow_path_with`] | a solver, tangent and kept factorisation carried over the levels of a sweep |
 //! | [`perturbed_path`] | the thesis's perturbation load, converged with the first level and then removed (§3.2) |
 //! | [`IncrementReport`], [`Termination`] | what happened, iteration by iteration, with the inertia |
+//! | [`Bifurcation`] | a rise of the negative-pivot count the inertia guard accepted as real ([`Stepping::inertia_guard`]) |
 #![deny(missing_docs)]
 #![cfg_attr(
     not(test),
@@ -17,7 +18,9 @@
 )]
 
 mod error;
+mod guard;
 mod path;
+mod predict;
 mod problem;
 mod session;
 mod solve;
@@ -27,9 +30,10 @@ pub use path::{
     PathReport, Stepping, follow_path, follow_path_from, follow_path_with, perturbed_path,
     perturbed_step,
 };
+pub use predict::predicted_increment;
 pub use problem::{NonlinearProblem, StructuralProblem};
 pub use session::PathSolver;
 pub use solve::{
-    IncrementReport, IterationRecord, NewtonSettings, TangentCache, Termination,
+    Bifurcation, IncrementReport, IterationRecord, NewtonSettings, TangentCache, Termination,
     negative_pivots_at, solve_increment, solve_increment_with,
 };

@@ -1,8 +1,11 @@
 //! Load stepping to a list of load-factor targets with cutback and regrowth.
 
+use crate::guard::{InertiaGuard, Verdict};
+use crate::predict::{Prediction, tangent_predictor};
+use crate::solve::iterate;
 use crate::{
-    IncrementReport, NewtonError, NewtonSettings, NonlinearProblem, PathSolver, solve_increment,
-    solve_increment_with,
+    Bifurcation, IncrementReport, NewtonError, NewtonSettings, NonlinearProblem, PathSolver,
+    solve_increment,
 };
 
 /// Increment control.
@@ -21,8 +24,25 @@ pub struct Stepping {
     /// Cutback factor after a failed attempt.
     pub cutback: f64,
     /// Start each increment from the secant extrapolation of the last two converged states
-    /// (u + (u − u_prev)·Δλ/Δλ_prev) instead of the last state.
+    /// (u + (u − u_prev)·Δλ/Δλ_prev) instead of the last state. Used when the tangent
+    /// predictor does not apply (no prescribed value changes): the tangent wins, its error is
+    /// Δλ²/2·u″ against the secant's Δλ(Δλ + Δλ_prev)/2·u″, and it needs no history.
     pub secant_predictor: bool,
+    /// When prescribed values change over an increment, move the free DOFs with them before
+    /// Newton starts: K_ff Δu_f = −(K_fc Δu_c − Δf_ext) with the tangent of the last converged
+    /// state (the factorisation its increment left; [`NonlinearProblem::coupling_force`]).
+    /// Not when a kept tangent serves the increment's first iteration (modified Newton, BFGS):
+    /// that iteration is linearised at or before the start already.
+    pub tangent_predictor: bool,
+    /// Inertia guard: an increment from a stable state (no negative pivot) over which the
+    /// tangent gains negative pivots is refused and cut back while it is larger than this
+    /// fraction of the increment that first showed the rise; at or below it the rise is
+    /// accepted as a real bifurcation and recorded ([`IncrementReport::bifurcation`]). Rises on
+    /// an unstable path are recorded without refusal. 0 = never refuse (rises are still
+    /// recorded when the start's inertia is known: from the predictor's factorisation or an
+    /// earlier increment's). The counts are those of each increment's last factorisation, so
+    /// with a kept tangent (BFGS) only increments that refactor are judged.
+    pub inertia_guard: f64,
 }
 
 impl Default for Stepping {
@@ -35,6 +55,8 @@ impl Default for Stepping {
             easy: 4,
             cutback: 0.5,
             secant_predictor: true,
+            tangent_predictor: true,
+            inertia_guard: 0.25,
         }
     }
 }
@@ -49,6 +71,16 @@ pub struct PathReport {
 }
 
 impl PathReport {
+    /// The rises of the inertia accepted as real ([`IncrementReport::bifurcation`]), each with
+    /// the load factor of the increment that recorded it: a bifurcation (or limit) point lies
+    /// in (`from`, λ].
+    pub fn bifurcations(&self) -> Vec<(f64, Bifurcation)> {
+        self.attempts
+            .iter()
+            .filter_map(|a| a.bifurcation.map(|b| (a.lambda, b)))
+            .collect()
+    }
+
     /// Converged increments where the count of negative pivots changed from the previous one:
     /// (λ before, λ after, pivots before, pivots after). On a symmetric tangent a change marks a
     /// bifurcation or limit point between the two load factors (Sylvester's law of inertia).
@@ -103,6 +135,15 @@ pub fn follow_path_from(
 /// starts from the session's factorisation (the last increment's, or the one
 /// [`PathSolver::inertia_at`] left) instead of factoring anew. A session made for another
 /// pattern or solver kind is made anew.
+///
+/// Each increment whose prescribed values change starts from the tangent predictor
+/// ([`Stepping::tangent_predictor`]) with the factorisation the session holds for the start
+/// state when it has one (the residual there is then taken as converged: after changing dead
+/// loads between calls, [`PathSolver::invalidate`] so that the start is evaluated anew), else
+/// one made there; other increments from the secant extrapolation. A converged increment that
+/// makes a stable path unstable is judged by the inertia guard ([`Stepping::inertia_guard`]):
+/// refused and cut back ([`Termination::InertiaChanged`](crate::Termination)), or accepted
+/// with its [`Bifurcation`] recorded ([`PathReport::bifurcations`]).
 pub fn follow_path_with(
     problem: &mut dyn NonlinearProblem,
     u: &mut Vec<f64>,
@@ -114,9 +155,6 @@ pub fn follow_path_with(
 ) -> Result<PathReport, NewtonError> {
     check_stepping(stepping)?;
     session.fit(problem, settings.solver)?;
-    let PathSolver {
-        solver, k, cache, ..
-    } = session;
     let mut report = PathReport::default();
     let mut lambda = start;
     let mut step = stepping.initial.min(stepping.max);
@@ -125,39 +163,72 @@ pub fn follow_path_with(
     let mut previous: Option<(Vec<f64>, f64)> = None;
     // The factorised tangent (and BFGS pairs) carried between increments when
     // `settings.keep_tangent`; a failed attempt clears it, so its retry starts afresh.
+    let mut guard = InertiaGuard::new(stepping.inertia_guard, session.pivots_at(u));
     for &target in targets {
         while (target - lambda).abs() > 1e-12 * target.abs().max(1.0) {
             let dir = (target - lambda).signum();
             let delta = step.min((target - lambda).abs());
+            let to = lambda + dir * delta;
             let mut trial = u.clone();
-            if let (true, Some((u_prev, d_prev))) = (stepping.secant_predictor, &previous) {
+            // The tangent predictor, unless a kept tangent serves the first iteration (which is
+            // then linearised at or before the start already); or, when the guard lacks the
+            // start's inertia, whether the prescribed values change (then the start's tangent
+            // is factorised for its inertia).
+            let apply = stepping.tangent_predictor && !session.cache.serves(settings);
+            let prediction = if apply || guard.needs_reference() {
+                tangent_predictor(problem, &mut trial, lambda, to, session, apply)?
+            } else {
+                Prediction::NoChange
+            };
+            if prediction != Prediction::NoChange {
+                guard.know(session.pivots_at(u));
+            }
+            let predicted = prediction == Prediction::Moved;
+            let secant = !predicted && stepping.secant_predictor && previous.is_some();
+            if let (true, Some((u_prev, d_prev))) = (secant, &previous) {
                 let f = dir * delta / d_prev;
                 for ((t, &a), &b) in trial.iter_mut().zip(u.iter()).zip(u_prev) {
                     *t = a + f * (a - b);
                 }
             }
-            let attempt = solve_increment_with(
+            let PathSolver {
+                solver, k, cache, ..
+            } = &mut *session;
+            let mut attempt = iterate(
                 problem,
                 &mut trial,
-                lambda + dir * delta,
+                to,
                 settings,
-                solver.as_mut(),
-                k,
-                cache,
+                (solver.as_mut(), k, cache),
+                predicted,
             )?;
-            let converged = attempt.converged();
+            if prediction == Prediction::NoChange && !secant {
+                // Started at u itself: the first factorisation, if one was made, is u's.
+                guard.know(attempt.iterations.first().and_then(|i| i.negative_pivots));
+            }
+            let mut converged = attempt.converged();
             let iterations = attempt.iterations.len();
+            if converged {
+                let next = delta * stepping.cutback;
+                if guard.judge(&mut attempt, lambda, delta, next, stepping.min) == Verdict::Refuse {
+                    // Its factorisation belongs to the refused state: not the retry's tangent.
+                    session.invalidate();
+                    converged = false;
+                }
+            }
             let reason = format!("{:?}", attempt.termination);
+            let pivots = attempt.negative_pivots();
             report.attempts.push(attempt);
             if converged {
+                session.accept(&trial, pivots);
                 previous = Some((std::mem::replace(u, trial), dir * delta));
-                lambda += dir * delta;
-                if iterations <= stepping.easy {
+                lambda = to;
+                if iterations <= stepping.easy && !guard.pending() {
                     step = (step * stepping.grow).min(stepping.max);
                 }
             } else {
                 cutbacks += 1;
-                step *= stepping.cutback;
+                step = delta * stepping.cutback;
                 if step < stepping.min {
                     return Err(NewtonError::Cutback {
                         target,

@@ -16,6 +16,22 @@ pub trait NonlinearProblem {
     /// Completes a Newton increment `du` for DOFs the solve left at zero but that depend on
     /// others (tied slaves: du_s = Σ c·du_m). Default: nothing.
     fn expand(&self, _du: &mut [f64]) {}
+    /// The change of the residual when the load factor goes from `from` to `to` with the free
+    /// DOFs held, linearised at `u` (a state at `from`), into `out`: K_fc(u)·Δu_c − Δf_ext,
+    /// Δu_c = u_c(to) − u_c(from) the change of the prescribed values, zero at constrained
+    /// rows (folded as the residual is). The right-hand side of the tangent predictor
+    /// K_ff Δu_f = −(K_fc Δu_c − Δf_ext) (eq. 2.1.3 linearised at the last converged state).
+    /// Returns false when no prescribed value changes (Newton's first iteration from `u` is
+    /// then that predictor already) — and by default, for problems without the door.
+    fn coupling_force(
+        &mut self,
+        _u: &[f64],
+        _from: f64,
+        _to: f64,
+        _out: &mut [f64],
+    ) -> Result<bool, NewtonError> {
+        Ok(false)
+    }
     /// Residual at (u, λ) into `r` (zero at prescribed entries) and, when given, the tangent
     /// (identity at prescribed entries). Returns a force scale for relative convergence tests
     /// (the largest external or reaction force).
@@ -76,6 +92,44 @@ impl NonlinearProblem for StructuralProblem {
 
     fn expand(&self, du: &mut [f64]) {
         self.constraints.expand_increment(du);
+    }
+
+    /// K(u)·v from the cells that hold a changed prescribed value
+    /// ([`Assembler::tangent_product`]), v = Δu_c including the tied slaves that follow
+    /// prescribed masters or carry an offset; then folded onto the masters (Tᵀ) and zeroed at
+    /// constrained rows like the residual.
+    fn coupling_force(
+        &mut self,
+        u: &[f64],
+        from: f64,
+        to: f64,
+        out: &mut [f64],
+    ) -> Result<bool, NewtonError> {
+        let (mut at_to, mut at_from) = (u.to_vec(), u.to_vec());
+        self.constraints.apply(&mut at_to, to);
+        self.constraints.apply(&mut at_from, from);
+        let v: Vec<f64> = at_to.iter().zip(&at_from).map(|(a, b)| a - b).collect();
+        if v.iter().all(|&x| x == 0.0) {
+            return Ok(false);
+        }
+        let kv = self.assembler.tangent_product(u, &v)?;
+        let (mut f_to, mut f_from) = (vec![0.0; u.len()], vec![0.0; u.len()]);
+        self.constraints.external(to, &mut f_to);
+        self.constraints.external(from, &mut f_from);
+        for (((o, k), a), b) in out.iter_mut().zip(&kv).zip(&f_to).zip(&f_from) {
+            *o = k - (a - b);
+        }
+        for t in self.constraints.ties() {
+            let s = out[t.slave];
+            for &(m, c) in &t.masters {
+                out[m] += c * s;
+            }
+            out[t.slave] = 0.0;
+        }
+        for (d, _) in self.constraints.prescribed() {
+            out[d] = 0.0;
+        }
+        Ok(true)
     }
 
     fn evaluate(

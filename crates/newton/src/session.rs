@@ -6,6 +6,18 @@ use crate::{NewtonError, NonlinearProblem, TangentCache};
 use nonlin3d_solver::{LinearSolver, SolverKind, SymmetricMatrix};
 use std::sync::Arc;
 
+/// What [`PathSolver::start_tangent`] found.
+#[derive(Debug)]
+pub(crate) enum StartTangent {
+    /// The factorisation kept from the increment that reached the state (its residual is
+    /// within that increment's tolerance).
+    Kept,
+    /// A factorisation made at the state, with the residual there.
+    Made(Vec<f64>),
+    /// The tangent at the state is singular: nothing is factorised.
+    Singular,
+}
+
 /// A solver analysed for a problem's sparsity pattern, with the tangent it factors and the
 /// [`TangentCache`] that says whether (and how old) its factorisation is. Made once per
 /// problem and handed to [`follow_path_with`](crate::follow_path_with) level after level; the
@@ -16,6 +28,13 @@ pub struct PathSolver {
     pub(crate) solver: Box<dyn LinearSolver>,
     pub(crate) k: SymmetricMatrix,
     pub(crate) cache: TangentCache,
+    /// The last accepted state this session saw (empty: none): its factorisation, when the
+    /// cache vouches for one, serves as the tangent there (the predictor's), and `pivots` is
+    /// its inertia.
+    pub(crate) state: Vec<f64>,
+    /// Negative pivots at `state` (from the last factorisation of the increment that reached
+    /// it, or one made there).
+    pub(crate) pivots: Option<usize>,
 }
 
 impl PathSolver {
@@ -29,6 +48,8 @@ impl PathSolver {
             solver,
             k: SymmetricMatrix::zeros(pattern),
             cache: TangentCache::new(),
+            state: Vec::new(),
+            pivots: None,
         })
     }
 
@@ -69,7 +90,47 @@ impl PathSolver {
         problem.evaluate(u, lambda, &mut r, Some(&mut self.k))?;
         let pivots = self.solver.factorize(&self.k)?.negative_pivots;
         self.cache = TangentCache::factored_now();
+        self.state = u.to_vec();
+        self.pivots = Some(pivots);
         Ok(pivots)
+    }
+
+    /// Makes sure the solver holds a factorised tangent for the start state `u` of an
+    /// increment: the one kept from the increment that reached `u` (the last factorisation of
+    /// its Newton iterations, as CalculiX reuses it), else one assembled and factorised at `u`
+    /// (which also gives `u`'s inertia and its residual r(u, λ)).
+    pub(crate) fn start_tangent(
+        &mut self,
+        problem: &mut dyn NonlinearProblem,
+        u: &[f64],
+        lambda: f64,
+    ) -> Result<StartTangent, NewtonError> {
+        if self.cache.is_factored() && self.state == u {
+            return Ok(StartTangent::Kept);
+        }
+        self.cache.invalidate();
+        let mut r = vec![0.0; problem.n()];
+        problem.evaluate(u, lambda, &mut r, Some(&mut self.k))?;
+        let Ok(f) = self.solver.factorize(&self.k) else {
+            return Ok(StartTangent::Singular);
+        };
+        self.cache = TangentCache::factored_now();
+        self.state = u.to_vec();
+        self.pivots = Some(f.negative_pivots);
+        Ok(StartTangent::Made(r))
+    }
+
+    /// Records `u` as the last accepted state, with the negative pivots of the increment that
+    /// reached it (None: that increment made no factorisation; the count is kept).
+    pub(crate) fn accept(&mut self, u: &[f64], pivots: Option<usize>) {
+        self.state.clear();
+        self.state.extend_from_slice(u);
+        self.pivots = pivots.or(self.pivots);
+    }
+
+    /// Negative pivots at `u` if it is the last accepted state this session saw.
+    pub(crate) fn pivots_at(&self, u: &[f64]) -> Option<usize> {
+        if self.state == u { self.pivots } else { None }
     }
 
     /// Forgets the factorisation (the next call factors anew).

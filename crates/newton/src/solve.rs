@@ -86,6 +86,31 @@ pub enum Termination {
     NonFinite,
     /// The tangent could not be factored (zero pivot, …): the message names the DOF.
     Singular(String),
+    /// The residual met the tolerance, but the tangent there has more negative pivots
+    /// (`after`) than at the last accepted state (`before`) and the increment was larger than
+    /// the inertia guard accepts ([`Stepping::inertia_guard`](crate::Stepping::inertia_guard)):
+    /// possibly a spurious equilibrium a large step jumped to, so the increment is refused and
+    /// cut back.
+    InertiaChanged {
+        /// Negative pivots at the last accepted state.
+        before: usize,
+        /// Negative pivots at the refused state.
+        after: usize,
+    },
+}
+
+/// A rise of the count of negative pivots accepted as real: it persisted down to the smallest
+/// increment the inertia guard tries, so a bifurcation (or limit) point lies in (`from`, λ] of
+/// the increment that records it (Sylvester's law of inertia on the symmetric tangent, eq.
+/// 2.1.3: an eigenvalue of K_T crossed zero).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Bifurcation {
+    /// Load factor of the last accepted state before the crossing.
+    pub from: f64,
+    /// Negative pivots there.
+    pub before: usize,
+    /// Negative pivots at the end of the increment.
+    pub after: usize,
 }
 
 /// The record of one attempt at one load level.
@@ -101,6 +126,9 @@ pub struct IncrementReport {
     pub iterations: Vec<IterationRecord>,
     /// How it ended.
     pub termination: Termination,
+    /// Set by path following on an accepted increment over which the count of negative pivots
+    /// rose (see [`Bifurcation`]); None otherwise.
+    pub bifurcation: Option<Bifurcation>,
 }
 
 impl IncrementReport {
@@ -157,6 +185,12 @@ impl TangentCache {
         self.factored
     }
 
+    /// Whether the next increment's first iteration will use the kept factorisation rather
+    /// than factor a tangent at its start.
+    pub(crate) fn serves(&self, settings: &NewtonSettings) -> bool {
+        settings.keep_tangent && self.factored && self.age < settings.refactor_every && !self.slow
+    }
+
     /// Records a pair s = Δu, y = Δr unless its curvature yᵀs is not clearly positive.
     fn push_pair(&mut self, s: Vec<f64>, y: Vec<f64>, limit: usize) {
         let ys = dot(&y, &s);
@@ -171,7 +205,7 @@ impl TangentCache {
     }
 
     /// d = −H r by the two-loop recursion with H₀ = K₀⁻¹ (the factorised tangent).
-    fn direction(
+    pub(crate) fn direction(
         &self,
         r: &[f64],
         solver: &mut dyn LinearSolver,
@@ -247,6 +281,25 @@ pub fn solve_increment_with(
     k: &mut SymmetricMatrix,
     cache: &mut TangentCache,
 ) -> Result<IncrementReport, NewtonError> {
+    iterate(problem, u, lambda, settings, (solver, k, cache), false)
+}
+
+/// The Newton iterations of [`solve_increment_with`]; with `iterate_once` at least one
+/// iteration even if the start already meets the tolerance (after the tangent predictor, whose
+/// start may: the iteration's factorisation gives the inertia of the converged state, which
+/// path following and the stability test need).
+pub(crate) fn iterate(
+    problem: &mut dyn NonlinearProblem,
+    u: &mut [f64],
+    lambda: f64,
+    settings: &NewtonSettings,
+    (solver, k, cache): (
+        &mut dyn LinearSolver,
+        &mut SymmetricMatrix,
+        &mut TangentCache,
+    ),
+    iterate_once: bool,
+) -> Result<IncrementReport, NewtonError> {
     if settings.refactor_every == 0 || settings.max_iterations == 0 {
         return Err(NewtonError::Setting {
             name: "refactor_every / max_iterations",
@@ -266,7 +319,7 @@ pub fn solve_increment_with(
     problem.prescribe(u, lambda);
     let mut r = vec![0.0; n];
     // The tangent at u is wanted with the first residual unless a kept one will do.
-    let reuse = cache.factored && cache.age < settings.refactor_every && !cache.slow;
+    let reuse = cache.serves(settings);
     let scale = problem.evaluate(u, lambda, &mut r, if reuse { None } else { Some(k) })?;
     let mut k_current = !reuse;
     let tolerance = settings
@@ -279,16 +332,18 @@ pub fn solve_increment_with(
         tolerance,
         iterations: Vec::new(),
         termination: Termination::MaxIterations,
+        bifurcation: None,
     };
     if !norm.is_finite() {
         report.termination = Termination::NonFinite;
         return Ok(report);
     }
-    if norm <= tolerance {
+    if norm <= tolerance && !iterate_once {
         report.termination = Termination::Converged;
         return Ok(report);
     }
-    let initial = norm;
+    // (The start may meet the tolerance already with `iterate_once`.)
+    let initial = norm.max(tolerance);
     let mut trial_u = vec![0.0; n];
     let mut trial_r = vec![0.0; n];
     for _ in 0..settings.max_iterations {
