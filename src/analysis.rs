@@ -521,7 +521,7 @@ pub fn run(
     let mut problem = build_problem(scene, &model)?;
     let t_setup = t1.elapsed().as_secs_f64();
     let plate = model.kind == ModelKind::Plate;
-    let (factors, _) = load_factors(scene);
+    let (factors, reference) = load_factors(scene);
     // Levels are reported with the scene's own values (λ·reference may differ in the last bit).
     let values = if plate {
         &scene.loads.transverse_n
@@ -626,6 +626,14 @@ pub fn run(
         let mut level = LevelResult::new(value, centre, peak, &attempts, &front, u.clone());
         level.set_negative_pivots(pivots);
         level.convergence.full_newton_fallback = fallback;
+        level.convergence.bifurcation = attempts.iter().find_map(|a| {
+            a.bifurcation.map(|b| Crossing {
+                from: b.from * reference,
+                to: a.lambda * reference,
+                negative_pivots_before: b.before,
+                negative_pivots_after: b.after,
+            })
+        });
         progress(Progress::Level {
             index: k,
             value,

@@ -183,6 +183,19 @@ pub fn table(results: &Results) -> String {
              the growth criterion (faces = overlapped in front_K.csv and results.json)"
         );
     }
+    let what = head;
+    for l in &results.levels {
+        if let Some(b) = l.convergence.bifurcation {
+            let _ = writeln!(
+                s,
+                "bifurcation crossed between {what} {:.6} and {:.6} (negative pivots {} → {})",
+                b.from, b.to, b.negative_pivots_before, b.negative_pivots_after
+            );
+        }
+    }
+    if let Some(at) = results.model.perturbed_at {
+        let _ = writeln!(s, "perturbation applied at {what} {at} (§3.2 protocol)");
+    }
     for w in &results.warnings {
         let _ = writeln!(s, "warning: {w}");
     }

@@ -1,7 +1,7 @@
 //! What an analysis returns; serialised as `results.json` (schema in docs/SCENES.md).
 
 use crate::analysis::Model;
-use nonlin3d_newton::IncrementReport;
+use nonlin3d_newton::{IncrementReport, Termination};
 use nonlin3d_vcct::FrontRelease;
 use serde::Serialize;
 
@@ -132,6 +132,28 @@ pub struct Convergence {
     /// The level was redone with full Newton after BFGS landed on the branch buckled into
     /// the base (`newton = "bfgs"` only).
     pub full_newton_fallback: bool,
+    /// A bifurcation (or limit point) crossed in this level: the tangent gained negative
+    /// pivots between two applied values, kept after the step had been cut down to bracket it
+    /// (the inertia guard). None: none crossed.
+    pub bifurcation: Option<Crossing>,
+    /// Converged increments refused by the inertia guard (a stable state gaining negative
+    /// pivots over a large step) and redone with smaller steps.
+    pub refused_increments: usize,
+}
+
+/// Where the path crossed a bifurcation: between `from` and `to` (strain, or load N) the
+/// count of negative pivots of the tangent went from `negative_pivots_before` to
+/// `negative_pivots_after`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Crossing {
+    /// Last value with the lower count.
+    pub from: f64,
+    /// First value with the higher count.
+    pub to: f64,
+    /// Negative pivots before.
+    pub negative_pivots_before: usize,
+    /// Negative pivots after.
+    pub negative_pivots_after: usize,
 }
 
 /// One strain (or load) level.
@@ -182,6 +204,11 @@ impl LevelResult {
                 negative_pivots: converged.last().and_then(|a| a.negative_pivots()),
                 stable: None,
                 full_newton_fallback: false,
+                bifurcation: None,
+                refused_increments: attempts
+                    .iter()
+                    .filter(|a| matches!(a.termination, Termination::InertiaChanged { .. }))
+                    .count(),
             },
             front: front.iter().map(FrontRow::new).collect(),
             displacements,

@@ -190,6 +190,19 @@ fn unstable_levels_are_flagged_everywhere() {
             .unwrap()
             > 0
     );
+    // The crossing is bracketed (the inertia guard cut the step) and reported, JSON and table.
+    let b = &levels[1]["convergence"]["bifurcation"];
+    let (from, to) = (b["from"].as_f64().unwrap(), b["to"].as_f64().unwrap());
+    assert!(-0.001 >= from && from > to && to >= -0.003, "{b}");
+    assert!(
+        from - to <= 0.5 * 0.002,
+        "bracket {from} … {to} not narrowed"
+    );
+    assert_eq!(b["negative_pivots_before"], 0);
+    assert!(
+        stdout.contains("bifurcation crossed between strain"),
+        "{stdout}"
+    );
     let warnings = json["warnings"].as_array().unwrap();
     assert!(
         warnings
