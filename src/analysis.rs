@@ -4,13 +4,14 @@
 //! Each stage is callable alone: [`build_model`], [`build_problem`], [`solve_level`],
 //! [`front_table`]; [`run`] (or [`Analysis::run`]) strings them together and times them.
 
+pub use crate::model::{Model, ModelKind};
 use crate::scene::{ForceKinematics, Geometry, MapName, NewtonName, Scene, Shape, SolverName};
 use crate::{Error, results::*};
 use nonlin3d_assembly::{Assembler, Constraints};
 use nonlin3d_element::Kinematics;
-use nonlin3d_laminate::{ShearCoupling, Stiffness};
+use nonlin3d_laminate::ShearCoupling;
 use nonlin3d_mesh::{
-    EllipticMap, EmbeddedParams, Front, Imperfection, Mesh, PlyLayout, ThroughWidthParams,
+    EllipticMap, EmbeddedParams, Imperfection, Mesh, PlyLayout, ThroughWidthParams,
     embedded_delamination_with_front, through_width_delamination,
 };
 use nonlin3d_newton::{
@@ -20,40 +21,6 @@ use nonlin3d_newton::{
 use nonlin3d_solver::SolverKind;
 use nonlin3d_vcct::{FrontRelease, cells_above, release_rates};
 use std::time::Instant;
-
-/// Which boundary conditions a model gets (thesis §3.2).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum ModelKind {
-    /// u = 0 on x = 0, v = 0 on y = 0, w = 0 on z = 0, u = W·ε on x = W.
-    Embedded,
-    /// As embedded, y = 0 free (one node fixed in y against the rigid motion).
-    Edge,
-    /// As embedded plus v = 0 on y = W (plane strain).
-    ThroughWidth,
-    /// u = 0 on x = 0, v = 0 on y = 0, w = 0 on z = 0; the central transverse load.
-    Plate,
-}
-
-/// The finite element model of a scene.
-#[derive(Debug, Clone)]
-pub struct Model {
-    /// The mesh (SI units).
-    pub mesh: Mesh,
-    /// The delamination front.
-    pub front: Front,
-    /// Materials as indexed by the cells.
-    pub materials: Vec<Stiffness>,
-    /// Boundary-condition family.
-    pub kind: ModelKind,
-    /// x of the loaded end (u = x_end·ε there), m.
-    pub x_end: f64,
-    /// Sublaminate thickness h, m.
-    pub h: f64,
-    /// Smallest in-plane semi-dimension of the delamination (for the perturbation size), m:
-    /// min(a, b) embedded and edge, the radius for the plate, the half-length a through the
-    /// width.
-    pub a_min: f64,
-}
 
 /// Builds the mesh and front of a scene (with its imperfection, if any).
 pub fn build_model(scene: &Scene) -> Result<Model, Error> {

@@ -1,7 +1,8 @@
 //! What a scene must satisfy before anything is meshed, checked in the scene's own words: field
 //! names as written in the TOML (`geometry.w_mm`, `mesh.slices`) and lengths in mm. The mesh
 //! generators check their parameters too, but in SI units and with their internal names; a scene
-//! that passes these checks never reaches those messages.
+//! that passes these checks never reaches those messages. [`Scene::validate`] and
+//! [`Scene::warnings`] live here.
 
 use crate::Error;
 use crate::scene::{Geometry, Scene, Shape};
@@ -20,6 +21,22 @@ fn positive(name: &str, v: f64) -> Result<(), Error> {
         Ok(())
     } else {
         bad(format!("{name} = {v}: must be positive and finite"))
+    }
+}
+
+impl Scene {
+    /// Checks what the type system cannot, in the scene's words (field names as written, mm):
+    /// positive sizes, a delamination that fits the model, mesh counts in range, loads present
+    /// and used, sensible options (`checks.rs`).
+    pub fn validate(&self) -> Result<(), Error> {
+        scene(self)
+    }
+
+    /// Legal but suspicious input (tensile strains on a buckling model, a sublaminate thicker
+    /// than the base or its span, strains out of order): the run goes ahead; the command line
+    /// prints these and results.json keeps them.
+    pub fn warnings(&self) -> Vec<String> {
+        warnings(self)
     }
 }
 

@@ -13,6 +13,7 @@
 //! | [`solver`] | `nonlin3d-solver` | sparse patterns and matrices, RCM/AMD, profile LDLᵀ, faer Cholesky, inertia (§2.4) |
 //! | [`vcct`] | `nonlin3d-vcct` | G_I, G_II, G_III along the front by virtual crack closure, mixed-mode criteria (§2.8) |
 //! | [`scene`] | this crate | `Scene`: the serde/TOML description of an analysis (docs/SCENES.md) |
+//! | [`model`] | this crate | the finite element model of a scene (mesh, front, materials, boundary-condition family) |
 //! | [`analysis`] | this crate | the pipeline scene → mesh → constraints → Newton (perturbation, strain sweep) → VCCT (§3.2, ch. 5) |
 //! | [`results`], [`report`], [`plot`], [`output`] | this crate | `results.json`, front CSVs, VTU/PVD series, SVG plots; the output folder written level by level, atomically |
 //! | [`export`] | this crate | a scene as a CalculiX deck: the `nonlin3d export` command |
@@ -32,10 +33,12 @@
 #![warn(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
 pub mod analysis;
+mod atomic;
 mod checks;
 pub mod deck;
 pub mod eigen_check;
 pub mod export;
+pub mod model;
 pub mod output;
 pub mod plot;
 pub mod report;

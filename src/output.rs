@@ -8,7 +8,8 @@
 //! converged so far with `"complete": false` and `"stopped"` saying why.
 
 use crate::Error;
-use crate::analysis::Model;
+pub use crate::atomic::{atomically, write_atomic};
+use crate::model::Model;
 use crate::results::{LevelResult, ModelSummary, Results, Timings};
 use nonlin3d_mesh::vtu::{Field, pvd_string, vtu_string};
 use std::path::{Path, PathBuf};
@@ -19,28 +20,6 @@ fn io(path: &Path) -> impl FnOnce(std::io::Error) -> Error + '_ {
         path: path.to_path_buf(),
         source,
     }
-}
-
-/// Writes `path` through a temporary file in the same folder (`.NAME.partial`), synced, then
-/// renamed over `path`: readers see the old file or the new one, never a part.
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), Error> {
-    atomically(path, |tmp| std::fs::write(tmp, bytes).map_err(io(tmp)))
-}
-
-/// Runs `write` on a temporary path beside `path`, syncs the result and renames it into place.
-pub fn atomically(
-    path: &Path,
-    write: impl FnOnce(&Path) -> Result<(), Error>,
-) -> Result<(), Error> {
-    let name = path
-        .file_name()
-        .map_or_else(|| "output".into(), |n| n.to_string_lossy().into_owned());
-    let tmp = path.with_file_name(format!(".{name}.partial"));
-    write(&tmp)?;
-    std::fs::File::open(&tmp)
-        .and_then(|f| f.sync_all())
-        .map_err(io(&tmp))?;
-    std::fs::rename(&tmp, path).map_err(io(path))
 }
 
 /// Files a run writes (and removes from a previous run in the same folder, so no stale

@@ -90,7 +90,7 @@ pub fn levels_csv(results: &Results) -> String {
 /// ([`crate::output::write_atomic`]) and `results.json` last, and records the time in
 /// `results.timings.output_s`.
 pub fn write_all(results: &mut Results, dir: &Path) -> Result<(), Error> {
-    use crate::output::{atomically, write_atomic};
+    use crate::atomic::{atomically, write_atomic};
     let t = Instant::now();
     std::fs::create_dir_all(dir).map_err(io(dir))?;
     write_atomic(&dir.join("levels.csv"), levels_csv(results).as_bytes())?;

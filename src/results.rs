@@ -1,6 +1,6 @@
 //! What an analysis returns; serialised as `results.json` (schema in docs/SCENES.md).
 
-use crate::analysis::Model;
+use crate::model::Model;
 use nonlin3d_newton::{IncrementReport, Termination};
 use nonlin3d_vcct::FrontRelease;
 use serde::Serialize;

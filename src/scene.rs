@@ -538,20 +538,6 @@ impl Scene {
         Self::from_toml(DEFAULT_SCENE)
     }
 
-    /// Checks what the type system cannot, in the scene's words (field names as written, mm):
-    /// positive sizes, a delamination that fits the model, mesh counts in range, loads present
-    /// and used, sensible options (`checks.rs`).
-    pub fn validate(&self) -> Result<(), Error> {
-        crate::checks::scene(self)
-    }
-
-    /// Legal but suspicious input (tensile strains on a buckling model, a sublaminate thicker
-    /// than the base or its span, strains out of order): the run goes ahead; the command line
-    /// prints these and results.json keeps them.
-    pub fn warnings(&self) -> Vec<String> {
-        crate::checks::warnings(self)
-    }
-
     /// The material's ply-axis constants (before homogenisation), and whether it is to be
     /// homogenised quasi-isotropically.
     pub fn ply_material(&self) -> Result<(Orthotropic, Homogenize), Error> {

@@ -40,6 +40,7 @@ mod stiffness;
 
 pub use error::LaminateError;
 pub use orthotropic::Orthotropic;
+pub use rotation::VOIGT_PAIRS;
 pub use rotation::{rotate_voigt, rotation_about_z};
 pub use stack::{Ply, PlyStack};
-pub use stiffness::{ShearCoupling, Stiffness, VOIGT_PAIRS};
+pub use stiffness::{ShearCoupling, Stiffness};

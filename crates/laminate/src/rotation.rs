@@ -1,6 +1,8 @@
 //! Exact rotation of a Voigt stiffness (thesis strain order, engineering shears).
 
-use crate::stiffness::VOIGT_PAIRS;
+/// Tensor index pairs of the six Voigt components in the thesis order (eq. 2.1.4):
+/// xx, yy, zz, xy, yz, xz.
+pub const VOIGT_PAIRS: [(usize, usize); 6] = [(0, 0), (1, 1), (2, 2), (0, 1), (1, 2), (0, 2)];
 
 /// The rotation matrix about z by `theta` radians; its columns are the rotated x, y, z axes.
 pub fn rotation_about_z(theta: f64) -> [[f64; 3]; 3] {

@@ -4,10 +4,6 @@ use crate::LaminateError;
 use crate::rotation::{rotate_voigt, rotation_about_z};
 use nalgebra::Matrix6;
 
-/// Tensor index pairs of the six Voigt components in the thesis order (eq. 2.1.4):
-/// xx, yy, zz, xy, yz, xz.
-pub const VOIGT_PAIRS: [(usize, usize); 6] = [(0, 0), (1, 1), (2, 2), (0, 1), (1, 2), (0, 2)];
-
 /// How a ply rotated about z treats the coupling C56 between γyz and γxz.
 ///
 /// For a ply at angle θ with G13 ≠ G23 the exact rotation gives
