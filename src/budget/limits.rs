@@ -66,17 +66,15 @@ impl Bound {
 impl std::fmt::Display for Bound {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         let b = |x: u64| format_bytes(x.into());
-        write!(f, "{} of {}", self.kind, b(self.cap))?;
+        write!(f, "{} of {} (", self.kind, b(self.cap))?;
         if self.in_use > 0 {
-            write!(
-                f,
-                " ({} in use, {} kept for thread arenas and later allocations)",
-                b(self.in_use),
-                b(self.reserve)
-            )
-        } else {
-            write!(f, " ({} kept for later allocations)", b(self.reserve))
+            write!(f, "{} in use, ", b(self.in_use))?;
         }
+        let why = match self.kind {
+            LimitKind::AddressSpace => "thread arenas and later allocations",
+            _ => "later allocations",
+        };
+        write!(f, "{} kept for {why})", b(self.reserve))
     }
 }
 

@@ -126,6 +126,30 @@ pub(crate) fn try_filled<T: Clone>(
     Ok(v)
 }
 
+/// `len` zeros, or [`SolverError::OutOfMemory`] naming `what`. Zeroed by the allocator (calloc:
+/// fresh pages from the system are not written), so the factor's pages are first touched by
+/// the factorisation, as with `vec![0.0; len]`; [`try_filled`] would write them all at once
+/// (0.5 s for 626 MiB, measured).
+pub(crate) fn try_zeros(len: usize, what: &'static str) -> Result<Vec<f64>, SolverError> {
+    if len == 0 {
+        return Ok(Vec::new());
+    }
+    let oom = || SolverError::OutOfMemory {
+        what,
+        bytes: len.saturating_mul(std::mem::size_of::<f64>()),
+    };
+    let layout = std::alloc::Layout::array::<f64>(len).map_err(|_| oom())?;
+    // SAFETY: `layout` has a non-zero size (len > 0); a null return is the allocator's refusal.
+    let ptr = unsafe { std::alloc::alloc_zeroed(layout) }.cast::<f64>();
+    if ptr.is_null() {
+        return Err(oom());
+    }
+    // SAFETY: `ptr` was allocated by the global allocator with the layout of `len` f64s (the
+    // size and alignment `Vec<f64>` uses for capacity `len`), and all-zero bits are 0.0, so
+    // all `len` elements are initialised.
+    Ok(unsafe { Vec::from_raw_parts(ptr, len, len) })
+}
+
 /// Room for `extra` more elements in `v`, or [`SolverError::OutOfMemory`].
 pub(crate) fn try_room<T>(
     v: &mut Vec<T>,
@@ -288,6 +312,19 @@ mod tests {
 
     #[test]
     fn huge_requests_are_errors_not_aborts() {
+        let e = try_zeros(usize::MAX / 8, "test zeros").unwrap_err();
+        assert!(matches!(
+            e,
+            SolverError::OutOfMemory {
+                what: "test zeros",
+                ..
+            }
+        ));
+        // 2⁶⁰ bytes: a valid layout the system cannot give.
+        assert!(try_zeros(1 << 57, "test").is_err());
+        let z = try_zeros(1000, "test").unwrap();
+        assert!(z.len() == 1000 && z.iter().all(|&v| v == 0.0));
+        assert!(try_zeros(0, "test").unwrap().is_empty());
         let e = try_filled(usize::MAX / 8, 0.0f64, "test vector").unwrap_err();
         assert!(matches!(
             e,

@@ -2,7 +2,7 @@
 //! AMD ordering: LLᵀ for positive definite matrices, LDLᵀ for symmetric indefinite ones.
 //! Symbolic analysis once per pattern, numeric factorisation many times.
 
-use crate::budget::{MemoryBudget, Need, current_budget, try_filled};
+use crate::budget::{MemoryBudget, Need, current_budget, try_zeros};
 use crate::{
     Analysis, Factorization, LinearSolver, SolverError, SymmetricMatrix, SymmetricPattern,
 };
@@ -219,7 +219,7 @@ impl LinearSolver for FaerSolver {
             .iter()
             .map(|&c| (c * c) as f64)
             .sum();
-        self.l_values = try_filled(len, 0.0, "the faer factor")?;
+        self.l_values = try_zeros(len, "the faer factor")?;
         self.symbolic = Some(symbolic);
         self.buffer = Some(buffer);
         self.pattern = Some(pattern.clone());

@@ -21,7 +21,7 @@ impl SymmetricMatrix {
     /// A zero matrix on `pattern`, or [`SolverError::OutOfMemory`] if the system refuses the
     /// memory (8 bytes per stored entry).
     pub fn try_zeros(pattern: Arc<SymmetricPattern>) -> Result<Self, SolverError> {
-        let values = crate::budget::try_filled(pattern.nnz_lower(), 0.0, "the matrix values")?;
+        let values = crate::budget::try_zeros(pattern.nnz_lower(), "the matrix values")?;
         Ok(Self { pattern, values })
     }
 

@@ -11,7 +11,7 @@
 //! CPU has them. No pivoting: the inertia (count of d_i < 0) is exact by Sylvester's law
 //! whenever the factorisation exists; a pivot |d_i| ≤ tolerance·|a_ii| is an error.
 
-use crate::budget::{MemoryBudget, Need, current_budget, try_filled, try_room};
+use crate::budget::{MemoryBudget, Need, current_budget, try_filled, try_room, try_zeros};
 use crate::ordering::first_columns;
 use crate::{
     Analysis, Factorization, LinearSolver, Permutation, SolverError, SymmetricMatrix,
@@ -187,7 +187,7 @@ impl LinearSolver for ProfileLdlt {
             }
         }
         let stats = envelope_stats(pattern, &perm);
-        self.env = try_filled(total, 0.0, "the profile envelope")?;
+        self.env = try_zeros(total, "the profile envelope")?;
         self.dinv = try_filled(n, 0.0, "the pivots")?;
         self.scale = try_filled(n, 0.0, "the pivot scales")?;
         self.work = try_filled(n, 0.0, "the solve vector")?;
