@@ -71,7 +71,7 @@ impl std::fmt::Display for Bound {
             write!(f, "{} in use, ", b(self.in_use))?;
         }
         let why = match self.kind {
-            LimitKind::AddressSpace => "thread arenas and later allocations",
+            LimitKind::AddressSpace => "thread arenas, packing buffers and later allocations",
             _ => "later allocations",
         };
         write!(f, "{} kept for {why})", b(self.reserve))
@@ -93,6 +93,20 @@ pub struct Readings {
     pub vm_rss: u64,
     /// Worker threads that allocate (rayon's pool).
     pub threads: usize,
+    /// The packing buffer faer's dense kernels (private-gemm on x86-64) allocate, without a way
+    /// to fail, in each thread that factors: twice the L3 cache, bytes.
+    pub gemm_buffer: u64,
+}
+
+/// A sysfs cache size ("32768K", "2M"), bytes.
+pub(super) fn cache_size(text: &str) -> Option<u64> {
+    let t = text.trim();
+    let (num, scale) = match t.chars().last()? {
+        'K' => (&t[..t.len() - 1], 1024),
+        'M' => (&t[..t.len() - 1], 1024 * 1024),
+        _ => (t, 1),
+    };
+    num.parse::<u64>().ok()?.checked_mul(scale)
 }
 
 /// The value of `key` (e.g. "MemAvailable:") in a /proc text of "key value kB" lines, bytes.
@@ -181,6 +195,12 @@ impl Readings {
             vm_size: proc_kib(&status, "VmSize:").unwrap_or(0),
             vm_rss: proc_kib(&status, "VmRSS:").unwrap_or(0),
             threads: rayon::current_num_threads(),
+            gemm_buffer: if cfg!(target_arch = "x86_64") {
+                let l3 = text("/sys/devices/system/cpu/cpu0/cache/index3/size");
+                2 * cache_size(&l3).unwrap_or(32 * MIB)
+            } else {
+                0
+            },
         }
     }
 }
@@ -198,9 +218,11 @@ impl Limit {
         Self::default()
     }
 
-    /// The limits from `readings` and `--max-memory`. Under RLIMIT_AS the thread arenas not
-    /// yet reserved (64 MiB each, glibc) are kept in reserve: the address space not resident
-    /// (VmSize − VmRSS) is taken as arenas already there.
+    /// The limits from `readings` and `--max-memory`. Under RLIMIT_AS the address space that
+    /// will be reserved without being used is kept in reserve: the malloc arenas of the worker
+    /// threads (64 MiB each, glibc; the main thread allocates from the brk heap) and one dense
+    /// packing buffer ([`Readings::gemm_buffer`]), less what of them is already there (taken as
+    /// the address space not resident, VmSize − VmRSS).
     pub fn from_readings(max_memory: Option<u64>, r: &Readings) -> Self {
         let mut bounds = Vec::new();
         let bound = |kind, cap, in_use, reserve| Bound {
@@ -216,7 +238,7 @@ impl Limit {
             bounds.push(bound(LimitKind::Available, cap, 0, 0));
         }
         if let Some(cap) = r.address_space {
-            let arenas = ARENA * (r.threads as u64 + 1);
+            let arenas = ARENA * r.threads as u64 + r.gemm_buffer;
             let reserved = r.vm_size.saturating_sub(r.vm_rss);
             bounds.push(bound(
                 LimitKind::AddressSpace,

@@ -1,7 +1,9 @@
 //! Unit tests of `budget`: sizes, limits, estimates and refusals.
 #![allow(clippy::unwrap_used, clippy::panic)]
 
-use super::limits::{ARENA, SLACK, address_space_limit, cgroup_bound, cgroup_limit, proc_kib};
+use super::limits::{
+    ARENA, SLACK, address_space_limit, cache_size, cgroup_bound, cgroup_limit, proc_kib,
+};
 use super::*;
 use crate::scene::DEFAULT_SCENE;
 use nonlin3d_solver::{FaerMode, FaerSolver, LinearSolver, SolverError};
@@ -61,6 +63,9 @@ fn proc_texts_are_read() {
         "v1's 'no limit'"
     );
     assert_eq!(cgroup_limit("2147483648\n"), Some(2 * GIB));
+    assert_eq!(cache_size("32768K\n"), Some(32 * MIB));
+    assert_eq!(cache_size("2M"), Some(2 * MIB));
+    assert_eq!(cache_size("x"), None);
 }
 
 /// The tightest limit on the way to the root is the cgroup's, with the usage of the cgroup that
@@ -91,6 +96,7 @@ fn readings() -> Readings {
         vm_size: 300 * MIB,
         vm_rss: 100 * MIB,
         threads: 2,
+        gemm_buffer: 64 * MIB,
     }
 }
 
@@ -99,13 +105,22 @@ fn readings() -> Readings {
 #[test]
 fn the_limit_is_the_smallest_of_its_sources() {
     let r = readings();
-    // Address space: 4 GiB − 300 MiB in use − (3 arenas of 64 MiB − 200 MiB not resident, ≥ 0)
-    // − the slack.
+    // Address space: 4 GiB − 300 MiB in use − (2 arenas and a packing buffer − 200 MiB not
+    // resident, ≥ 0) − the slack; with 4 threads, 120 MiB are still to come.
     let l = Limit::from_readings(None, &r);
     let t = l.tightest().unwrap();
     assert_eq!(t.kind, LimitKind::AddressSpace);
-    let arenas = (ARENA * 3).saturating_sub(200 * MIB);
+    let arenas = (ARENA * 2 + 64 * MIB).saturating_sub(200 * MIB);
     assert_eq!(t.left(), 4 * GIB - 300 * MIB - arenas - SLACK);
+    let four = Readings {
+        threads: 4,
+        ..r.clone()
+    };
+    let arenas = (ARENA * 4 + 64 * MIB).saturating_sub(200 * MIB);
+    assert_eq!(
+        Limit::from_readings(None, &four).left(),
+        Some(4 * GIB - 300 * MIB - arenas - SLACK)
+    );
     assert_eq!(l.left(), Some(t.left()));
     // --max-memory below it, against the resident size.
     let l = Limit::from_readings(Some(GIB), &r);
