@@ -31,9 +31,10 @@ pub(crate) fn is_zero_pivot(d: f64, tolerance: f64, scale: f64) -> bool {
     !d.is_finite() || d.abs() <= tolerance * scale
 }
 
-/// Default cap on envelope entries: none. What the envelope may take is the memory budget's
-/// call ([`crate::budget`]), which knows the machine; a fixed cap did not.
-pub const DEFAULT_MAX_ENTRIES: usize = usize::MAX;
+/// Default cap on envelope entries, 3·2²⁷ (3 GiB of f64), kept as the upper bound the
+/// benchmarks and callers rely on; whether an envelope fits in memory is the memory budget's
+/// call ([`crate::budget`]), which knows the machine, checked as well.
+pub const DEFAULT_MAX_ENTRIES: usize = 3 << 27;
 
 /// How the profile solver orders the equations.
 #[derive(Debug, Clone, PartialEq, Eq, Default)]
