@@ -25,6 +25,8 @@ use std::time::Instant;
 /// Builds the mesh and front of a scene (with its imperfection, if any).
 pub fn build_model(scene: &Scene) -> Result<Model, Error> {
     scene.validate()?;
+    // Nodes and cells estimated from the scene before anything is allocated.
+    crate::budget::check_mesh(scene, &crate::budget::limit())?;
     let mm = 1e-3;
     let c = &scene.mesh;
     let kind = c
@@ -481,6 +483,8 @@ pub fn run(
     scene: &Scene,
     progress: &mut dyn FnMut(Progress) -> Result<(), Error>,
 ) -> Result<Results, Error> {
+    // The whole run (tangent and factor too) estimated before meshing.
+    crate::budget::check_scene(scene, &crate::budget::limit())?;
     let t0 = Instant::now();
     let model = build_model(scene)?;
     let t_mesh = t0.elapsed().as_secs_f64();

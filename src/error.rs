@@ -36,6 +36,18 @@ pub enum Error {
         /// What the system said.
         source: std::io::Error,
     },
+    /// The model would not fit in the memory the process may use: the estimate, the limit and
+    /// the scene fields that set the size (`budget`).
+    #[error("{0}")]
+    TooLarge(Box<crate::budget::Refusal>),
+    /// A memory size that cannot be read (`--max-memory`).
+    #[error("memory size '{text}': {reason}")]
+    MemorySize {
+        /// The text given.
+        text: String,
+        /// What is wrong with it.
+        reason: String,
+    },
     /// A numerical step produced no answer (named).
     #[error("{0}")]
     Numerical(String),

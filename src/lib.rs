@@ -19,6 +19,7 @@
 //! | [`export`] | this crate | a scene as a CalculiX deck: the `nonlin3d export` command |
 //! | [`deck`] | this crate | solving an Abaqus/CalculiX deck: the `nonlin3d solve` command |
 //! | [`eigen_check`] | this crate | the element eigen-check (§2.5): `nonlin3d eigen-check` |
+//! | [`budget`] | this crate | memory limits (`--max-memory`, available memory, RLIMIT_AS, cgroup) and a model's size before it is built |
 //!
 //! Substructuring and contact come as their own crates in later releases.
 //!
@@ -34,6 +35,7 @@
 
 pub mod analysis;
 mod atomic;
+pub mod budget;
 mod checks;
 pub mod deck;
 pub mod eigen_check;

@@ -4,6 +4,8 @@
 //!   none, the thesis's reference case (30 mm circle, ε = −0.001 … −0.005). Prints a table,
 //!   writes `DIR/results.json`, `front_K.csv`, `model.pvd` + `model_K.vtu`, SVG plots.
 //! - `nonlin3d export SCENE.toml --inp FILE`: the scene as a CalculiX deck.
+//! - `run` and `export` take `--max-memory SIZE` (2GiB, 500MB): the run stays below it and
+//!   below the machine's and the process's own limits, or stops with the estimate.
 //! - `nonlin3d eigen-check`: the element eigen-check of thesis §2.5.
 //! - `nonlin3d solve DECK.inp --out DIR`: solves an Abaqus/CalculiX deck (the subset in
 //!   docs/DECKS.md; linear or NLGEOM static steps) and writes `DIR/displacements.csv`,
@@ -45,6 +47,10 @@ enum Command {
         /// No progress bar.
         #[arg(long)]
         quiet: bool,
+        /// Memory the run may use (2GiB, 500MB, 1.5G); the machine's and the process's own
+        /// limits apply as well.
+        #[arg(long, value_parser = nonlin3d::budget::parse_size)]
+        max_memory: Option<u64>,
     },
     /// Write a scene as an Abaqus/CalculiX deck.
     Export {
@@ -53,6 +59,9 @@ enum Command {
         /// The deck to write.
         #[arg(long)]
         inp: PathBuf,
+        /// Memory the export may use (2GiB, 500MB, 1.5G).
+        #[arg(long, value_parser = nonlin3d::budget::parse_size)]
+        max_memory: Option<u64>,
     },
     /// Zero-energy modes of distorted Hex20/Hex8 elements under each rule (thesis §2.5).
     EigenCheck,
@@ -74,6 +83,7 @@ enum Command {
 }
 
 fn solve(deck: &Path, out: &Path, tolerance: f64, increment: Option<f64>) -> Result<(), Failure> {
+    nonlin3d::budget::install(None);
     let model = nonlin3d::mesh::read_inp_file(deck)
         .map_err(|e| Failure::Input(nonlin3d::Error::from(e)))?;
     let options = nonlin3d::deck::StepOptions {
@@ -183,9 +193,15 @@ fn stop_on_signals(_: nonlin3d::output::InterruptHandle) -> Result<(), nonlin3d:
     Ok(())
 }
 
-fn run(scene: Option<&Path>, out: &Path, quiet: bool) -> Result<(), Failure> {
+fn run(
+    scene: Option<&Path>,
+    out: &Path,
+    quiet: bool,
+    max_memory: Option<u64>,
+) -> Result<(), Failure> {
     use indicatif::{ProgressBar, ProgressStyle};
     use nonlin3d::analysis::Progress;
+    nonlin3d::budget::install(max_memory);
     let scene = read_scene(scene).map_err(Failure::Input)?;
     let quantity = if matches!(scene.geometry, nonlin3d::scene::Geometry::Plate { .. }) {
         "load_n"
@@ -256,7 +272,8 @@ fn run(scene: Option<&Path>, out: &Path, quiet: bool) -> Result<(), Failure> {
     Ok(())
 }
 
-fn export(scene: &Path, inp: &Path) -> Result<(), Failure> {
+fn export(scene: &Path, inp: &Path, max_memory: Option<u64>) -> Result<(), Failure> {
+    nonlin3d::budget::install(max_memory);
     let scene = read_scene(Some(scene)).map_err(Failure::Input)?;
     for w in scene.warnings() {
         eprintln!("nonlin3d: warning: {w}");
@@ -270,9 +287,18 @@ fn export(scene: &Path, inp: &Path) -> Result<(), Failure> {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
-        None => run(None, Path::new("nonlin3d-out"), false),
-        Some(Command::Run { scene, out, quiet }) => run(scene.as_deref(), &out, quiet),
-        Some(Command::Export { scene, inp }) => export(&scene, &inp),
+        None => run(None, Path::new("nonlin3d-out"), false, None),
+        Some(Command::Run {
+            scene,
+            out,
+            quiet,
+            max_memory,
+        }) => run(scene.as_deref(), &out, quiet, max_memory),
+        Some(Command::Export {
+            scene,
+            inp,
+            max_memory,
+        }) => export(&scene, &inp, max_memory),
         Some(Command::EigenCheck) => nonlin3d::eigen_check::run()
             .map(|rows| print!("{}", nonlin3d::eigen_check::report(&rows)))
             .map_err(Failure::Run),

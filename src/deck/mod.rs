@@ -160,6 +160,7 @@ fn hex20_rule(model: &InpModel) -> Result<IntegrationRule, Error> {
 
 /// Solves every step of `model` in order.
 pub fn solve_deck(model: &InpModel, options: &StepOptions) -> Result<Vec<StepResult>, Error> {
+    crate::budget::check_deck(&model.mesh, &crate::budget::limit())?;
     let (mesh, materials) = oriented(model)?;
     let rule = hex20_rule(model)?;
     let n = 3 * mesh.nodes.len();

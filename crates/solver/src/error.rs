@@ -1,5 +1,7 @@
 //! The error type of `nonlin3d-solver`.
 
+use crate::budget::format_bytes;
+
 /// What can go wrong building, assembling, ordering or factoring a sparse system. Variants
 /// name the equation (position in the factor's order) and the DOF (the caller's index).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -79,6 +81,42 @@ pub enum SolverError {
         entries: usize,
         /// The limit.
         limit: usize,
+    },
+    /// The factor, its workspace and the matrix it factors would exceed the memory budget
+    /// (`crate::budget`); found by the symbolic analysis, before anything is allocated.
+    #[error(
+        "the {what} needs {entries} entries ({}) plus {} of workspace and {} for the matrix it \
+         factors: {} in all, more than the {} allowed by {limit}",
+        format_bytes(*factor_bytes as u128),
+        format_bytes(*workspace_bytes as u128),
+        format_bytes(*matrix_bytes as u128),
+        format_bytes(*factor_bytes as u128 + *workspace_bytes as u128 + *matrix_bytes as u128),
+        format_bytes(*budget as u128)
+    )]
+    OverBudget {
+        /// Which factor.
+        what: &'static str,
+        /// Stored entries of the factor.
+        entries: usize,
+        /// Bytes of the factor's values.
+        factor_bytes: usize,
+        /// Bytes of workspace.
+        workspace_bytes: usize,
+        /// Bytes of the matrix of values on the pattern.
+        matrix_bytes: usize,
+        /// The budget, bytes.
+        budget: usize,
+        /// What sets the budget, in words.
+        limit: String,
+    },
+    /// The system refused memory for an allocation (a `try_reserve` failed, or faer's
+    /// symbolic analysis ran out of memory).
+    #[error("out of memory: the system refused the {} asked for {what}", format_bytes(*bytes as u128))]
+    OutOfMemory {
+        /// What was being allocated.
+        what: &'static str,
+        /// Bytes asked for (for faer's symbolic analysis: its index arrays, a lower bound).
+        bytes: usize,
     },
     /// faer reported a failure outside the cases above.
     #[error("faer: {0}")]

@@ -2,6 +2,7 @@
 //! AMD ordering: LLᵀ for positive definite matrices, LDLᵀ for symmetric indefinite ones.
 //! Symbolic analysis once per pattern, numeric factorisation many times.
 
+use crate::budget::{MemoryBudget, Need, current_budget, try_zeros};
 use crate::{
     Analysis, Factorization, LinearSolver, SolverError, SymmetricMatrix, SymmetricPattern,
 };
@@ -51,6 +52,9 @@ pub struct FaerSolver {
     pub tolerance: f64,
     /// Threads for the numeric phase: `Par::Seq` or `Par::rayon(k)`.
     pub par: Par,
+    /// Bytes the factor, its workspace and the matrix may take; `None`: the process-wide
+    /// budget ([`crate::set_memory_budget`]), if any.
+    pub memory_budget: Option<MemoryBudget>,
     pattern: Option<Arc<SymmetricPattern>>,
     symbolic: Option<SymbolicCholesky<usize>>,
     l_values: Vec<f64>,
@@ -83,6 +87,7 @@ impl FaerSolver {
             structure: FaerStructure::Auto,
             tolerance: crate::profile::DEFAULT_PIVOT_TOLERANCE,
             par: Par::Seq,
+            memory_budget: None,
             pattern: None,
             symbolic: None,
             l_values: Vec::new(),
@@ -168,8 +173,20 @@ impl LinearSolver for FaerSolver {
             supernodal_flop_ratio_threshold: threshold,
             ..Default::default()
         };
+        // Whatever an earlier analysis holds goes first: the new factor may need the room.
+        self.symbolic = None;
+        self.buffer = None;
+        self.l_values = Vec::new();
+        self.pattern = None;
+        self.factored = false;
         let symbolic = factorize_symbolic_cholesky(a, Side::Lower, SymmetricOrdering::Amd, params)
-            .map_err(|e| SolverError::Faer(format!("symbolic analysis: {e:?}")))?;
+            .map_err(|e| match e {
+                faer::sparse::FaerError::OutOfMemory => SolverError::OutOfMemory {
+                    what: "faer's symbolic analysis",
+                    bytes: 2 * std::mem::size_of::<usize>() * (pattern.nnz_lower() + n + 1),
+                },
+                other => SolverError::Faer(format!("symbolic analysis: {other:?}")),
+            })?;
         let req = match self.mode {
             FaerMode::Ldlt => {
                 symbolic.factorize_numeric_ldlt_scratch::<f64>(self.par, Default::default())
@@ -179,18 +196,30 @@ impl LinearSolver for FaerSolver {
             }
         }
         .or(symbolic.solve_in_place_scratch::<f64>(RHS_BLOCK, self.par));
-        let buffer = MemBuffer::try_new(req).map_err(|_| SolverError::TooLarge {
-            what: "faer workspace",
-            entries: req.size_bytes() / 8,
-            limit: crate::profile::DEFAULT_MAX_ENTRIES,
-        })?;
         let len = symbolic.len_val();
+        let f64s = |k: usize| k.saturating_mul(std::mem::size_of::<f64>());
+        Need {
+            what: match self.mode {
+                FaerMode::Ldlt => "faer LDLᵀ factor",
+                FaerMode::Llt => "faer LLᵀ factor",
+            },
+            entries: len,
+            factor_bytes: f64s(len),
+            // The scratch, and the permutation copy and diagonal each factorisation makes.
+            workspace_bytes: req.size_bytes().saturating_add(f64s(2 * n)),
+            matrix_bytes: f64s(pattern.nnz_lower()),
+        }
+        .check(current_budget(self.memory_budget.as_ref()))?;
+        let buffer = MemBuffer::try_new(req).map_err(|_| SolverError::OutOfMemory {
+            what: "faer's workspace",
+            bytes: req.size_bytes(),
+        })?;
         // Flops of the numeric phase: Σ_k c_k² over the factor's column counts c_k.
         let flops = column_counts(&symbolic)
             .iter()
             .map(|&c| (c * c) as f64)
             .sum();
-        self.l_values = vec![0.0; len];
+        self.l_values = try_zeros(len, "the faer factor")?;
         self.symbolic = Some(symbolic);
         self.buffer = Some(buffer);
         self.pattern = Some(pattern.clone());

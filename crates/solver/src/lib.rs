@@ -9,6 +9,7 @@
 //! | [`ProfileLdlt`] | envelope LDLᵀ, RCM ordered, SIMD inner products |
 //! | [`FaerSolver`] | faer LDLᵀ / LLᵀ with AMD, supernodal or simplicial |
 //! | [`LinearSolver`], [`SolverKind`] | the common interface; [`Factorization::negative_pivots`] is the inertia |
+//! | [`MemoryBudget`], [`set_memory_budget`] | the bytes a factorisation may take, checked by `analyze` before allocating |
 //!
 //! ```
 //! use nonlin3d_solver::{LinearSolver, ProfileLdlt, SymmetricMatrix, SymmetricPattern};
@@ -32,6 +33,7 @@
     warn(clippy::unwrap_used, clippy::expect_used, clippy::panic)
 )]
 
+pub mod budget;
 mod error;
 mod faer_backend;
 mod matrix;
@@ -39,6 +41,7 @@ mod ordering;
 pub mod profile;
 mod solver;
 
+pub use budget::{MemoryBudget, set_memory_budget};
 pub use error::SolverError;
 pub use faer_backend::{FaerMode, FaerSolver, FaerStructure};
 pub use matrix::SymmetricMatrix;

@@ -18,6 +18,13 @@ impl SymmetricMatrix {
         Self { pattern, values }
     }
 
+    /// A zero matrix on `pattern`, or [`SolverError::OutOfMemory`] if the system refuses the
+    /// memory (8 bytes per stored entry).
+    pub fn try_zeros(pattern: Arc<SymmetricPattern>) -> Result<Self, SolverError> {
+        let values = crate::budget::try_zeros(pattern.nnz_lower(), "the matrix values")?;
+        Ok(Self { pattern, values })
+    }
+
     /// A matrix from its lower-triangle values (in the pattern's order).
     pub fn from_values(
         pattern: Arc<SymmetricPattern>,

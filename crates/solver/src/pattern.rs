@@ -1,6 +1,7 @@
 //! The sparsity pattern of a symmetric matrix, built once from element connectivity.
 
 use crate::SolverError;
+use crate::budget::{try_filled, try_room};
 
 /// The lower triangle (diagonal included) of a symmetric n×n sparsity pattern in compressed
 /// sparse columns: column j holds rows `row_idx[col_ptr[j]..col_ptr[j + 1]]`, sorted, the first
@@ -23,7 +24,7 @@ impl SymmetricPattern {
     /// duplicates, so a 150 000-DOF Hex20 model (~18 M entries) builds in a fraction of a second.
     pub fn from_dof_lists<L: AsRef<[usize]>>(n: usize, lists: &[L]) -> Result<Self, SolverError> {
         // DOF → lists containing it (CSR).
-        let mut count = vec![0usize; n + 1];
+        let mut count = try_filled(n + 1, 0usize, "the pattern's DOF index")?;
         for (list, dofs) in lists.iter().enumerate() {
             for &dof in dofs.as_ref() {
                 if dof >= n {
@@ -36,19 +37,30 @@ impl SymmetricPattern {
             count[i + 1] += count[i];
         }
         let mut fill = count.clone();
-        let mut lists_of = vec![0usize; count[n]];
+        let mut lists_of = try_filled(count[n], 0usize, "the pattern's DOF index")?;
         for (list, dofs) in lists.iter().enumerate() {
             for &dof in dofs.as_ref() {
                 lists_of[fill[dof]] = list;
                 fill[dof] += 1;
             }
         }
-        let mut marker = vec![usize::MAX; n];
-        let mut col_ptr = Vec::with_capacity(n + 1);
-        let mut row_idx = Vec::new();
+        drop(fill);
+        let mut marker = try_filled(n, usize::MAX, "the pattern's markers")?;
+        let mut col_ptr = Vec::new();
+        try_room(&mut col_ptr, n + 1, "the pattern's column pointers")?;
+        let mut row_idx: Vec<usize> = Vec::new();
         col_ptr.push(0);
         for j in 0..n {
             let start = row_idx.len();
+            // Room for the whole column before it is filled: at most the DOFs of its lists.
+            let most = 1 + lists_of[count[j]..count[j + 1]]
+                .iter()
+                .map(|&l| lists[l].as_ref().len())
+                .sum::<usize>();
+            if row_idx.capacity() - row_idx.len() < most {
+                let grow = most.max(row_idx.len() / 2);
+                try_room(&mut row_idx, grow, "the pattern's row indices")?;
+            }
             row_idx.push(j);
             marker[j] = j;
             for &list in &lists_of[count[j]..count[j + 1]] {
@@ -62,6 +74,7 @@ impl SymmetricPattern {
             row_idx[start + 1..].sort_unstable();
             col_ptr.push(row_idx.len());
         }
+        row_idx.shrink_to_fit();
         Ok(Self {
             n,
             col_ptr,
