@@ -74,6 +74,7 @@ enum Command {
 }
 
 fn solve(deck: &Path, out: &Path, tolerance: f64, increment: Option<f64>) -> Result<(), Failure> {
+    use nonlin3d::deck::Progress;
     let model = nonlin3d::mesh::read_inp_file(deck)
         .map_err(|e| Failure::Input(nonlin3d::Error::from(e)))?;
     let options = nonlin3d::deck::StepOptions {
@@ -83,21 +84,40 @@ fn solve(deck: &Path, out: &Path, tolerance: f64, increment: Option<f64>) -> Res
         },
         initial_increment: increment,
     };
-    let results = nonlin3d::deck::solve_deck(&model, &options).map_err(Failure::Run)?;
-    nonlin3d::deck::write_results(out, &model, &results).map_err(Failure::Run)?;
-    for r in &results {
-        let iterations: usize = r.increments.iter().map(|i| i.iterations).sum();
-        let done = r.increments.iter().filter(|i| i.converged).count();
-        println!(
-            "step {}: {done} increments ({} attempts), {iterations} iterations{}",
-            r.step,
-            r.increments.len(),
-            if r.nlgeom { " (NLGEOM)" } else { "" }
-        );
-    }
+    // Bad input (no step, an inverted element, …) and an output folder that cannot be written
+    // are found before anything is solved; each increment lands there as it converges.
+    nonlin3d::deck::check(&model, &options).map_err(Failure::Input)?;
+    let mut output = nonlin3d::deck::DeckOutput::create(out, &model).map_err(Failure::Input)?;
+    stop_on_signals(output.interrupt_handle()).map_err(Failure::Run)?;
     for n in &model.not_used {
         println!("not used: {}, {}: {}", n.at, n.keyword, n.reason);
     }
+    let outcome = nonlin3d::deck::solve_deck_with(&model, &options, &mut |p| {
+        if let Progress::Step(r) = p {
+            let iterations: usize = r.increments.iter().map(|i| i.iterations).sum();
+            let done = r.increments.iter().filter(|i| i.converged).count();
+            println!(
+                "step {}: {done} increments ({} attempts), {iterations} iterations{}",
+                r.step,
+                r.increments.len(),
+                if r.nlgeom { " (NLGEOM)" } else { "" }
+            );
+        }
+        output.progress(p)
+    });
+    let results = match outcome {
+        Ok(r) => r,
+        Err(e) => {
+            // Keep what converged, say why it stopped; the write error (if any) is secondary.
+            let _ = output.failed(&e);
+            return Err(Failure::Run(nonlin3d::Error::Numerical(format!(
+                "{e}\n(the increments converged before are in {}, summary.json \"complete\": \
+                 false)",
+                out.display()
+            ))));
+        }
+    };
+    output.finish(&results).map_err(Failure::Run)?;
     println!("results in {}", out.display());
     Ok(())
 }

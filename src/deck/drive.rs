@@ -65,10 +65,12 @@ pub(crate) struct Converged<'a> {
     pub last: bool,
     pub u: &'a [f64],
     pub problem: &'a mut StructuralProblem,
+    /// Every attempt of the step so far.
+    pub attempts: &'a [IncrementSummary],
 }
 
-/// Runs step `k` (0-based) from `u` (updated to its end), calling `on_increment` after each
-/// converged increment. Returns every attempt.
+/// Runs step `k` (0-based) from `u` (updated to its end), appending every attempt to
+/// `attempts` and calling `on_increment` with each converged increment.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn run_step(
     model: &InpModel,
@@ -78,8 +80,9 @@ pub(crate) fn run_step(
     problem: &mut StructuralProblem,
     u: &mut Vec<f64>,
     options: &StepOptions,
+    attempts: &mut Vec<IncrementSummary>,
     on_increment: &mut dyn FnMut(Converged<'_>) -> Result<(), Error>,
-) -> Result<Vec<IncrementSummary>, Error> {
+) -> Result<(), Error> {
     let step = &model.steps[k];
     let p = &step.procedure;
     let settings = newton_settings(&options.newton, step);
@@ -89,15 +92,7 @@ pub(crate) fn run_step(
     let mut solver = settings.solver.build();
     solver.analyze(&problem.pattern())?;
     let mut kmat = SymmetricMatrix::zeros(problem.pattern());
-    let mut attempts = Vec::new();
     let mut t = 0.0;
-    if let Some(f) = options.initial_increment
-        && !(f > 0.0 && f <= 1.0)
-    {
-        return Err(Error::Numerical(format!(
-            "initial increment {f}: expected a fraction of the step period in (0, 1]"
-        )));
-    }
     let mut dt = match (step.nlgeom, options.initial_increment) {
         (false, _) => period,
         (true, None) => p.initial,
@@ -159,6 +154,7 @@ pub(crate) fn run_step(
                 last: period - t <= eps,
                 u,
                 problem,
+                attempts,
             })?;
             if p.direct || !step.nlgeom {
                 continue;
@@ -207,5 +203,5 @@ pub(crate) fn run_step(
             }
         }
     }
-    Ok(attempts)
+    Ok(())
 }
