@@ -14,8 +14,9 @@
 //!
 //! Exit status: 0 complete; 1 the analysis (or writing its results) failed; 2 bad input (scene,
 //! deck, arguments, an output folder that cannot be written); 130 interrupted by SIGINT, 143 by
-//! SIGTERM. `run` writes each level as it converges, so a failed or interrupted run leaves every
-//! converged level with `"complete": false` in results.json.
+//! SIGTERM. `run` writes each level and `solve` each increment as it converges, so a failed or
+//! interrupted run leaves everything converged so far, with `"complete": false` in results.json
+//! (summary.json for `solve`).
 
 use clap::{Parser, Subcommand};
 use nonlin3d::newton::NewtonSettings;
@@ -83,6 +84,7 @@ enum Command {
 }
 
 fn solve(deck: &Path, out: &Path, tolerance: f64, increment: Option<f64>) -> Result<(), Failure> {
+    use nonlin3d::deck::Progress;
     nonlin3d::budget::install(None);
     let model = nonlin3d::mesh::read_inp_file(deck)
         .map_err(|e| Failure::Input(nonlin3d::Error::from(e)))?;
@@ -93,21 +95,40 @@ fn solve(deck: &Path, out: &Path, tolerance: f64, increment: Option<f64>) -> Res
         },
         initial_increment: increment,
     };
-    let results = nonlin3d::deck::solve_deck(&model, &options).map_err(Failure::Run)?;
-    nonlin3d::deck::write_results(out, &model, &results).map_err(Failure::Run)?;
-    for r in &results {
-        let iterations: usize = r.increments.iter().map(|i| i.iterations).sum();
-        let done = r.increments.iter().filter(|i| i.converged).count();
-        println!(
-            "step {}: {done} increments ({} attempts), {iterations} iterations{}",
-            r.step,
-            r.increments.len(),
-            if r.nlgeom { " (NLGEOM)" } else { "" }
-        );
-    }
+    // Bad input (no step, an inverted element, …) and an output folder that cannot be written
+    // are found before anything is solved; each increment lands there as it converges.
+    nonlin3d::deck::check(&model, &options).map_err(Failure::Input)?;
+    let mut output = nonlin3d::deck::DeckOutput::create(out, &model).map_err(Failure::Input)?;
+    stop_on_signals(output.interrupt_handle()).map_err(Failure::Run)?;
     for n in &model.not_used {
         println!("not used: {}, {}: {}", n.at, n.keyword, n.reason);
     }
+    let outcome = nonlin3d::deck::solve_deck_with(&model, &options, &mut |p| {
+        if let Progress::Step(r) = p {
+            let iterations: usize = r.increments.iter().map(|i| i.iterations).sum();
+            let done = r.increments.iter().filter(|i| i.converged).count();
+            println!(
+                "step {}: {done} increments ({} attempts), {iterations} iterations{}",
+                r.step,
+                r.increments.len(),
+                if r.nlgeom { " (NLGEOM)" } else { "" }
+            );
+        }
+        output.progress(p)
+    });
+    let results = match outcome {
+        Ok(r) => r,
+        Err(e) => {
+            // Keep what converged, say why it stopped; the write error (if any) is secondary.
+            let _ = output.failed(&e);
+            return Err(Failure::Run(nonlin3d::Error::Numerical(format!(
+                "{e}\n(the increments converged before are in {}, summary.json \"complete\": \
+                 false)",
+                out.display()
+            ))));
+        }
+    };
+    output.finish(&results).map_err(Failure::Run)?;
     println!("results in {}", out.display());
     Ok(())
 }

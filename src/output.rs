@@ -217,9 +217,40 @@ pub struct InterruptHandle {
 }
 
 impl InterruptHandle {
+    /// A handle for another writer than [`RunOutput`] (the deck solver's, whose status file
+    /// `path` is summary.json), with nothing to write until [`publish`](Self::publish).
+    pub fn new(path: &Path) -> Self {
+        Self {
+            pending: Arc::new(Mutex::new(Pending {
+                path: path.to_path_buf(),
+                stopped_json: None,
+            })),
+        }
+    }
+
+    /// Under the lock [`stop`](Self::stop) takes: runs `write` (the state's other files),
+    /// writes `now` to the status file, and keeps `stopped` for `stop` (the status with
+    /// `"stopped": "interrupted"`; None once the run is finished).
+    pub fn publish(
+        &self,
+        write: impl FnOnce() -> Result<(), Error>,
+        now: &str,
+        stopped: Option<String>,
+    ) -> Result<(), Error> {
+        let mut pending = self
+            .pending
+            .lock()
+            .map_err(|_| Error::Numerical("output lock poisoned".into()))?;
+        write()?;
+        write_atomic(&pending.path, now.as_bytes())?;
+        pending.stopped_json = stopped;
+        Ok(())
+    }
+
     /// Waits for any `results.json` write in progress, then writes the run's state with
-    /// `"stopped": "interrupted by SIGNAL"` (nothing after a finished run). Returns whether
-    /// a file was written.
+    /// `"stopped": "interrupted by SIGNAL"` (nothing after a finished run) and keeps the lock,
+    /// so that the run writes nothing more: call it only to exit. Returns whether a file was
+    /// written.
     pub fn stop(&self, signal: &str) -> bool {
         let Ok(pending) = self.pending.lock() else {
             return false;
@@ -232,7 +263,11 @@ impl InterruptHandle {
             &format!("\"stopped\": \"interrupted by {signal}\""),
             1,
         );
-        write_atomic(&pending.path, text.as_bytes()).is_ok()
+        let written = write_atomic(&pending.path, text.as_bytes()).is_ok();
+        // The lock stays held (the caller exits next): no write of the run that was waiting
+        // for it can replace the stopped state.
+        std::mem::forget(pending);
+        written
     }
 }
 

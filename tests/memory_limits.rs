@@ -81,7 +81,10 @@ fn a_33k_node_scene_under_1_gib_of_address_space_is_refused_not_aborted() {
     .unwrap();
     assert_eq!(json["complete"], false);
     assert!(json["levels"].as_array().unwrap().is_empty());
-    assert!(json["stopped"].as_str().unwrap().contains("RLIMIT_AS"), "{json}");
+    assert!(
+        json["stopped"].as_str().unwrap().contains("RLIMIT_AS"),
+        "{json}"
+    );
 }
 
 /// `--max-memory` is a limit like the others: the reference scene does not fit in 40 MB

@@ -66,10 +66,12 @@ pub(crate) struct Converged<'a> {
     pub last: bool,
     pub u: &'a [f64],
     pub problem: &'a mut StructuralProblem,
+    /// Every attempt of the step so far.
+    pub attempts: &'a [IncrementSummary],
 }
 
-/// Runs step `k` (0-based) from `u` (updated to its end), calling `on_increment` after each
-/// converged increment. Returns every attempt.
+/// Runs step `k` (0-based) from `u` (updated to its end), appending every attempt to
+/// `attempts` and calling `on_increment` with each converged increment.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn run_step(
     model: &InpModel,
@@ -79,8 +81,9 @@ pub(crate) fn run_step(
     problem: &mut StructuralProblem,
     u: &mut Vec<f64>,
     options: &StepOptions,
+    attempts: &mut Vec<IncrementSummary>,
     on_increment: &mut dyn FnMut(Converged<'_>) -> Result<(), Error>,
-) -> Result<Vec<IncrementSummary>, Error> {
+) -> Result<(), Error> {
     let step = &model.steps[k];
     let p = &step.procedure;
     let settings = newton_settings(&options.newton, step);
@@ -90,15 +93,7 @@ pub(crate) fn run_step(
     // One session per step: its kept factorisation serves the next increment's predictor while
     // the loads run continuously; a new step may change them at once (OP=NEW).
     let mut session = PathSolver::new(problem, settings.solver)?;
-    let mut attempts = Vec::new();
     let mut t = 0.0;
-    if let Some(f) = options.initial_increment
-        && !(f > 0.0 && f <= 1.0)
-    {
-        return Err(Error::Numerical(format!(
-            "initial increment {f}: expected a fraction of the step period in (0, 1]"
-        )));
-    }
     let mut dt = match (step.nlgeom, options.initial_increment) {
         (false, _) => period,
         (true, None) => p.initial,
@@ -148,6 +143,7 @@ pub(crate) fn run_step(
                 last: period - t <= eps,
                 u,
                 problem,
+                attempts,
             })?;
             if p.direct || !step.nlgeom {
                 continue;
@@ -196,5 +192,5 @@ pub(crate) fn run_step(
             }
         }
     }
-    Ok(attempts)
+    Ok(())
 }

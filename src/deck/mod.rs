@@ -1,25 +1,30 @@
 //! Solving an Abaqus/CalculiX deck (the subset `nonlin3d_mesh::read_inp` reads, docs/DECKS.md):
 //! linear or NLGEOM static steps, as the `nonlin3d solve` command does, with CalculiX's step
 //! semantics (module `loads`), time incrementation (module `drive`) and output requests
-//! (module `output`).
+//! (module `output`), after the checks a scene gets (module `check`: a step, positive element
+//! Jacobians, …). [`solve_deck_with`] reports each converged increment; [`DeckOutput`] writes
+//! the command's files from those reports as the solve goes (module `files`).
 //!
 //! C3D20 cells are integrated with 3×3×3 points, C3D20R and C3D8 with 2×2×2 (a deck mixing
 //! C3D20 and C3D20R is refused). Each cell's material is rotated to its `*ORIENTATION` axes
 //! (exact tensor rotation). NLGEOM steps use the nonlinear kernels (total Lagrangian, St.
 //! Venant–Kirchhoff), other steps the linear kernels (one Newton iteration solves them).
 
+mod check;
 mod drive;
+mod files;
 mod loads;
 mod output;
 
+pub use check::check;
+pub use files::DeckOutput;
 pub use output::{OutputTable, write_results};
 
 use crate::Error;
 use nonlin3d_assembly::{Assembler, Constraints, StressRules};
-use nonlin3d_element::{ElementKind, IntegrationRule, Kinematics};
-use nonlin3d_laminate::{Orthotropic, ShearCoupling, Stiffness};
-use nonlin3d_mesh::inp::InpElastic;
-use nonlin3d_mesh::{InpModel, Mesh};
+use nonlin3d_element::{IntegrationRule, Kinematics};
+use nonlin3d_laminate::ShearCoupling;
+use nonlin3d_mesh::InpModel;
 use nonlin3d_newton::{IncrementReport, NewtonSettings, StructuralProblem};
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -86,7 +91,11 @@ pub struct StepResult {
     pub start_time: f64,
     /// Increments (all attempts).
     pub increments: Vec<IncrementSummary>,
-    /// Displacements at the end of the step, by mesh node (deck ids in `InpModel::node_ids`).
+    /// Whether the step reached the end of its period (false while it is being solved, and for
+    /// a step that failed).
+    pub complete: bool,
+    /// Displacements at the end of the step (at its last converged increment while it is being
+    /// solved), by mesh node (deck ids in `InpModel::node_ids`).
     #[serde(skip)]
     pub displacements: Vec<[f64; 3]>,
     /// The step's output requests, filled at the increments they were due.
@@ -94,75 +103,38 @@ pub struct StepResult {
     pub outputs: Vec<OutputTable>,
 }
 
-/// The stiffness of a deck material.
-fn stiffness(e: &InpElastic) -> Result<Stiffness, Error> {
-    Ok(match e {
-        InpElastic::Isotropic { e, nu } => Orthotropic::isotropic(*e, *nu).stiffness()?,
-        InpElastic::Engineering(o) => o.stiffness()?,
-        InpElastic::Orthotropic(s) | InpElastic::Anisotropic(s) => **s,
-    })
+/// What [`solve_deck_with`] reports as it goes.
+#[derive(Debug, Clone, Copy)]
+pub enum Progress<'a> {
+    /// An increment converged: the step so far (every attempt, the output tables filled so
+    /// far, the displacements now; `complete` false).
+    Increment(&'a StepResult),
+    /// The step reached the end of its period (`complete` true).
+    Step(&'a StepResult),
+    /// The step failed: every attempt (the failed ones too) and the tables so far; the error
+    /// follows as the solve's result.
+    Failed(&'a StepResult),
 }
 
-/// The mesh with one material per distinct (deck material, orientation), each rotated to its
-/// axes, and no ply angles; and those materials.
-fn oriented(model: &InpModel) -> Result<(Mesh, Vec<Stiffness>), Error> {
-    let base: Vec<Stiffness> = model
-        .materials
-        .iter()
-        .map(|m| stiffness(&m.elastic))
-        .collect::<Result<_, _>>()?;
-    let mut mesh = model.mesh.clone();
-    let mut index: BTreeMap<(usize, [u64; 9]), usize> = BTreeMap::new();
-    let mut materials = Vec::new();
-    for (c, cell) in mesh.cells.iter_mut().enumerate() {
-        let r = model.orientations.get(c).copied().unwrap_or([
-            [1.0, 0.0, 0.0],
-            [0.0, 1.0, 0.0],
-            [0.0, 0.0, 1.0],
-        ]);
-        let bits: Vec<u64> = r.iter().flatten().map(|v| v.to_bits()).collect();
-        let key = (cell.material, bits.try_into().unwrap_or([0; 9]));
-        let id = match index.get(&key) {
-            Some(&id) => id,
-            None => {
-                materials.push(base[cell.material].rotated(&r)?);
-                index.insert(key, materials.len() - 1);
-                materials.len() - 1
-            }
-        };
-        cell.material = id;
-        cell.ply_angle_deg = 0.0;
-    }
-    Ok((mesh, materials))
-}
-
-/// The integration rule of Hex20 cells: 2×2×2 for C3D20R, 3×3×3 for C3D20.
-fn hex20_rule(model: &InpModel) -> Result<IntegrationRule, Error> {
-    let hex20: Vec<bool> = model
-        .mesh
-        .cells
-        .iter()
-        .zip(&model.reduced)
-        .filter(|(c, _)| c.kind == ElementKind::Hex20)
-        .map(|(_, &r)| r)
-        .collect();
-    if hex20.iter().any(|&r| r) && hex20.iter().any(|&r| !r) {
-        return Err(Error::Numerical(
-            "the deck mixes C3D20 and C3D20R; nonlin3d uses one rule per element kind".into(),
-        ));
-    }
-    Ok(if hex20.first().copied().unwrap_or(false) {
-        IntegrationRule::Gauss2
-    } else {
-        IntegrationRule::Gauss3
-    })
-}
-
-/// Solves every step of `model` in order.
+/// Checks `model` ([`check`]) and solves every step in order; writes nothing.
 pub fn solve_deck(model: &InpModel, options: &StepOptions) -> Result<Vec<StepResult>, Error> {
+    solve_deck_with(model, options, &mut |_| Ok(()))
+}
+
+/// [`solve_deck`], calling `observer` after every converged increment, at the end of every
+/// step and on a failed step (an observer's error stops the solve). [`DeckOutput::progress`]
+/// writes the files of `nonlin3d solve` from these.
+pub fn solve_deck_with(
+    model: &InpModel,
+    options: &StepOptions,
+    observer: &mut dyn FnMut(Progress<'_>) -> Result<(), Error>,
+) -> Result<Vec<StepResult>, Error> {
     crate::budget::check_deck(&model.mesh, &crate::budget::limit())?;
-    let (mesh, materials) = oriented(model)?;
-    let rule = hex20_rule(model)?;
+    let check::Prepared {
+        mesh,
+        materials,
+        rule,
+    } = check::prepare(model, options)?;
     let n = 3 * mesh.nodes.len();
     let mut u = vec![0.0; n];
     let mut history = loads::History::new(model);
@@ -207,8 +179,18 @@ pub fn solve_deck(model: &InpModel, options: &StepOptions) -> Result<Vec<StepRes
             hex8_rule: IntegrationRule::Gauss2,
             kinematics,
         };
-        let mut tables = output::tables(model, step);
-        let increments = drive::run_step(
+        let mut current = StepResult {
+            step: k + 1,
+            nlgeom: step.nlgeom,
+            period: frame.period,
+            start_time: start,
+            increments: Vec::new(),
+            complete: false,
+            displacements: Vec::new(),
+            outputs: output::tables(model, step),
+        };
+        let mut attempts = Vec::new();
+        let run = drive::run_step(
             model,
             k,
             &history,
@@ -216,20 +198,34 @@ pub fn solve_deck(model: &InpModel, options: &StepOptions) -> Result<Vec<StepRes
             &mut problem,
             &mut u,
             options,
-            &mut |c| output::record(model, &mesh, &rules, step, frame, &mut tables, c),
-        )?;
+            &mut attempts,
+            &mut |c| {
+                let (u, tried) = (c.u, c.attempts);
+                output::record(model, &mesh, &rules, step, frame, &mut current.outputs, c)?;
+                current.increments = tried.to_vec();
+                current.displacements = nodal(u);
+                observer(Progress::Increment(&current))
+            },
+        );
+        current.increments = attempts;
+        if let Err(e) = run {
+            // The solve's error is the one to report; the observer's own (a file that could not
+            // be written) would hide it.
+            let _ = observer(Progress::Failed(&current));
+            return Err(e);
+        }
         history.end_step(model, frame);
-        results.push(StepResult {
-            step: k + 1,
-            nlgeom: step.nlgeom,
-            period: frame.period,
-            start_time: start,
-            increments,
-            displacements: u.chunks(3).map(|c| [c[0], c[1], c[2]]).collect(),
-            outputs: tables,
-        });
+        current.complete = true;
+        current.displacements = nodal(&u);
+        observer(Progress::Step(&current))?;
+        results.push(current);
         assemblers.insert(step.nlgeom, problem.assembler);
         start += frame.period;
     }
     Ok(results)
+}
+
+/// Displacements by node.
+fn nodal(u: &[f64]) -> Vec<[f64; 3]> {
+    u.chunks(3).map(|c| [c[0], c[1], c[2]]).collect()
 }

@@ -225,71 +225,18 @@ pub(crate) fn record(
     Ok(())
 }
 
-fn csv_of_displacements(model: &InpModel, r: &StepResult) -> String {
-    let mut s = String::from("node,ux,uy,uz\n");
-    for (id, d) in model.node_ids.iter().zip(&r.displacements) {
-        let _ = writeln!(s, "{id},{:e},{:e},{:e}", d[0], d[1], d[2]);
-    }
-    s
-}
-
-/// Writes, for each step K, `dir/step-K/displacements.csv` (deck node id, ux, uy, uz at the
-/// end of the step) and the step's output tables (`dir/step-K/node-print-SET.csv`, …); the
-/// last step's displacements also as `dir/displacements.csv`; and `dir/summary.json`: steps
-/// (increments with step and total time, iterations, residuals, convergence, negative pivots;
-/// the output files with the increments written) and `not_used`, what the deck gave that the
-/// analysis did not use, with its line.
+/// Writes the results of a whole solve as `nonlin3d solve` does ([`DeckOutput`](super::DeckOutput),
+/// which writes them increment by increment): for each step K `dir/step-K/displacements.csv`
+/// (deck node id, ux, uy, uz at the end of the step) and the step's output tables
+/// (`dir/step-K/node-print-SET.csv`, …); the last step's displacements also as
+/// `dir/displacements.csv`; and `dir/summary.json`: `complete`, `stopped`, steps (increments
+/// with step and total time, iterations, residuals, convergence, negative pivots; the output
+/// files with the increments written) and `not_used`, what the deck gave that the analysis did
+/// not use, with its line.
 pub fn write_results(dir: &Path, model: &InpModel, results: &[StepResult]) -> Result<(), Error> {
-    let io = |e: std::io::Error| Error::Io {
-        path: dir.to_path_buf(),
-        source: e,
-    };
-    std::fs::create_dir_all(dir).map_err(io)?;
-    let mut steps = Vec::new();
+    let mut out = super::DeckOutput::create(dir, model)?;
     for r in results {
-        let sub = dir.join(format!("step-{}", r.step));
-        std::fs::create_dir_all(&sub).map_err(io)?;
-        std::fs::write(
-            sub.join("displacements.csv"),
-            csv_of_displacements(model, r),
-        )
-        .map_err(io)?;
-        for t in &r.outputs {
-            std::fs::write(sub.join(&t.file), &t.csv).map_err(io)?;
-        }
-        let mut v = serde_json::to_value(r).map_err(|e| Error::Numerical(e.to_string()))?;
-        v["outputs"] = r
-            .outputs
-            .iter()
-            .map(|t| {
-                serde_json::json!({
-                    "keyword": t.keyword,
-                    "line": t.line,
-                    "file": format!("step-{}/{}", r.step, t.file),
-                    "increments": t.increments,
-                    "axes": t.axes,
-                })
-            })
-            .collect();
-        steps.push(v);
+        out.progress(super::Progress::Step(r))?;
     }
-    if let Some(last) = results.last() {
-        std::fs::write(
-            dir.join("displacements.csv"),
-            csv_of_displacements(model, last),
-        )
-        .map_err(io)?;
-    }
-    let not_used: Vec<serde_json::Value> = model
-        .not_used
-        .iter()
-        .map(|n| serde_json::json!({ "at": n.at, "keyword": n.keyword, "reason": n.reason }))
-        .collect();
-    let json = serde_json::to_string_pretty(&serde_json::json!({
-        "steps": steps,
-        "not_used": not_used,
-    }))
-    .map_err(|e| Error::Numerical(e.to_string()))?;
-    std::fs::write(dir.join("summary.json"), json).map_err(io)?;
-    Ok(())
+    out.finish(results)
 }

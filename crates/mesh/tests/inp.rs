@@ -199,6 +199,78 @@ fn generate_sets_and_initial_boundaries() {
 }
 
 /// A small valid deck to mutate.
+/// A set that a `*BOUNDARY`, `*CLOAD` or output request names and that has no members would act
+/// on nothing: refused with the line that uses it, the keyword, the set and where it was
+/// defined. Each element keeps the line it was defined on, for later messages.
+#[test]
+fn an_empty_set_in_use_is_refused_and_elements_keep_their_lines() {
+    let mut base = String::from("*NODE\n");
+    for i in 1..=8 {
+        base.push_str(&format!(
+            "{i}, {}, {}, {}\n",
+            i % 2,
+            (i / 2) % 2,
+            (i / 4) % 2
+        ));
+    }
+    // Lines 1–9 nodes; 10–11 the element; 12 the empty set; 13 a used one.
+    base.push_str("*ELEMENT, TYPE=C3D8, ELSET=E\n10, 1, 2, 4, 3, 5, 6, 8, 7\n*NSET, NSET=NONE\n");
+    base.push_str("*NSET, NSET=BOTTOM, GENERATE\n1, 4\n*ELSET, ELSET=NOEL\n");
+    base.push_str(
+        "*MATERIAL, NAME=AL\n*ELASTIC\n72e9, 0.33\n*SOLID SECTION, ELSET=E, MATERIAL=AL\n",
+    );
+    let step = |body: &str| format!("{base}*STEP\n*STATIC\n{body}*END STEP\n");
+    let line_of =
+        |deck: &str, start: &str| deck.lines().position(|l| l.starts_with(start)).unwrap() + 1;
+    let ok = read_inp(&step("*BOUNDARY\nBOTTOM, 3\n")).unwrap();
+    assert_eq!(ok.element_at, ["line 11"]);
+    for (body, used, what) in [
+        (
+            "*BOUNDARY\nBOTTOM, 3\nnone, 1, 3\n",
+            "none, 1",
+            "*BOUNDARY data",
+        ),
+        ("*CLOAD\nNONE, 3, 1.\n", "NONE, 3", "*CLOAD data"),
+        (
+            "*NODE PRINT, NSET=none\nU\n",
+            "*NODE PRINT",
+            "*NODE PRINT, NSET",
+        ),
+        (
+            "*EL PRINT, ELSET=NOEL\nS\n",
+            "*EL PRINT",
+            "*EL PRINT, ELSET",
+        ),
+    ] {
+        let deck = step(body);
+        let e = error_text(&deck);
+        let set = if what.starts_with("*EL") {
+            "element set 'NOEL'"
+        } else {
+            "node set 'NONE'"
+        };
+        let defined = line_of(
+            &deck,
+            if what.starts_with("*EL") {
+                "*ELSET, ELSET=NOEL"
+            } else {
+                "*NSET, NSET=NONE"
+            },
+        );
+        let want = format!(
+            "line {}, {what}: {set} (defined at line {defined}) is empty",
+            line_of(&deck, used)
+        );
+        assert!(e.contains(&want), "{want} not in {e}");
+    }
+    // Model data too.
+    let e = error_text(&format!("{base}*BOUNDARY\nNONE, 1\n"));
+    assert!(
+        e.contains("node set 'NONE'") && e.contains("is empty"),
+        "{e}"
+    );
+}
+
 fn sample_deck() -> String {
     let mut mesh = structured_box(&BoxParams::new(
         ElementKind::Hex20,

@@ -269,6 +269,9 @@ pub struct InpModel {
     pub node_ids: Vec<usize>,
     /// Deck id of each element.
     pub element_ids: Vec<usize>,
+    /// Where each element was defined: `line N`, or `FILE line N` in an included file (for
+    /// messages about an element).
+    pub element_at: Vec<String>,
     /// Whether each element was declared with reduced integration (C3D20R).
     pub reduced: Vec<bool>,
     /// Materials in deck order.
@@ -304,6 +307,18 @@ pub fn read_inp_file(path: &Path) -> Result<InpModel, MeshError> {
     read_lines(logical_lines(&text, Some(path))?)
 }
 
+/// A set named by a boundary condition, load or output request.
+pub(crate) struct SetUse {
+    /// The data line or keyword line that names it.
+    pub at: Loc,
+    /// `*BOUNDARY data`, `*NODE PRINT, NSET`, ….
+    pub what: String,
+    /// Node set (true) or element set.
+    pub nodes: bool,
+    /// The mesh spelling.
+    pub name: String,
+}
+
 /// The reader's state between keywords.
 #[derive(Default)]
 pub(crate) struct Reader {
@@ -317,6 +332,10 @@ pub(crate) struct Reader {
     pub sections: Vec<sections::Section>,
     /// Where each element was defined.
     pub element_at: Vec<Loc>,
+    /// Where each set (by kind, node sets `true`, and upper-case name) was first defined.
+    pub set_at: HashMap<(bool, String), Loc>,
+    /// Sets that a `*BOUNDARY`, `*CLOAD` or output request uses, checked non-empty at the end.
+    pub set_uses: Vec<SetUse>,
     /// Materials given `*ELASTIC`.
     pub elastic_given: Vec<bool>,
     /// The step being read.
@@ -378,8 +397,50 @@ impl Reader {
         self.cell_set_names.get(&name.to_uppercase())
     }
 
+    /// Records that `what` at `at` uses set `name` (mesh spelling).
+    pub(crate) fn use_set(&mut self, at: &Loc, what: String, nodes: bool, name: &str) {
+        self.set_uses.push(SetUse {
+            at: at.clone(),
+            what,
+            nodes,
+            name: name.to_string(),
+        });
+    }
+
+    /// A set that a boundary condition, load or output request names must have members: an
+    /// empty one would constrain, load or print nothing without a word.
+    fn check_set_uses(&self) -> Result<(), MeshError> {
+        for u in &self.set_uses {
+            let sets = if u.nodes {
+                &self.m.mesh.node_sets
+            } else {
+                &self.m.mesh.cell_sets
+            };
+            if sets.get(&u.name).is_some_and(|s| !s.is_empty()) {
+                continue;
+            }
+            let kind = if u.nodes { "node" } else { "element" };
+            let defined = self
+                .set_at
+                .get(&(u.nodes, u.name.to_uppercase()))
+                .map(|at| format!(" (defined at {at})"))
+                .unwrap_or_default();
+            return Err(lexer::deck_error(
+                &u.at,
+                &u.what,
+                format!(
+                    "{kind} set '{}'{defined} is empty: it would act on nothing",
+                    u.name
+                ),
+            ));
+        }
+        Ok(())
+    }
+
     fn finish(mut self) -> Result<InpModel, MeshError> {
         self.resolve_sections()?;
+        self.check_set_uses()?;
+        self.m.element_at = self.element_at.iter().map(ToString::to_string).collect();
         for set in self
             .m
             .mesh

@@ -1,7 +1,7 @@
 //! Model-data keywords: nodes, elements, sets, materials, orientations, sections, amplitudes,
 //! and the data a static mechanical step does not use (accepted and listed).
 
-use super::lexer::{Keyword, Line, fields, float, float_param, int};
+use super::lexer::{Keyword, Line, Loc, fields, float, float_param, int};
 use super::sections::{Section, rectangular_axes};
 use super::{Amplitude, Reader};
 use crate::MeshError;
@@ -154,7 +154,7 @@ impl Reader {
             self.m.node_ids.push(id);
         }
         if let Some(name) = kw.get("NSET") {
-            self.add_to_set(true, name, added);
+            self.add_to_set(true, name, added, &kw.at);
         }
         Ok(())
     }
@@ -216,13 +216,17 @@ impl Reader {
             self.m.reduced.push(reduced);
         }
         if let Some(name) = kw.get("ELSET") {
-            self.add_to_set(false, name, added);
+            self.add_to_set(false, name, added, &kw.at);
         }
         Ok(())
     }
 
-    /// Adds mesh indices to a node (`nodes`) or element set, creating it with this spelling.
-    fn add_to_set(&mut self, nodes: bool, name: &str, items: Vec<usize>) {
+    /// Adds mesh indices to a node (`nodes`) or element set, creating it with this spelling
+    /// (and remembering `at`, where it was first defined).
+    fn add_to_set(&mut self, nodes: bool, name: &str, items: Vec<usize>, at: &Loc) {
+        self.set_at
+            .entry((nodes, name.to_uppercase()))
+            .or_insert_with(|| at.clone());
         let (names, sets) = if nodes {
             (&mut self.node_set_names, &mut self.m.mesh.node_sets)
         } else {
@@ -291,7 +295,7 @@ impl Reader {
                 items.extend(members);
             }
         }
-        self.add_to_set(nodes, &name, items);
+        self.add_to_set(nodes, &name, items, &kw.at);
         Ok(())
     }
 

@@ -75,6 +75,10 @@ impl Reader {
                 .ok_or_else(|| kw.param_error(set_key, format!("set '{name}' is not defined")))?,
             ),
         };
+        if let Some(name) = &set {
+            let what = format!("{}, {set_key}", kw.what());
+            self.use_set(&kw.at, what, set_key == "NSET", name);
+        }
         let mut variables = Vec::new();
         for l in data {
             for v in fields(&l.text).into_iter().filter(|s| !s.is_empty()) {

@@ -257,17 +257,20 @@ impl Reader {
         Ok(())
     }
 
-    /// The node or node set in the first field of a data line.
-    fn target(&self, kw: &Keyword, l: &Line, f: &str) -> Result<NodeRef, MeshError> {
+    /// The node or node set in the first field of a data line (a set is recorded, to be
+    /// checked non-empty at the end of the deck).
+    fn target(&mut self, kw: &Keyword, l: &Line, f: &str) -> Result<NodeRef, MeshError> {
         match f.parse::<usize>() {
             Ok(id) => Ok(NodeRef::Node(*self.node_index.get(&id).ok_or_else(
                 || kw.data_error(&l.at, format!("node {id} is not defined")),
             )?)),
-            Err(_) => self
-                .node_set(f)
-                .cloned()
-                .map(NodeRef::Set)
-                .ok_or_else(|| kw.data_error(&l.at, format!("node set '{f}' is not defined"))),
+            Err(_) => {
+                let name = self.node_set(f).cloned().ok_or_else(|| {
+                    kw.data_error(&l.at, format!("node set '{f}' is not defined"))
+                })?;
+                self.use_set(&l.at, format!("*{} data", kw.name), true, &name);
+                Ok(NodeRef::Set(name))
+            }
         }
     }
 

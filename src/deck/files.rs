@@ -1,0 +1,284 @@
+//! The output folder of `nonlin3d solve`, written as the solve goes, with the contract of
+//! `nonlin3d run`'s (`crate::output::RunOutput`; docs/RELIABILITY.md, "Decks"):
+//!
+//! - the folder is made and tested before anything is solved, and the files an earlier solve
+//!   left there (only the names this program writes) are removed;
+//! - after every converged increment, the output tables that received rows and `summary.json`
+//!   (every step so far, the one in progress with `"complete": false`) are rewritten;
+//! - `step-K/displacements.csv` is written only when step K reaches the end of its period, so
+//!   one that exists is final; `displacements.csv` (the last step's) only when every step has;
+//! - `summary.json` says `"complete": false` until the last write of a whole solve, and
+//!   `"stopped"` says why a solve ended early (`"error: …"`, `"interrupted by SIGINT"`).
+//!
+//! Every file goes through `crate::output::write_atomic` (a temporary name, synced, renamed),
+//! under the lock the signal handler takes ([`InterruptHandle::publish`]), so a reader or an
+//! interrupted solve never sees half a file. A table is rewritten whole each time it grows:
+//! O(its size) per increment, so O(increments² × its rows per increment) over a step. That is
+//! nothing for the decks nonlin3d solves today and costly for a large one asking for every
+//! stress every increment (docs/RELIABILITY.md gives the numbers).
+
+use super::{Progress, StepResult};
+use crate::Error;
+use crate::output::{InterruptHandle, write_atomic};
+use nonlin3d_mesh::InpModel;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+fn io(path: &Path) -> impl FnOnce(std::io::Error) -> Error + '_ {
+    move |source| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    }
+}
+
+/// Names of the files a solve writes in a `step-K` folder.
+fn ours_in_step(name: &str) -> bool {
+    name == "displacements.csv"
+        || (["node-print", "node-file", "el-print", "el-file"]
+            .iter()
+            .any(|p| name.starts_with(p))
+            && name.ends_with(".csv"))
+        || (name.starts_with('.') && name.ends_with(".partial"))
+}
+
+/// Names of the files a solve writes in its folder.
+fn ours(name: &str) -> bool {
+    matches!(name, "summary.json" | "displacements.csv")
+        || (name.starts_with('.') && name.ends_with(".partial"))
+}
+
+/// A `step-K` folder name.
+fn step_folder(name: &str) -> bool {
+    name.strip_prefix("step-")
+        .is_some_and(|k| !k.is_empty() && k.bytes().all(|b| b.is_ascii_digit()))
+}
+
+/// Removes the files of an earlier solve in `dir` (only our names; a `step-K` folder only if
+/// nothing else is left in it).
+fn remove_stale(dir: &Path) -> Result<(), Error> {
+    for entry in std::fs::read_dir(dir).map_err(io(dir))?.flatten() {
+        let name = entry.file_name().to_string_lossy().into_owned();
+        let path = entry.path();
+        let Ok(kind) = entry.file_type() else {
+            continue;
+        };
+        if kind.is_file() && ours(&name) {
+            std::fs::remove_file(&path).map_err(io(&path))?;
+        } else if kind.is_dir() && step_folder(&name) {
+            for inner in std::fs::read_dir(&path).map_err(io(&path))?.flatten() {
+                let p = inner.path();
+                if inner.file_type().is_ok_and(|t| t.is_file())
+                    && ours_in_step(&inner.file_name().to_string_lossy())
+                {
+                    std::fs::remove_file(&p).map_err(io(&p))?;
+                }
+            }
+            // Kept if the user put something there.
+            let _ = std::fs::remove_dir(&path);
+        }
+    }
+    Ok(())
+}
+
+/// `node,ux,uy,uz` by deck node id.
+fn displacements_csv(model: &InpModel, u: &[[f64; 3]]) -> String {
+    let mut s = String::from("node,ux,uy,uz\n");
+    for (id, d) in model.node_ids.iter().zip(u) {
+        let _ = writeln!(s, "{id},{:e},{:e},{:e}", d[0], d[1], d[2]);
+    }
+    s
+}
+
+/// The summary entry of a step: its record, its output files with the increments they hold,
+/// and its displacements file once it is complete.
+fn step_json(r: &StepResult) -> Result<serde_json::Value, Error> {
+    let mut v = serde_json::to_value(r).map_err(|e| Error::Numerical(e.to_string()))?;
+    v["outputs"] = r
+        .outputs
+        .iter()
+        .map(|t| {
+            serde_json::json!({
+                "keyword": t.keyword,
+                "line": t.line,
+                "file": format!("step-{}/{}", r.step, t.file),
+                "increments": t.increments,
+                "axes": t.axes,
+            })
+        })
+        .collect();
+    v["displacements"] = if r.complete {
+        format!("step-{}/displacements.csv", r.step).into()
+    } else {
+        serde_json::Value::Null
+    };
+    Ok(v)
+}
+
+/// The output folder of a deck solve, written increment by increment.
+#[derive(Debug)]
+pub struct DeckOutput<'a> {
+    dir: PathBuf,
+    model: &'a InpModel,
+    /// summary.json's steps so far; the last may be in progress.
+    steps: Vec<serde_json::Value>,
+    /// The step whose tables are being written, and how many increments each table held when
+    /// it was last written.
+    tables_of: usize,
+    written: Vec<Option<usize>>,
+    complete: bool,
+    stopped: Option<String>,
+    handle: InterruptHandle,
+}
+
+impl<'a> DeckOutput<'a> {
+    /// Creates `dir` (and parents), checks that it can be written before anything is solved,
+    /// removes the files of an earlier solve there and writes a `summary.json` with no steps
+    /// and `"complete": false`.
+    pub fn create(dir: &Path, model: &'a InpModel) -> Result<Self, Error> {
+        std::fs::create_dir_all(dir).map_err(io(dir))?;
+        let probe = dir.join(".nonlin3d-write-test.partial");
+        std::fs::write(&probe, b"").map_err(io(&probe))?;
+        std::fs::remove_file(&probe).map_err(io(&probe))?;
+        remove_stale(dir)?;
+        let out = Self {
+            dir: dir.to_path_buf(),
+            model,
+            steps: Vec::new(),
+            tables_of: 0,
+            written: Vec::new(),
+            complete: false,
+            stopped: None,
+            handle: InterruptHandle::new(&dir.join("summary.json")),
+        };
+        out.publish(|| Ok(()))?;
+        Ok(out)
+    }
+
+    /// The folder.
+    pub fn dir(&self) -> &Path {
+        &self.dir
+    }
+
+    /// A handle for a signal handler: `stop` writes `summary.json` as it stands with
+    /// `"stopped": "interrupted by …"`.
+    pub fn interrupt_handle(&self) -> InterruptHandle {
+        self.handle.clone()
+    }
+
+    /// Writes what `p` brings: the tables that grew, the step's displacements when it is
+    /// complete, and `summary.json`.
+    pub fn progress(&mut self, p: Progress<'_>) -> Result<(), Error> {
+        let r = match p {
+            Progress::Increment(r) | Progress::Step(r) | Progress::Failed(r) => r,
+        };
+        if self.tables_of != r.step {
+            self.tables_of = r.step;
+            self.written = vec![None; r.outputs.len()];
+        }
+        let entry = step_json(r)?;
+        match self.steps.get_mut(r.step - 1) {
+            Some(s) => *s = entry,
+            None => self.steps.push(entry),
+        }
+        let sub = self.dir.join(format!("step-{}", r.step));
+        let grown: Vec<usize> = (0..r.outputs.len())
+            .filter(|&i| {
+                self.written.get(i).copied().flatten() != Some(r.outputs[i].increments.len())
+            })
+            .collect();
+        let displacements =
+            matches!(p, Progress::Step(_)).then(|| displacements_csv(self.model, &r.displacements));
+        self.publish(|| {
+            std::fs::create_dir_all(&sub).map_err(io(&sub))?;
+            for &i in &grown {
+                let t = &r.outputs[i];
+                write_atomic(&sub.join(&t.file), t.csv.as_bytes())?;
+            }
+            if let Some(csv) = &displacements {
+                write_atomic(&sub.join("displacements.csv"), csv.as_bytes())?;
+            }
+            Ok(())
+        })?;
+        for i in grown {
+            self.written[i] = Some(r.outputs[i].increments.len());
+        }
+        Ok(())
+    }
+
+    /// The solve failed: `summary.json` keeps every step and increment so far, `"complete":
+    /// false` and the error in `"stopped"`.
+    pub fn failed(&mut self, error: &Error) -> Result<(), Error> {
+        self.stopped = Some(format!("error: {error}"));
+        self.publish(|| Ok(()))
+    }
+
+    /// Every step is complete: `displacements.csv` (the last step's), then `summary.json` with
+    /// `"complete": true`, last.
+    pub fn finish(&mut self, results: &[StepResult]) -> Result<(), Error> {
+        self.complete = true;
+        self.stopped = None;
+        let last = results
+            .last()
+            .map(|r| displacements_csv(self.model, &r.displacements));
+        let dir = self.dir.clone();
+        self.publish(|| match &last {
+            Some(csv) => write_atomic(&dir.join("displacements.csv"), csv.as_bytes()),
+            None => Ok(()),
+        })
+    }
+
+    /// Runs `write`, then writes `summary.json` as it stands and prepares its interrupted form
+    /// (none once complete), under the signal handler's lock.
+    fn publish(&self, write: impl FnOnce() -> Result<(), Error>) -> Result<(), Error> {
+        let json_err = |e: serde_json::Error| Error::Numerical(e.to_string());
+        let not_used: Vec<serde_json::Value> = self
+            .model
+            .not_used
+            .iter()
+            .map(|n| serde_json::json!({ "at": n.at, "keyword": n.keyword, "reason": n.reason }))
+            .collect();
+        let mut value = serde_json::json!({
+            "complete": self.complete,
+            "stopped": self.stopped,
+            "steps": self.steps,
+            "not_used": not_used,
+        });
+        let now = serde_json::to_string_pretty(&value).map_err(json_err)?;
+        let stopped = if self.complete {
+            None
+        } else {
+            if self.stopped.is_none() {
+                value["stopped"] = "interrupted".into();
+            }
+            Some(serde_json::to_string_pretty(&value).map_err(json_err)?)
+        };
+        self.handle.publish(write, &now, stopped)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn only_our_file_names_are_cleaned() {
+        for n in ["summary.json", "displacements.csv", ".summary.json.partial"] {
+            assert!(ours(n), "{n}");
+        }
+        for n in ["notes.txt", "summary.json.bak", "results.json"] {
+            assert!(!ours(n), "{n}");
+        }
+        for n in [
+            "displacements.csv",
+            "node-print-TIP.csv",
+            "el-file.csv",
+            "node-print-x0-totals.csv",
+        ] {
+            assert!(ours_in_step(n), "{n}");
+        }
+        for n in ["notes.csv", "el-file.txt"] {
+            assert!(!ours_in_step(n), "{n}");
+        }
+        assert!(step_folder("step-12") && !step_folder("step-") && !step_folder("step-a"));
+    }
+}
