@@ -253,7 +253,7 @@ fn factor_estimate(
 }
 
 /// The size of `scene`'s model and run, from its counts alone (nothing is meshed). Nodes,
-/// cells, DOFs and tangent nonzeros are exact; the factor is estimated ([`factor_estimate`]).
+/// cells, DOFs and tangent nonzeros are exact; the factor is estimated (`factor_estimate`).
 pub fn estimate_scene(scene: &Scene) -> Estimate {
     let (counts, entities, width, _) = scene_counts(scene);
     let hex20 = scene
