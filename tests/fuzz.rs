@@ -16,18 +16,23 @@
 //! - `NONLIN3D_FUZZ_CASE` — run only this case and write its input to
 //!   `target/tmp/fuzz-case-SEED-INDEX.toml|inp` (to replay a failure or make a reproducer);
 //! - `NONLIN3D_FUZZ_JOBS` — worker processes (default: the cores, at most 2);
-//! - `NONLIN3D_FUZZ_TIMEOUT_S` — seconds per case before it is a hang (default 120);
+//! - `NONLIN3D_FUZZ_TIMEOUT_S` — seconds per case before it is a hang (default
+//!   [`DEFAULT_TIMEOUT_S`]);
 //! - `NONLIN3D_FUZZ_MEMORY_MB` — virtual-memory ceiling per worker (default 2048);
 //! - `NONLIN3D_FUZZ_REPORT` — a file to write every case's record to (JSON lines).
 
 #[path = "fuzz/mutate.rs"]
 mod mutate;
+#[path = "fuzz/pools.rs"]
+mod pools;
 #[path = "fuzz/rng.rs"]
 mod rng;
 #[path = "fuzz/stages.rs"]
 mod stages;
 #[path = "fuzz/supervise.rs"]
 mod supervise;
+#[path = "fuzz/worker.rs"]
+mod worker;
 
 use stages::Class;
 use std::collections::BTreeMap;
@@ -35,13 +40,19 @@ use std::io::Write;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
-use supervise::{Limits, Record, Work};
+use supervise::{Limits, Record};
+use worker::Work;
 
 #[global_allocator]
-static ALLOCATOR: supervise::Counting = supervise::Counting;
+static ALLOCATOR: worker::Counting = worker::Counting;
 
-/// Cases of the default run (CI): 40–80 s on two cores in release mode (docs/RELIABILITY.md).
-const DEFAULT_CASES: u64 = 1000;
+/// Cases of the default run (CI, release mode): 1000, about 1–2 minutes on two cores
+/// (docs/RELIABILITY.md); 50 in a debug build, whose solves are some twenty times slower.
+const DEFAULT_CASES: u64 = if cfg!(debug_assertions) { 50 } else { 1000 };
+
+/// Seconds per case before it counts as a hang: the slowest case seen in 10⁵ (a reduced solve
+/// cutting back to its smallest step) took under a minute on a loaded machine.
+const DEFAULT_TIMEOUT_S: u64 = if cfg!(debug_assertions) { 1200 } else { 120 };
 
 /// The default seed.
 const DEFAULT_SEED: u64 = 1988;
@@ -105,7 +116,7 @@ fn env_u64(name: &str) -> Option<u64> {
 
 fn limits() -> Limits {
     Limits {
-        timeout: Duration::from_secs(env_u64("TIMEOUT_S").unwrap_or(120)),
+        timeout: Duration::from_secs(env_u64("TIMEOUT_S").unwrap_or(DEFAULT_TIMEOUT_S)),
         memory_mb: env_u64("MEMORY_MB").unwrap_or(2048),
     }
 }
@@ -196,11 +207,14 @@ fn summary(records: &[Record], seconds: f64, jobs: u64, limits: Limits) -> Strin
         }
         s.push('\n');
     }
-    if let Some(r) = records.iter().max_by(|a, b| a.ms.total_cmp(&b.ms)) {
+    let cpu: f64 = records.iter().map(|r| r.cpu_ms).sum::<f64>() / 1e3;
+    s.push_str(&format!("  CPU time in the cases: {cpu:.0} s\n"));
+    if let Some(r) = records.iter().max_by(|a, b| a.cpu_ms.total_cmp(&b.cpu_ms)) {
         s.push_str(&format!(
-            "  slowest case: {} ({}) {:.2} s\n",
+            "  slowest case: {} ({}) {:.1} s CPU, {:.1} s wall\n",
             r.index,
             r.input,
+            r.cpu_ms / 1e3,
             r.ms / 1e3
         ));
     }
@@ -225,7 +239,8 @@ fn write_report(path: &str, records: &[Record]) {
         let line = serde_json::json!({
             "index": r.index, "input": r.input, "notes": r.notes, "class": o.class.name(),
             "stage": o.stage, "message": o.message, "location": o.location, "frames": o.frames,
-            "dofs": o.dofs, "solved": o.solved, "ms": r.ms, "peak_mb": r.peak_mb,
+            "dofs": o.dofs, "solved": o.solved, "ms": r.ms, "cpu_ms": r.cpu_ms,
+            "peak_mb": r.peak_mb,
             "known": known(r).map(|k| k.file),
         });
         let _ = writeln!(f, "{line}");
@@ -236,7 +251,7 @@ fn write_report(path: &str, records: &[Record]) {
 /// its environment when started as a worker, and nothing otherwise.
 #[test]
 fn worker_entry_point() {
-    supervise::worker_main();
+    worker::worker_main();
 }
 
 /// The bounded fuzz run: every mutated case ends in finite results or a message in words; no
@@ -276,7 +291,7 @@ fn mutated_scenes_and_decks_end_in_results_or_messages() {
         write_report(&path, &records);
     }
     if let Some(k) = single {
-        let input = supervise::input(&Work::Cases(seed), &supervise::corpus(), k);
+        let input = worker::input(&Work::Cases(seed), &worker::corpus(), k);
         let ext = if input.name.ends_with(".inp") {
             "inp"
         } else {
@@ -329,7 +344,7 @@ fn mutated_scenes_and_decks_end_in_results_or_messages() {
 /// known-failing ones must still fail as listed (so a fix shows up and its entry goes).
 #[test]
 fn fuzz_regressions_replay() {
-    let dir = supervise::root().join("tests/fuzz_regressions");
+    let dir = worker::root().join("tests/fuzz_regressions");
     let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
         .map(|d| d.flatten().map(|e| e.path()).collect())
         .unwrap_or_default();
@@ -368,6 +383,32 @@ fn fuzz_regressions_replay() {
     assert!(wrong.is_empty(), "{}", wrong.join("\n"));
 }
 
+/// The harness's self-test: worker items that panic, abort, allocate 3 GiB and spin are told
+/// apart — a panic with its message and place, two aborts (the second the memory ceiling's
+/// "memory allocation of … failed"), a hang after the time limit in CPU seconds.
+#[test]
+fn the_supervisor_catches_panics_aborts_memory_and_hangs() {
+    let limits = Limits {
+        timeout: Duration::from_secs(2),
+        memory_mb: 2048,
+    };
+    let n = worker::PROBES.len() as u64;
+    let (records, errors) = supervise::run(&Work::Probes, 0, n, 2, limits, &|_| {});
+    assert!(errors.is_empty(), "{errors:?}");
+    let seen: Vec<(Class, &str)> = records
+        .iter()
+        .map(|r| (r.outcome.class, r.outcome.message.as_str()))
+        .collect();
+    assert_eq!(seen.len(), 4, "{seen:?}");
+    assert_eq!(seen[0], (Class::Panic, "probe: a panic"));
+    assert!(records[0].outcome.location.contains("worker.rs"));
+    assert_eq!(seen[1].0, Class::Abort);
+    assert!(seen[1].1.contains("SIGABRT"), "{}", seen[1].1);
+    assert_eq!(seen[2].0, Class::Abort);
+    assert!(seen[2].1.contains("memory allocation of"), "{}", seen[2].1);
+    assert_eq!(seen[3].0, Class::Hang, "{}", seen[3].1);
+}
+
 /// Inputs of the corpus that are refused unmutated, and why (the fuzzer still mutates them: their
 /// parse, mesh and export stages are exercised).
 /// The through-width seed: `analysis::run` and `export::deck_of` ask every model for the node
@@ -378,7 +419,7 @@ const REFUSED_SEEDS: &[(&str, &str)] = &[("through_width_ortho.toml", "center_to
 /// finite results, so mutations start from inputs that reach every stage.
 #[test]
 fn the_fuzz_corpus_solves_unmutated() {
-    let corpus = supervise::corpus();
+    let corpus = worker::corpus();
     assert!(corpus.len() >= 12, "corpus of {} inputs", corpus.len());
     let mut bad = Vec::new();
     for (name, text) in &corpus {

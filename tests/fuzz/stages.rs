@@ -19,7 +19,6 @@ use crate::mutate::Format;
 use nonlin3d::newton::{NewtonSettings, Stepping};
 use nonlin3d::scene::Geometry;
 use nonlin3d::{Results, Scene};
-use std::io::Write;
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
@@ -115,9 +114,7 @@ fn enter(stage: &str) {
     let k = STAGES.iter().position(|s| *s == stage).unwrap_or(0);
     STAGE.store(k, Ordering::SeqCst);
     if ANNOUNCE.load(Ordering::Relaxed) {
-        let mut out = std::io::stdout().lock();
-        let _ = writeln!(out, "@@fuzz stage 0 \"{stage}\"");
-        let _ = out.flush();
+        crate::worker::say(&format!("@@fuzz stage 0 \"{stage}\""));
     }
 }
 

@@ -1,73 +1,21 @@
-//! Cases run in child processes: the test binary re-invokes itself (`worker_entry_point`) with
-//! the cases to run in its environment, under a virtual-memory ceiling (`ulimit -v`), with one
-//! Rayon thread. The child runs its cases in-process one after another under `catch_unwind`
-//! and reports each on stdout (`@@fuzz start K …`, `@@fuzz done K …`). The parent waits for
-//! each answer at most the per-case time limit: silence is a hang (the child is killed), an end
-//! of output in mid-case is an abort (signal, exit code and the last lines of stderr recorded);
-//! either way a new child carries on with the next case. Aborts and hangs so cost one process
-//! start each, and the cases in between run at in-process speed.
+//! Cases run in child processes (`worker.rs`): the test binary re-invokes itself
+//! (`worker_entry_point`) with the cases to run in its environment, under a virtual-memory
+//! ceiling (`ulimit -v`), with one Rayon thread, and runs them in-process one after another.
+//! The parent reads each case's record from the worker's stdout. A case that has used the time
+//! limit in CPU seconds (or ten times it in wall time) without an answer is a hang: the worker is
+//! killed. A worker whose output ends in mid-case aborted: its signal or exit code and what it
+//! said on stderr since the case began (e.g. "memory allocation of N bytes failed" and the
+//! workspace frames of the backtrace) are recorded. Either way a new worker carries on with the
+//! next case, so an abort or hang costs one process start and the cases in between run at
+//! in-process speed.
 
-use crate::mutate::{Format, mutate};
-use crate::rng::Rng;
 use crate::stages::{self, Class, Outcome};
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::io::{BufRead, BufReader, Read, Write};
-use std::path::{Path, PathBuf};
+use crate::worker::{Work, cpu_seconds};
+use std::io::{BufRead, BufReader, Read};
 use std::process::{Child, Command, Stdio};
-use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex, mpsc};
+use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
-
-/// The system allocator, counting live bytes and their peak (reported per case).
-pub struct Counting;
-
-static LIVE: AtomicUsize = AtomicUsize::new(0);
-static PEAK: AtomicUsize = AtomicUsize::new(0);
-
-fn grew(by: usize) {
-    let now = LIVE.fetch_add(by, Ordering::Relaxed) + by;
-    PEAK.fetch_max(now, Ordering::Relaxed);
-}
-
-// SAFETY: every call is forwarded to `System` unchanged; the counters only observe sizes.
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        // SAFETY: the caller's contract is `System.alloc`'s.
-        let p = unsafe { System.alloc(layout) };
-        if !p.is_null() {
-            grew(layout.size());
-        }
-        p
-    }
-
-    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
-        // SAFETY: as for `alloc`.
-        let p = unsafe { System.alloc_zeroed(layout) };
-        if !p.is_null() {
-            grew(layout.size());
-        }
-        p
-    }
-
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        // SAFETY: `ptr` came from this allocator with `layout`.
-        unsafe { System.dealloc(ptr, layout) };
-        LIVE.fetch_sub(layout.size(), Ordering::Relaxed);
-    }
-
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        // SAFETY: as for `dealloc`, with `new_size` checked by the caller.
-        let q = unsafe { System.realloc(ptr, layout, new_size) };
-        if !q.is_null() {
-            if new_size >= layout.size() {
-                grew(new_size - layout.size());
-            } else {
-                LIVE.fetch_sub(layout.size() - new_size, Ordering::Relaxed);
-            }
-        }
-        q
-    }
-}
 
 /// Limits on one case.
 #[derive(Debug, Clone, Copy)]
@@ -76,15 +24,6 @@ pub struct Limits {
     pub timeout: Duration,
     /// Virtual-memory ceiling of a worker process, MiB.
     pub memory_mb: u64,
-}
-
-/// What the workers run: mutated corpus cases of a seed, or files as they are.
-#[derive(Debug, Clone)]
-pub enum Work {
-    /// Case k is the k-th mutation of a corpus input under this seed.
-    Cases(u64),
-    /// Item k is this file, unmutated.
-    Files(Vec<PathBuf>),
 }
 
 /// One case's record, as the parent collects it.
@@ -100,165 +39,10 @@ pub struct Record {
     pub outcome: Outcome,
     /// Wall time, ms.
     pub ms: f64,
+    /// CPU time of the worker over the case (all threads), ms.
+    pub cpu_ms: f64,
     /// Peak of live heap bytes during the case above what was live before it, MiB.
     pub peak_mb: f64,
-}
-
-/// The package root.
-pub fn root() -> &'static Path {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-}
-
-/// The corpus: committed scenes and decks and the fuzz seeds, sorted by path (the case →
-/// input map depends on this order, so adding a file changes which input a case index mutates).
-pub fn corpus() -> Vec<(String, String)> {
-    let mut paths = Vec::new();
-    for dir in ["examples/scenes", "tests/decks", "tests/fuzz/seeds"] {
-        let Ok(entries) = std::fs::read_dir(root().join(dir)) else {
-            continue;
-        };
-        for e in entries.flatten() {
-            let p = e.path();
-            if Format::of(&p).is_some() {
-                paths.push(format!("{dir}/{}", e.file_name().to_string_lossy()));
-            }
-        }
-    }
-    paths.sort();
-    paths
-        .into_iter()
-        .filter_map(|p| Some((p.clone(), std::fs::read_to_string(root().join(&p)).ok()?)))
-        .collect()
-}
-
-/// Input `k` of `work`: name, format, bytes, the unmutated text, the mutations.
-pub struct Input {
-    /// Corpus path or file.
-    pub name: String,
-    /// Scene or deck.
-    pub format: Format,
-    /// What is fed to the pipeline.
-    pub bytes: Vec<u8>,
-    /// The unmutated text (cases only).
-    pub original: Option<String>,
-    /// Mutations applied.
-    pub notes: Vec<String>,
-}
-
-/// Case `k` of `work`.
-pub fn input(work: &Work, corpus: &[(String, String)], k: u64) -> Input {
-    match work {
-        Work::Cases(seed) => {
-            let mut rng = Rng::for_case(*seed, k);
-            let (name, text) = rng.pick(corpus);
-            let format = Format::of(Path::new(name)).unwrap_or(Format::Scene);
-            let m = mutate(&mut rng, text, format);
-            Input {
-                name: name.clone(),
-                format,
-                bytes: m.bytes,
-                original: Some(text.clone()),
-                notes: m.notes,
-            }
-        }
-        Work::Files(files) => {
-            let path = &files[k as usize];
-            Input {
-                name: path
-                    .strip_prefix(root())
-                    .unwrap_or(path)
-                    .display()
-                    .to_string(),
-                format: Format::of(path).unwrap_or(Format::Scene),
-                bytes: std::fs::read(path).unwrap_or_default(),
-                original: None,
-                notes: Vec::new(),
-            }
-        }
-    }
-}
-
-fn say(line: &str) {
-    let mut out = std::io::stdout().lock();
-    let _ = writeln!(out, "{line}");
-    let _ = out.flush();
-}
-
-/// The child's side: runs the items `FROM, FROM + STRIDE, … < TO` of the work in its
-/// environment (nothing when not started as a worker).
-pub fn worker_main() {
-    let var = |k: &str| std::env::var(format!("NONLIN3D_FUZZ_{k}")).ok();
-    if var("ROLE").as_deref() != Some("worker") {
-        return;
-    }
-    let num = |k: &str| var(k).and_then(|v| v.parse::<u64>().ok()).unwrap_or(0);
-    let (from, to, stride) = (num("FROM"), num("TO"), num("STRIDE").max(1));
-    let work = match var("WORK").unwrap_or_default().split_once(':') {
-        Some(("cases", seed)) => Work::Cases(seed.parse().unwrap_or(0)),
-        Some(("files", list)) => Work::Files(list.split('\n').map(PathBuf::from).collect()),
-        _ => return,
-    };
-    stages::record_panics();
-    stages::ANNOUNCE.store(true, Ordering::Relaxed);
-    // The program's main thread has 8 MiB of stack; libtest's threads 2 MiB.
-    let runner = std::thread::Builder::new()
-        .stack_size(8 << 20)
-        .spawn(move || {
-            let corpus = corpus();
-            let mut k = from;
-            while k < to {
-                run_item(&work, &corpus, k);
-                k += stride;
-            }
-        });
-    if let Ok(handle) = runner {
-        let _ = handle.join();
-    }
-}
-
-fn run_item(work: &Work, corpus: &[(String, String)], k: u64) {
-    let made = std::panic::catch_unwind(|| input(work, corpus, k));
-    let Ok(inp) = made else {
-        let p = stages::take_panic().unwrap_or_default();
-        say(&format!(
-            "@@fuzz harness {k} {}",
-            serde_json::json!({ "message": p.message, "location": p.location })
-        ));
-        return;
-    };
-    say(&format!(
-        "@@fuzz start {k} {}",
-        serde_json::json!({ "input": inp.name, "notes": inp.notes })
-    ));
-    stages::take_panic();
-    let base = LIVE.load(Ordering::Relaxed);
-    PEAK.store(base, Ordering::Relaxed);
-    let t = Instant::now();
-    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        stages::run_input(inp.format, &inp.bytes, inp.original.as_deref())
-    }));
-    let ms = t.elapsed().as_secs_f64() * 1e3;
-    let peak_mb = PEAK.load(Ordering::Relaxed).saturating_sub(base) as f64 / (1 << 20) as f64;
-    let o = result.unwrap_or_else(|_| {
-        let p = stages::take_panic().unwrap_or_default();
-        Outcome {
-            class: Class::Panic,
-            stage: stages::current_stage().into(),
-            message: p.message,
-            location: p.location,
-            frames: p.frames,
-            dofs: 0,
-            solved: false,
-        }
-    });
-    say(&format!(
-        "@@fuzz done {k} {}",
-        serde_json::json!({
-            "class": o.class.name(), "stage": o.stage, "message": o.message,
-            "location": o.location, "frames": o.frames, "dofs": o.dofs, "solved": o.solved,
-            "ms": ms, "peak_mb": peak_mb,
-        })
-    ));
 }
 
 enum Line {
@@ -312,6 +96,7 @@ fn spawn(work: &Work, from: u64, to: u64, stride: u64, limits: Limits) -> std::i
     };
     let work = match work {
         Work::Cases(seed) => format!("cases:{seed}"),
+        Work::Probes => "probes:".into(),
         Work::Files(f) => format!(
             "files:{}",
             f.iter()
@@ -379,6 +164,7 @@ fn last_words(stderr: &str) -> String {
                     .is_none_or(|n| n.parse::<usize>().is_err())
                 && !l.starts_with("running ")
                 && !l.starts_with("test ")
+                && !l.starts_with("@@fuzz")
         })
         .collect();
     said[said.len().saturating_sub(3)..].join(" / ")
@@ -406,6 +192,7 @@ fn failure(
             solved: false,
         },
         ms: 0.0,
+        cpu_ms: 0.0,
         peak_mb: 0.0,
     }
 }
@@ -433,6 +220,7 @@ fn record_of(k: u64, input: &str, notes: &[String], v: &serde_json::Value) -> Re
             solved: v["solved"].as_bool().unwrap_or(false),
         },
         ms: v["ms"].as_f64().unwrap_or(0.0),
+        cpu_ms: v["cpu_ms"].as_f64().unwrap_or(0.0),
         peak_mb: v["peak_mb"].as_f64().unwrap_or(0.0),
     }
 }
@@ -467,6 +255,51 @@ pub fn run(
     (records, errors)
 }
 
+/// The worker's protocol lines, read on a thread ([`Line::End`] when its stdout closes).
+fn lines_of(child: &mut Child) -> mpsc::Receiver<Line> {
+    let (tx, rx) = mpsc::channel();
+    if let Some(out) = child.stdout.take() {
+        std::thread::spawn(move || {
+            for l in BufReader::new(out).lines().map_while(Result::ok) {
+                if let Some(line) = parse_line(&l) {
+                    let _ = tx.send(line);
+                }
+            }
+            let _ = tx.send(Line::End);
+        });
+    }
+    rx
+}
+
+/// The worker's stderr, kept (its last 128–256 KiB) by a thread that ends with the worker.
+fn stderr_of(child: &mut Child) -> (Arc<Mutex<String>>, Option<JoinHandle<()>>) {
+    let stderr = Arc::new(Mutex::new(String::new()));
+    let mut reader = None;
+    if let Some(mut err) = child.stderr.take() {
+        let keep = Arc::clone(&stderr);
+        reader = Some(std::thread::spawn(move || {
+            let mut buf = [0u8; 4096];
+            while let Ok(n) = err.read(&mut buf) {
+                if n == 0 {
+                    break;
+                }
+                if let Ok(mut s) = keep.lock() {
+                    s.push_str(&String::from_utf8_lossy(&buf[..n]));
+                    if s.len() > 1 << 18 {
+                        let cut = s.len() - (1 << 17);
+                        let cut = (cut..s.len()).find(|&i| s.is_char_boundary(i)).unwrap_or(0);
+                        s.drain(..cut);
+                    }
+                }
+            }
+        }));
+    }
+    (stderr, reader)
+}
+
+/// How often a lane looks at a silent worker's CPU time.
+const POLL: Duration = Duration::from_secs(5);
+
 /// One worker lane: children started one after another until every item is answered.
 fn lane(
     work: &Work,
@@ -487,50 +320,23 @@ fn lane(
                 return (records, errors);
             }
         };
-        let (tx, rx) = mpsc::channel();
-        if let Some(out) = child.stdout.take() {
-            let tx = tx.clone();
-            std::thread::spawn(move || {
-                for l in BufReader::new(out).lines().map_while(Result::ok) {
-                    if let Some(line) = parse_line(&l) {
-                        let _ = tx.send(line);
-                    }
-                }
-                let _ = tx.send(Line::End);
-            });
-        }
-        let stderr = Arc::new(Mutex::new(String::new()));
-        if let Some(mut err) = child.stderr.take() {
-            let keep = Arc::clone(&stderr);
-            std::thread::spawn(move || {
-                let mut buf = [0u8; 4096];
-                while let Ok(n) = err.read(&mut buf) {
-                    if n == 0 {
-                        break;
-                    }
-                    if let Ok(mut s) = keep.lock() {
-                        s.push_str(&String::from_utf8_lossy(&buf[..n]));
-                        if s.len() > 1 << 18 {
-                            let cut = s.len() - (1 << 17);
-                            let cut = (cut..s.len()).find(|&i| s.is_char_boundary(i)).unwrap_or(0);
-                            s.drain(..cut);
-                        }
-                    }
-                }
-            });
-        }
+        let rx = lines_of(&mut child);
+        let (stderr, mut stderr_reader) = stderr_of(&mut child);
+        let pid = child.id().to_string();
+        let spawned = Instant::now();
+        // (case, CPU seconds of the worker at its start, wall clock at its start)
+        let mut clock: Option<(f64, Instant)> = None;
         let mut current: Option<(u64, String, Vec<String>)> = None;
         let mut stage = String::new();
         loop {
-            match rx.recv_timeout(limits.timeout) {
+            match rx.recv_timeout(POLL.min(limits.timeout)) {
                 Ok(Line::Start(k, input, notes)) => {
                     current = Some((k, input, notes));
-                    if let Ok(mut s) = stderr.lock() {
-                        s.clear();
-                    }
+                    clock = Some((cpu_seconds(&pid).unwrap_or(0.0), Instant::now()));
                 }
                 Ok(Line::Stage(s)) => stage = s,
                 Ok(Line::Done(k, v)) => {
+                    clock = None;
                     let (input, notes) = match current.take() {
                         Some((_, i, n)) => (i, n),
                         None => (String::new(), Vec::new()),
@@ -546,14 +352,19 @@ fn lane(
                 }
                 Ok(Line::End) => {
                     let status = child.wait();
-                    // Give the stderr reader a moment to drain the child's last words.
-                    std::thread::sleep(Duration::from_millis(50));
+                    // The child's last words: its stderr read to the end.
+                    if let Some(h) = stderr_reader.take() {
+                        let _ = h.join();
+                    }
                     if let Some((k, input, notes)) = current.take() {
                         let how = status.map_or_else(|e| e.to_string(), exit_words);
+                        // What the worker said on stderr since it started this case.
                         let said = stderr.lock().map(|s| s.clone()).unwrap_or_default();
-                        let message = format!("{how}: {}", last_words(&said));
+                        let marker = format!("@@fuzz start {k}\n");
+                        let said = said.rsplit_once(&marker).map_or(said.as_str(), |p| p.1);
+                        let message = format!("{how}: {}", last_words(said));
                         let mut r = failure(k, &input, &notes, Class::Abort, &stage, message);
-                        r.outcome.frames = stages::nonlin3d_frames(&said);
+                        r.outcome.frames = stages::nonlin3d_frames(said);
                         progress(&r);
                         records.push(r);
                         next = k + stride;
@@ -565,13 +376,29 @@ fn lane(
                     break;
                 }
                 Err(_) => {
+                    // A hang is a case that has used the limit in CPU time (a loaded machine
+                    // only slows it down), or ten times the limit in wall time.
+                    let limit = limits.timeout.as_secs_f64();
+                    let (cpu, wall) = match clock {
+                        Some((cpu0, t0)) => {
+                            let wall = t0.elapsed().as_secs_f64();
+                            (cpu_seconds(&pid).map_or(wall, |c| c - cpu0), wall)
+                        }
+                        None => {
+                            let wall = spawned.elapsed().as_secs_f64();
+                            (wall, wall)
+                        }
+                    };
+                    if cpu < limit && wall < 10.0 * limit {
+                        continue;
+                    }
                     let _ = child.kill();
                     let _ = child.wait();
                     match current.take() {
                         Some((k, input, notes)) => {
                             let message = format!(
-                                "no answer within {} s (the worker was killed)",
-                                limits.timeout.as_secs()
+                                "no answer after {cpu:.0} s of CPU time ({wall:.0} s wall; the \
+                                 worker was killed)"
                             );
                             let r = failure(k, &input, &notes, Class::Hang, &stage, message);
                             progress(&r);
