@@ -44,6 +44,13 @@ impl Scene {
 pub(crate) fn scene(s: &Scene) -> Result<(), Error> {
     for (name, v) in s.geometry.lengths_mm() {
         positive(&format!("geometry.{name}"), v)?;
+        // Far outside this, coordinates in metres lose their digits or the cells' Jacobians
+        // underflow (a 1e-308 mm sublaminate meshes to det J = 0).
+        if !(1e-6..=1e6).contains(&v) {
+            return bad(format!(
+                "geometry.{name} = {v} mm: lengths must lie between 1e-6 mm and 1e6 mm"
+            ));
+        }
     }
     geometry_fits(&s.geometry)?;
     mesh_controls(s)?;
@@ -52,6 +59,14 @@ pub(crate) fn scene(s: &Scene) -> Result<(), Error> {
     let a = &s.analysis;
     positive("analysis.tolerance_n", a.tolerance_n)?;
     positive("analysis.max_increment", a.max_increment)?;
+    let smallest = nonlin3d_newton::Stepping::default().min;
+    if !(smallest..=1.0).contains(&a.max_increment) {
+        return bad(format!(
+            "analysis.max_increment = {}: must lie between {smallest} (the smallest increment \
+             Newton cuts back to) and 1 (the whole first level)",
+            a.max_increment
+        ));
+    }
     if a.refactor_every == 0 {
         return bad("analysis.refactor_every = 0: must be at least 1".into());
     }

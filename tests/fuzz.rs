@@ -71,46 +71,12 @@ struct Known {
 /// the run; each reproducer is replayed and must still fail this way — once fixed, the replay
 /// fails until its entry is removed here (the reproducer file stays as a regression test).
 const KNOWN_FAILING: &[Known] = &[
-    // crates/newton/src/path.rs: the stepping refused in its Debug form (`{stepping:?}`), after
-    // the scene checks let analysis.max_increment below the minimum increment (1e-4) through.
-    Known {
-        file: "stepping_debug_max_increment_1e-9.toml",
-        class: Class::DebugMessage,
-        patterns: &["Stepping {"],
-    },
     // crates/newton/src/path.rs: a failed attempt's termination in its Debug form
     // (`Singular("zero pivot …")`, also `Diverged`, `MaxIterations`) in the cutback message.
     Known {
         file: "termination_debug_free_node.inp",
         class: Class::DebugMessage,
         patterns: &["Singular("],
-    },
-    // crates/mesh/src/error.rs: the reference point of a non-positive det J as `{xi:?}`, for
-    // scenes whose lengths pass the checks but collapse or overflow the mesh (1e-308, 1e308 mm).
-    Known {
-        file: "jacobian_debug_h_1e-308.toml",
-        class: Class::DebugMessage,
-        patterns: &["at reference point ["],
-    },
-    // crates/vcct/src/criteria.rs: a toughness of 1e-308 J/m² (or an exponent of 4294967297)
-    // passes the criterion check and the failure index overflows to inf in results.json.
-    Known {
-        file: "non_finite_failure_index_g_iic_1e-308.toml",
-        class: Class::NonFinite,
-        patterns: &["failure_index ="],
-    },
-    // src/checks.rs: each mesh count up to 10 000 passes, their product is not bounded; 10 000
-    // slices abort in the mesh generator (memory allocation failed, SIGABRT).
-    Known {
-        file: "memory_abort_slices_10000.toml",
-        class: Class::Abort,
-        // The backtrace names the generator unless the failed allocation was too small to
-        // print one; the mutation then names the count.
-        patterns: &[
-            "crates/mesh/src/embedded.rs",
-            "slices = 10000",
-            "`slices = 8`: 8 → 10000",
-        ],
     },
 ];
 

@@ -16,7 +16,7 @@
 //! levels from the first that differs.
 
 use crate::mutate::Format;
-use nonlin3d::newton::{NewtonSettings, Stepping};
+use nonlin3d::newton::NewtonSettings;
 use nonlin3d::scene::Geometry;
 use nonlin3d::{Results, Scene};
 use std::sync::Mutex;
@@ -503,15 +503,15 @@ fn deck(text: &str) -> Outcome {
         return finished(Class::Ok, String::new(), dofs, false);
     }
     enter("solve");
-    let settings = NewtonSettings {
-        force_tolerance: 1e-4,
-        ..NewtonSettings::default()
+    // The defaults of `nonlin3d solve`: 1e-4 N, the deck's own *STATIC increments.
+    let options = nonlin3d::deck::StepOptions {
+        newton: NewtonSettings {
+            force_tolerance: 1e-4,
+            ..NewtonSettings::default()
+        },
+        initial_increment: None,
     };
-    let stepping = Stepping {
-        initial: 0.25,
-        ..Stepping::default()
-    };
-    let steps = match nonlin3d::deck::solve_deck(&model, &settings, &stepping) {
+    let steps = match nonlin3d::deck::solve_deck(&model, &options) {
         Ok(s) => s,
         Err(e) => return refused("solve", e.to_string(), dofs),
     };
@@ -525,10 +525,10 @@ fn deck(text: &str) -> Outcome {
             }
         }
         for (k, inc) in s.increments.iter().enumerate() {
-            if !inc.lambda.is_finite() || inc.residuals.iter().any(|r| !r.is_finite()) {
+            if !inc.step_time.is_finite() || inc.residuals.iter().any(|r| !r.is_finite()) {
                 let message = format!(
-                    "step {}: increment {k} (summary.json): λ = {}, residuals {:?}",
-                    s.step, inc.lambda, inc.residuals
+                    "step {}: increment {k} (summary.json): step time {}, residuals {:?}",
+                    s.step, inc.step_time, inc.residuals
                 );
                 return finished(Class::NonFinite, message, dofs, true);
             }

@@ -123,9 +123,17 @@ pub fn corpus() -> Vec<(String, String)> {
         }
     }
     paths.sort();
+    // Self-contained inputs only: a deck that includes another (read from text, *INCLUDE is
+    // refused by design) or a mesh-only fragment meant to be included (no *STEP) cannot be
+    // solved on its own.
+    let whole = |text: &str| {
+        let upper = text.to_ascii_uppercase();
+        !upper.contains("*INCLUDE") && (upper.contains("*STEP") || !upper.contains("*NODE"))
+    };
     paths
         .into_iter()
         .filter_map(|p| Some((p.clone(), std::fs::read_to_string(root().join(&p)).ok()?)))
+        .filter(|(_, text)| whole(text))
         .collect()
 }
 

@@ -27,7 +27,7 @@ pub enum MeshError {
         count: usize,
     },
     /// A set refers to a cell that does not exist, or a face number outside 0..6.
-    #[error("{owner}: cell {cell} (face {face:?}) does not exist ({count} cells)")]
+    #[error("{owner}: cell {cell}{} does not exist ({count} cells)", face.map_or(String::new(), |f| format!(" (face {f})")))]
     CellIndex {
         /// Which set.
         owner: String,
@@ -47,7 +47,12 @@ pub enum MeshError {
         index: usize,
     },
     /// A cell is inverted or degenerate: det J ≤ 0 somewhere.
-    #[error("cell {cell}: det J = {det:e} ≤ 0 at reference point {xi:?}")]
+    #[error(
+        "cell {cell}: det J = {det:e} ≤ 0 at reference point (ξ, η, ζ) = ({}, {}, {}): the cell is inverted or degenerate (check lengths and counts)",
+        xi[0],
+        xi[1],
+        xi[2]
+    )]
     Inverted {
         /// Cell index.
         cell: usize,

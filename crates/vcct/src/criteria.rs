@@ -35,6 +35,11 @@ pub enum MixedMode {
     },
 }
 
+/// Smallest toughness a criterion accepts, J/m² (real interfaces: 10 … 10⁴ J/m²).
+pub const MIN_TOUGHNESS: f64 = 1e-3;
+/// Largest exponent (α, β, η) a criterion accepts.
+pub const MAX_EXPONENT: f64 = 100.0;
+
 impl MixedMode {
     /// Checks that toughnesses and exponents are positive and finite.
     pub fn validate(&self) -> Result<(), VcctError> {
@@ -57,15 +62,27 @@ impl MixedMode {
             }
         };
         for &(name, v) in vals {
-            if !(v > 0.0 && v.is_finite()) {
+            // Toughnesses of real interfaces are 10 … 10⁴ J/m²; the bounds keep every index
+            // finite for any finite G (a toughness of 1e-308 made (G/G_c)^β overflow).
+            let (lo, hi) = if name.starts_with("G_") {
+                (MIN_TOUGHNESS, 1e12)
+            } else {
+                (1e-3, MAX_EXPONENT)
+            };
+            if !(v >= lo && v <= hi) {
                 return Err(VcctError::Criterion { name, value: v });
             }
         }
         Ok(())
     }
 
-    /// The failure index of one front point (≥ 1: growth predicted).
+    /// The failure index of one front point (≥ 1: growth predicted). Saturates at f64::MAX
+    /// rather than overflow to ∞ for an absurd G (never a non-finite number in the results).
     pub fn index(&self, r: &FrontRelease) -> f64 {
+        self.raw_index(r).min(f64::MAX)
+    }
+
+    fn raw_index(&self, r: &FrontRelease) -> f64 {
         let g_i = r.g_i.max(0.0);
         let (g_ii, g_iii) = (r.g_ii.abs(), r.g_iii.abs());
         match *self {

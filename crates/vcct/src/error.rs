@@ -42,7 +42,9 @@ pub enum VcctError {
         area: f64,
     },
     /// A criterion parameter that is not positive and finite.
-    #[error("criterion parameter {name} = {value}: must be positive and finite")]
+    #[error(
+        "criterion parameter {name} = {value}: toughnesses must lie between 1e-3 and 1e12 J/m², exponents between 1e-3 and 100"
+    )]
     Criterion {
         /// Parameter.
         name: &'static str,
