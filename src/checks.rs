@@ -33,7 +33,9 @@ pub(crate) fn scene(s: &Scene) -> Result<(), Error> {
     layup(s)?;
     loads(s)?;
     let a = &s.analysis;
-    positive("analysis.tolerance_n", a.tolerance_n)?;
+    if let Some(t) = a.tolerance_n {
+        positive("analysis.tolerance_n", t)?;
+    }
     positive("analysis.max_increment", a.max_increment)?;
     if a.refactor_every == 0 {
         return bad("analysis.refactor_every = 0: must be at least 1".into());
