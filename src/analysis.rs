@@ -284,11 +284,18 @@ pub fn perturbation_loads(model: &Model, force: f64) -> Result<Vec<(usize, f64)>
     Ok(nodes.iter().map(|&n| (3 * n + 2, share)).collect())
 }
 
-/// Newton and stepping settings of a scene.
+/// Newton and stepping settings of a scene. Convergence: the relative residual criterion of
+/// [`NewtonSettings::default`] (‖r‖∞ ≤ 1e-8·F), or with `analysis.tolerance_n` that absolute
+/// tolerance in N alone (relative tolerance 0), as given.
 pub fn settings(scene: &Scene) -> (NewtonSettings, Stepping) {
     let a = &scene.analysis;
+    let base = NewtonSettings::default();
     let newton = NewtonSettings {
-        force_tolerance: a.tolerance_n,
+        force_tolerance: a.tolerance_n.unwrap_or(0.0),
+        relative_tolerance: match a.tolerance_n {
+            Some(_) => 0.0,
+            None => base.relative_tolerance,
+        },
         refactor_every: match a.newton {
             NewtonName::Full => 1,
             NewtonName::Modified => a.refactor_every,

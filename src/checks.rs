@@ -57,7 +57,9 @@ pub(crate) fn scene(s: &Scene) -> Result<(), Error> {
     layup(s)?;
     loads(s)?;
     let a = &s.analysis;
-    positive("analysis.tolerance_n", a.tolerance_n)?;
+    if let Some(t) = a.tolerance_n {
+        positive("analysis.tolerance_n", t)?;
+    }
     positive("analysis.max_increment", a.max_increment)?;
     let smallest = nonlin3d_newton::Stepping::default().min;
     if !(smallest..=1.0).contains(&a.max_increment) {

@@ -34,6 +34,6 @@ pub use predict::predicted_increment;
 pub use problem::{NonlinearProblem, StructuralProblem};
 pub use session::PathSolver;
 pub use solve::{
-    Bifurcation, IncrementReport, IterationRecord, NewtonSettings, TangentCache, Termination,
-    negative_pivots_at, solve_increment, solve_increment_with,
+    Bifurcation, IncrementReport, IterationRecord, NewtonSettings, REACHABLE, TangentCache,
+    Termination, negative_pivots_at, residual_tolerance, solve_increment, solve_increment_with,
 };

@@ -216,7 +216,7 @@ pub fn follow_path_with(
                     converged = false;
                 }
             }
-            let reason = format!("{:?}", attempt.termination);
+            let reason = attempt.termination.to_string();
             let pivots = attempt.negative_pivots();
             report.attempts.push(attempt);
             if converged {
@@ -302,7 +302,7 @@ pub fn perturbed_path(
         &mut k,
     )?;
     let ok = removed.converged();
-    let reason = format!("{:?}", removed.termination);
+    let reason = removed.termination.to_string();
     report.attempts.push(removed);
     if !ok {
         return Err(NewtonError::Cutback {
@@ -326,9 +326,11 @@ pub fn perturbed_path(
 /// The §3.2 protocol over one step: from `u` converged at load factor `from` (a stable state,
 /// e.g. the last level before the trivial path lost stability), the `perturbation` dead loads
 /// (DOF, force) act while the path is followed to `to` (with cutback, so the response bends
-/// smoothly onto a branch instead of snapping); then they are removed all at once as in the
-/// thesis — or, if that does not converge, in four parts (as the thesis did once, §4.2). `u` is
-/// updated only on success; errors name the stage.
+/// smoothly onto a branch instead of snapping); then they are removed at the same λ: all at
+/// once as in the thesis, and if that does not converge in parts with cutback (as the thesis
+/// did once in four parts, §4.2): a part that fails is halved, down to [`MIN_REMOVAL_PART`] of
+/// the load, and after a success the part doubles again. `u` is updated only on success;
+/// errors name the stage, and for the removal the fraction of the load still on.
 pub fn perturbed_step(
     problem: &mut crate::StructuralProblem,
     u: &mut Vec<f64>,
@@ -343,13 +345,6 @@ pub fn perturbed_step(
             .iter()
             .try_for_each(|&(dof, f)| problem.constraints.set_dead_load(dof, scale * f))
     };
-    let fail = |stage: &str, r: &IncrementReport| NewtonError::Cutback {
-        target: to,
-        reached: to,
-        cutbacks: 0,
-        last_step: 0.0,
-        reason: format!("{stage}: {:?}", r.termination),
-    };
     let mut trial = u.clone();
     set(problem, 1.0)?;
     let loaded = follow_path_from(problem, &mut trial, from, &[to], settings, stepping);
@@ -360,26 +355,69 @@ pub fn perturbed_step(
             return Err(e);
         }
     };
-    let mut solver = settings.solver.build();
-    solver.analyze(&problem.pattern())?;
-    let mut k = nonlin3d_solver::SymmetricMatrix::zeros(problem.pattern());
-    let loaded = trial.clone();
-    set(problem, 0.0)?;
-    let r = solve_increment(problem, &mut trial, to, settings, solver.as_mut(), &mut k)?;
-    let ok = r.converged();
-    attempts.push(r);
-    if !ok {
-        trial = loaded;
-        for part in (0..4).rev() {
-            set(problem, part as f64 / 4.0)?;
-            let r = solve_increment(problem, &mut trial, to, settings, solver.as_mut(), &mut k)?;
-            if !r.converged() {
-                set(problem, 0.0)?;
-                return Err(fail("removing the perturbation load in parts", &r));
-            }
-            attempts.push(r);
-        }
+    let removed = remove_in_parts(problem, &mut trial, to, &set, settings, &mut attempts);
+    if let Err(e) = removed {
+        set(problem, 0.0)?;
+        return Err(e);
     }
     *u = trial;
     Ok(attempts)
+}
+
+/// The smallest part of the perturbation load [`perturbed_step`] removes in one solve: 1/64.
+pub const MIN_REMOVAL_PART: f64 = 1.0 / 64.0;
+
+/// Takes the perturbation load (scaled by `set`) from fully on to off at λ = `lambda`, `u`
+/// converged with it fully on: parts of the load, each a Newton solve at the same λ, the part
+/// halved after a failure and doubled after a success (at most the whole remainder).
+fn remove_in_parts(
+    problem: &mut crate::StructuralProblem,
+    u: &mut [f64],
+    lambda: f64,
+    set: &dyn Fn(
+        &mut crate::StructuralProblem,
+        f64,
+    ) -> Result<(), nonlin3d_assembly::AssemblyError>,
+    settings: &NewtonSettings,
+    attempts: &mut Vec<IncrementReport>,
+) -> Result<(), NewtonError> {
+    let mut solver = settings.solver.build();
+    solver.analyze(&problem.pattern())?;
+    let mut k = nonlin3d_solver::SymmetricMatrix::zeros(problem.pattern());
+    let (mut remaining, mut part, mut cutbacks) = (1.0f64, 1.0f64, 0);
+    while remaining > 0.0 {
+        part = part.min(remaining);
+        // Parts are powers of two of the whole load: the remainder stays exact.
+        let next = remaining - part;
+        set(problem, next)?;
+        let mut trial = u.to_vec();
+        let r = solve_increment(
+            problem,
+            &mut trial,
+            lambda,
+            settings,
+            solver.as_mut(),
+            &mut k,
+        )?;
+        let ok = r.converged();
+        let reason = r.termination.to_string();
+        attempts.push(r);
+        if ok {
+            u.copy_from_slice(&trial);
+            remaining = next;
+            part *= 2.0;
+        } else if part * 0.5 >= MIN_REMOVAL_PART {
+            part *= 0.5;
+            cutbacks += 1;
+        } else {
+            return Err(NewtonError::Perturbation {
+                lambda,
+                remaining: 100.0 * remaining,
+                part,
+                cutbacks,
+                reason,
+            });
+        }
+    }
+    Ok(())
 }
