@@ -73,9 +73,10 @@ enum Command {
         /// Output directory.
         #[arg(long, default_value = "nonlin3d-out")]
         out: PathBuf,
-        /// Residual tolerance in N (the thesis used 1e-4 N, §4.4).
-        #[arg(long, default_value_t = 1e-4)]
-        tolerance: f64,
+        /// Absolute residual tolerance in N instead of the default relative criterion
+        /// (‖r‖∞ ≤ 1e-8 of the largest external or reaction force; docs/THEORY.md).
+        #[arg(long)]
+        tolerance: Option<f64>,
         /// First increment of every NLGEOM step as a fraction of its period, every increment
         /// with DIRECT (default: the deck's *STATIC initial increment).
         #[arg(long)]
@@ -83,15 +84,25 @@ enum Command {
     },
 }
 
-fn solve(deck: &Path, out: &Path, tolerance: f64, increment: Option<f64>) -> Result<(), Failure> {
+fn solve(
+    deck: &Path,
+    out: &Path,
+    tolerance: Option<f64>,
+    increment: Option<f64>,
+) -> Result<(), Failure> {
     use nonlin3d::deck::Progress;
     nonlin3d::budget::install(None);
     let model = nonlin3d::mesh::read_inp_file(deck)
         .map_err(|e| Failure::Input(nonlin3d::Error::from(e)))?;
     let options = nonlin3d::deck::StepOptions {
-        newton: NewtonSettings {
-            force_tolerance: tolerance,
-            ..NewtonSettings::default()
+        // An absolute tolerance replaces the relative one, as in a scene's tolerance_n.
+        newton: match tolerance {
+            Some(t) => NewtonSettings {
+                force_tolerance: t,
+                relative_tolerance: 0.0,
+                ..NewtonSettings::default()
+            },
+            None => NewtonSettings::default(),
         },
         initial_increment: increment,
     };

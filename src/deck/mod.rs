@@ -72,7 +72,7 @@ impl IncrementSummary {
                 .chain(a.iterations.iter().map(|i| i.residual))
                 .collect(),
             converged: a.converged(),
-            termination: format!("{:?}", a.termination),
+            termination: a.termination.to_string(),
             negative_pivots: a.negative_pivots(),
         }
     }
