@@ -12,6 +12,9 @@ use nonlin3d_mesh::EmbeddedParams;
 /// (10 000 slices alone would give about 10⁸ nodes).
 pub const MAX_COUNT: usize = 10_000;
 
+/// Solver threads above this are refused (machines this runs on have far fewer cores).
+pub const MAX_THREADS: usize = 1024;
+
 fn bad<T>(message: String) -> Result<T, Error> {
     Err(Error::Scene(message))
 }
@@ -67,6 +70,14 @@ pub(crate) fn scene(s: &Scene) -> Result<(), Error> {
             "analysis.max_increment = {}: must lie between {smallest} (the smallest increment \
              Newton cuts back to) and 1 (the whole first level)",
             a.max_increment
+        ));
+    }
+    // faer splits its work into this many pieces: 4294967297 ran for minutes (fuzz case 6866).
+    if a.threads > MAX_THREADS {
+        return bad(format!(
+            "analysis.threads = {}: at most {MAX_THREADS} (0: all cores, 1: sequential and \
+             bitwise reproducible)",
+            a.threads
         ));
     }
     if a.refactor_every == 0 {

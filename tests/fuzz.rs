@@ -70,15 +70,7 @@ struct Known {
 /// pipeline (being rewritten). Cases that fail this way are counted as known and do not fail
 /// the run; each reproducer is replayed and must still fail this way — once fixed, the replay
 /// fails until its entry is removed here (the reproducer file stays as a regression test).
-const KNOWN_FAILING: &[Known] = &[
-    // crates/newton/src/path.rs: a failed attempt's termination in its Debug form
-    // (`Singular("zero pivot …")`, also `Diverged`, `MaxIterations`) in the cutback message.
-    Known {
-        file: "termination_debug_free_node.inp",
-        class: Class::DebugMessage,
-        patterns: &["Singular("],
-    },
-];
+const KNOWN_FAILING: &[Known] = &[];
 
 fn env_u64(name: &str) -> Option<u64> {
     std::env::var(format!("NONLIN3D_FUZZ_{name}"))

@@ -159,7 +159,7 @@ pub(crate) fn run_step(
         } else {
             let reason = match &report.termination {
                 Termination::MaxIterations => format!("no convergence in {iterations} iterations"),
-                other => format!("{other:?}"),
+                other => other.to_string(),
             };
             if p.direct || !step.nlgeom {
                 return Err(fail(format!(
