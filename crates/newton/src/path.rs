@@ -328,7 +328,7 @@ pub fn perturbed_path(
 /// (DOF, force) act while the path is followed to `to` (with cutback, so the response bends
 /// smoothly onto a branch instead of snapping); then they are removed at the same λ: all at
 /// once as in the thesis, and if that does not converge in parts with cutback (as the thesis
-/// did once in four parts, §4.2): a part that fails is halved, down to [`MIN_REMOVAL_PART`] of
+/// did once in four parts, §4.2): a part that fails is halved, down to `MIN_REMOVAL_PART` (1/64) of
 /// the load, and after a success the part doubles again. `u` is updated only on success;
 /// errors name the stage, and for the removal the fraction of the load still on.
 pub fn perturbed_step(
