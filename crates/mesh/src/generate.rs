@@ -2,6 +2,7 @@
 
 use crate::MeshError;
 use crate::model::{Cell, Mesh};
+use crate::names;
 use nonlin3d_element::ElementKind;
 use std::collections::HashMap;
 
@@ -159,18 +160,20 @@ pub fn structured_box(p: &BoxParams) -> Result<Mesh, MeshError> {
             }
         }
     }
-    for (axis, name) in ["x", "y", "z"].iter().enumerate() {
-        for (end, suffix) in [(0, "0"), (2 * p.counts[axis], "1")] {
+    for axis in 0..3 {
+        let (low, high) = names::box_ends(axis);
+        for (end, name) in [(0, low), (2 * p.counts[axis], high)] {
             let set: Vec<usize> = (0..mesh.nodes.len())
                 .filter(|&n| grid[n][axis] == end)
                 .collect();
-            mesh.node_sets.insert(format!("{name}{suffix}"), set);
+            mesh.node_sets.insert(name.into(), set);
         }
     }
     // Faces: (axis, side) → Abaqus face number (zero-based): ζ−: 0, ζ+: 1, η−: 2, ξ+: 3, η+: 4, ξ−: 5.
     let face_of = [[5u8, 3], [2, 4], [0, 1]];
-    for (axis, name) in ["x", "y", "z"].iter().enumerate() {
-        for (side, suffix) in [(0usize, "0"), (1, "1")] {
+    for axis in 0..3 {
+        let (low, high) = names::box_ends(axis);
+        for (side, name) in [(0usize, low), (1, high)] {
             let mut faces = Vec::new();
             for (c, _) in mesh.cells.iter().enumerate() {
                 let idx = [
@@ -182,11 +185,11 @@ pub fn structured_box(p: &BoxParams) -> Result<Mesh, MeshError> {
                     faces.push((c, face_of[axis][side]));
                 }
             }
-            mesh.face_sets.insert(format!("{name}{suffix}"), faces);
+            mesh.face_sets.insert(name.into(), faces);
         }
     }
     mesh.cell_sets
-        .insert("all".into(), (0..mesh.cells.len()).collect());
+        .insert(names::ALL.into(), (0..mesh.cells.len()).collect());
     mesh.validate()?;
     Ok(mesh)
 }

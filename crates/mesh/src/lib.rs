@@ -30,6 +30,7 @@ mod error;
 mod front;
 mod generate;
 pub mod inp;
+pub mod names;
 mod inp_read;
 mod model;
 mod quality;
