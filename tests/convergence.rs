@@ -14,8 +14,7 @@ fn isotropic(e_gpa: &str) -> String {
         .replace(
             "strains = [-0.001, -0.002, -0.003, -0.004, -0.005]",
             "strains = [-0.001, -0.002]",
-        )
-        .replace("tolerance_n = 1e-4\n", "");
+        );
     let named = "kind = \"named\"\nname = \"generic-graphite-epoxy\"\n";
     let start = text.find(named).unwrap();
     let end = start + text[start..].find("\n\n").unwrap();

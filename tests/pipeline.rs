@@ -127,8 +127,8 @@ fn scene_errors_are_named() {
         ("slices = 4", "slices = 4\nbogus = 1", "bogus"),
         ("kind = \"embedded\"", "kind = \"spherical\"", "spherical"),
         (
-            "tolerance_n = 1e-4",
-            "tolerance_n = 0.0",
+            "integration = \"gauss2\"",
+            "integration = \"gauss2\"\ntolerance_n = 0.0",
             "analysis.tolerance_n",
         ),
     ] {
@@ -204,8 +204,8 @@ fn bfgs_scenes_match_full_newton() {
     );
     let full = Scene::from_toml(&text).unwrap();
     let bfgs = Scene::from_toml(&text.replace(
-        "tolerance_n = 1e-4",
-        "tolerance_n = 1e-4\nnewton = \"bfgs\"",
+        "integration = \"gauss2\"",
+        "integration = \"gauss2\"\nnewton = \"bfgs\"",
     ))
     .unwrap();
     assert_eq!(bfgs.analysis.newton, nonlin3d::scene::NewtonName::Bfgs);
