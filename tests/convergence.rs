@@ -9,12 +9,10 @@ use nonlin3d::scene::DEFAULT_SCENE;
 /// The reference scene with an isotropic material of modulus `e_gpa` (ν = 0.3), 4 slices,
 /// ε = −0.001, −0.002, and no `tolerance_n` (the relative criterion).
 fn isotropic(e_gpa: &str) -> String {
-    let text = DEFAULT_SCENE
-        .replace("slices = 8", "slices = 4")
-        .replace(
-            "strains = [-0.001, -0.002, -0.003, -0.004, -0.005]",
-            "strains = [-0.001, -0.002]",
-        );
+    let text = DEFAULT_SCENE.replace("slices = 8", "slices = 4").replace(
+        "strains = [-0.001, -0.002, -0.003, -0.004, -0.005]",
+        "strains = [-0.001, -0.002]",
+    );
     let named = "kind = \"named\"\nname = \"generic-graphite-epoxy\"\n";
     let start = text.find(named).unwrap();
     let end = start + text[start..].find("\n\n").unwrap();
