@@ -12,6 +12,7 @@ use nonlin3d::element::{
     Workspace, evaluate, evaluate_batch, evaluate_batch_with,
 };
 use nonlin3d::laminate::{ShearCoupling, Stiffness, materials};
+use nonlin3d_testkit::Lcg;
 use std::hint::black_box;
 use std::time::Duration;
 
@@ -29,18 +30,6 @@ const CASES: [(ElementKind, IntegrationRule, &str); 4] = [
 /// Elements per batch: a thesis-size model (model 6 has ~1 000 Hex20 cells).
 const BATCH: usize = 1024;
 
-/// Deterministic pseudo-random numbers in [−1, 1).
-struct Lcg(u64);
-impl Lcg {
-    fn next(&mut self) -> f64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        ((self.0 >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
-    }
-}
-
 /// A distorted laminate-like element (2 × 2 × 0.25 mm, corners moved 10 %) with a
 /// postbuckling-size displacement field (rotation ~0.1 rad, strains ~0.5 %).
 fn element(kind: ElementKind, rng: &mut Lcg) -> (Vec<[f64; 3]>, Vec<[f64; 3]>) {
@@ -51,7 +40,7 @@ fn element(kind: ElementKind, rng: &mut Lcg) -> (Vec<[f64; 3]>, Vec<[f64; 3]>) {
         .map(|p| {
             let mut q = [0.0; 3];
             for r in 0..3 {
-                q[r] = 0.5 * size[r] * p[r] + 0.1 * 0.25e-3 * rng.next();
+                q[r] = 0.5 * size[r] * p[r] + 0.1 * 0.25e-3 * rng.uniform(-1.0, 1.0);
             }
             q
         })
@@ -62,7 +51,7 @@ fn element(kind: ElementKind, rng: &mut Lcg) -> (Vec<[f64; 3]>, Vec<[f64; 3]>) {
             [
                 -0.1 * p[2] + 0.005 * p[0],
                 0.002 * p[1],
-                0.1 * p[0] + 1e-6 * rng.next(),
+                0.1 * p[0] + 1e-6 * rng.uniform(-1.0, 1.0),
             ]
         })
         .collect();
@@ -86,7 +75,7 @@ fn bench_single(c: &mut Criterion) {
     group.throughput(Throughput::Elements(1));
     for (kind, rule, name) in CASES {
         let table = ShapeTable::new(kind, rule).unwrap_or_else(|e| panic!("{e}"));
-        let (x, u) = element(kind, &mut Lcg(7));
+        let (x, u) = element(kind, &mut Lcg::new(7));
         let mut out = ElementOutput::new(&table);
         let mut ws = Workspace::new(&table);
         eprintln!(
@@ -137,7 +126,7 @@ fn bench_batched(c: &mut Criterion) {
     group.throughput(Throughput::Elements(BATCH as u64));
     for (kind, rule, name) in CASES {
         let table = ShapeTable::new(kind, rule).unwrap_or_else(|e| panic!("{e}"));
-        let mut rng = Lcg(11);
+        let mut rng = Lcg::new(11);
         let (mut coords, mut disp) = (Vec::new(), Vec::new());
         for _ in 0..BATCH {
             let (x, u) = element(kind, &mut rng);

@@ -7,80 +7,28 @@ pub mod ccx;
 use nonlin3d::element::{ElementKind, IntegrationRule, ShapeTable, linear_stiffness};
 use nonlin3d::laminate::Stiffness;
 use nonlin3d::solver::{SymmetricMatrix, SymmetricPattern};
-use std::collections::HashMap;
 use std::sync::Arc;
 
-/// A structured box of n[0]×n[1]×n[2] elements with element sizes h (graded nothing).
+/// A structured box of n[0]×n[1]×n[2] elements with element sizes h (graded nothing): the
+/// shared test block (`nonlin3d_testkit::Block`) with the element kind it was built for.
 pub struct BoxMesh {
     pub kind: ElementKind,
-    pub n: [usize; 3],
-    pub coords: Vec<[f64; 3]>,
-    /// Doubled integer grid coordinates of each node (mid-edge nodes have one odd coordinate).
-    pub grid: Vec<[usize; 3]>,
-    pub cells: Vec<Vec<usize>>,
+    pub block: nonlin3d_testkit::Block,
+}
+
+impl std::ops::Deref for BoxMesh {
+    type Target = nonlin3d_testkit::Block;
+    fn deref(&self) -> &Self::Target {
+        &self.block
+    }
 }
 
 impl BoxMesh {
     pub fn new(kind: ElementKind, n: [usize; 3], h: [f64; 3]) -> Self {
-        let mut ids: HashMap<[usize; 3], usize> = HashMap::new();
-        let (mut coords, mut grid, mut cells) = (Vec::new(), Vec::new(), Vec::new());
-        for k in 0..n[2] {
-            for j in 0..n[1] {
-                for i in 0..n[0] {
-                    let cell = kind
-                        .reference_nodes()
-                        .iter()
-                        .map(|p| {
-                            let g = [
-                                (2 * i as i64 + 1 + p[0] as i64) as usize,
-                                (2 * j as i64 + 1 + p[1] as i64) as usize,
-                                (2 * k as i64 + 1 + p[2] as i64) as usize,
-                            ];
-                            *ids.entry(g).or_insert_with(|| {
-                                coords.push([
-                                    0.5 * h[0] * g[0] as f64,
-                                    0.5 * h[1] * g[1] as f64,
-                                    0.5 * h[2] * g[2] as f64,
-                                ]);
-                                grid.push(g);
-                                coords.len() - 1
-                            })
-                        })
-                        .collect();
-                    cells.push(cell);
-                }
-            }
-        }
         Self {
             kind,
-            n,
-            coords,
-            grid,
-            cells,
+            block: nonlin3d_testkit::Block::new(kind.reference_nodes(), n, h),
         }
-    }
-
-    pub fn dofs(&self) -> usize {
-        3 * self.coords.len()
-    }
-
-    /// DOFs of each cell, node-major.
-    pub fn cell_dofs(&self) -> Vec<Vec<usize>> {
-        self.cells
-            .iter()
-            .map(|c| {
-                c.iter()
-                    .flat_map(|&n| [3 * n, 3 * n + 1, 3 * n + 2])
-                    .collect()
-            })
-            .collect()
-    }
-
-    /// Nodes on the face x = 0 (axis 0), y = 0 (axis 1) or z = 0 (axis 2).
-    pub fn nodes_at_zero(&self, axis: usize) -> Vec<usize> {
-        (0..self.coords.len())
-            .filter(|&i| self.grid[i][axis] == 0)
-            .collect()
     }
 
     /// The linear stiffness, with the DOFs in `fixed` replaced by unit rows and columns (so

@@ -23,7 +23,7 @@ fn graphite(angle_deg: f64, coupling: ShearCoupling) -> Stiffness {
 fn zero_modes(
     kind: ElementKind,
     rule: IntegrationRule,
-    n: [i64; 3],
+    n: [usize; 3],
     material: &Stiffness,
 ) -> usize {
     let table = ShapeTable::new(kind, rule).unwrap();

@@ -3,64 +3,36 @@
 
 use nonlin3d_element::{ElementKind, ElementOutput, Kinematics, ShapeTable, Workspace, evaluate};
 use nonlin3d_laminate::Stiffness;
-use std::collections::HashMap;
 
-/// A structured block of nx×ny×nz elements of size h, nodes keyed by doubled integer grid
-/// coordinates (so Hex20 mid-edge nodes have an odd coordinate).
+/// A structured block of nx×ny×nz elements of size h (`nonlin3d_testkit::Block`: nodes keyed by
+/// doubled integer grid coordinates, so Hex20 mid-edge nodes have an odd coordinate), with the
+/// element kind it was built for.
 pub struct Block {
     pub kind: ElementKind,
-    pub coords: Vec<[f64; 3]>,
-    pub grid: Vec<[i64; 3]>,
-    pub cells: Vec<Vec<usize>>,
-    pub n: [i64; 3],
+    pub block: nonlin3d_testkit::Block,
 }
 
-pub fn block(kind: ElementKind, n: [i64; 3], h: [f64; 3]) -> Block {
-    let mut ids: HashMap<[i64; 3], usize> = HashMap::new();
-    let mut coords = Vec::new();
-    let mut grid = Vec::new();
-    let mut cells = Vec::new();
-    for k in 0..n[2] {
-        for j in 0..n[1] {
-            for i in 0..n[0] {
-                let mut cell = Vec::new();
-                for p in kind.reference_nodes() {
-                    let g = [
-                        2 * i + 1 + p[0] as i64,
-                        2 * j + 1 + p[1] as i64,
-                        2 * k + 1 + p[2] as i64,
-                    ];
-                    let id = *ids.entry(g).or_insert_with(|| {
-                        coords.push([
-                            0.5 * h[0] * g[0] as f64,
-                            0.5 * h[1] * g[1] as f64,
-                            0.5 * h[2] * g[2] as f64,
-                        ]);
-                        grid.push(g);
-                        coords.len() - 1
-                    });
-                    cell.push(id);
-                }
-                cells.push(cell);
-            }
-        }
+impl std::ops::Deref for Block {
+    type Target = nonlin3d_testkit::Block;
+    fn deref(&self) -> &Self::Target {
+        &self.block
     }
+}
+
+impl std::ops::DerefMut for Block {
+    fn deref_mut(&mut self) -> &mut Self::Target {
+        &mut self.block
+    }
+}
+
+pub fn block(kind: ElementKind, n: [usize; 3], h: [f64; 3]) -> Block {
     Block {
         kind,
-        coords,
-        grid,
-        cells,
-        n,
+        block: nonlin3d_testkit::Block::new(kind.reference_nodes(), n, h),
     }
 }
 
 impl Block {
-    /// Whether node `i` lies on the outer boundary of the block.
-    pub fn on_boundary(&self, i: usize) -> bool {
-        let g = self.grid[i];
-        (0..3).any(|r| g[r] == 0 || g[r] == 2 * self.n[r])
-    }
-
     /// Dense row-major global matrix and internal-force vector at displacements `u`.
     pub fn assemble(
         &self,
