@@ -1,6 +1,6 @@
 //! The problem interface and the finite element implementation of it.
 
-use crate::NewtonError;
+use crate::{DeadLoads, NewtonError};
 use nonlin3d_assembly::{Assembler, Constraints};
 use nonlin3d_solver::{SymmetricMatrix, SymmetricPattern};
 use std::sync::Arc;
@@ -44,27 +44,30 @@ pub trait NonlinearProblem {
     ) -> Result<f64, NewtonError>;
 }
 
-/// The finite element model as a [`NonlinearProblem`].
+/// The finite element model as a [`NonlinearProblem`]: r(u, λ) = f_int(u) − λ·f_ref − f_dead
+/// with supports, prescribed values and ties applied (thesis §2.1, eq. 2.1.3).
+///
+/// Its parts are private: the assembler and the constraints are read through
+/// [`assembler`](Self::assembler) and [`constraints`](Self::constraints), loads and constraints
+/// changed through [`add_load`](Self::add_load), [`prescribe_value`](Self::prescribe_value),
+/// [`set_dead_load`](DeadLoads::set_dead_load) and [`set_constraints`](Self::set_constraints),
+/// and the reactions of the last evaluation read through [`reactions`](Self::reactions).
 pub struct StructuralProblem {
     /// The assembler (mesh, materials, kernels).
-    pub assembler: Assembler,
+    assembler: Assembler,
     /// Supports, prescribed displacements, loads.
-    pub constraints: Constraints,
+    constraints: Constraints,
     /// Reactions of the last evaluation (f_int − f_ext at constrained DOFs).
-    pub reactions: Vec<f64>,
+    reactions: Vec<f64>,
 }
 
 impl StructuralProblem {
     /// A problem from an assembler and constraints of the same size.
     /// With ties in `constraints`, the assembler's pattern is extended for them
-    /// ([`Assembler::tie`]); ties added later are refused at the first evaluation.
+    /// ([`Assembler::tie`]); ties whose couplings the pattern lacks, set later
+    /// ([`set_constraints`](Self::set_constraints)), are refused at the first evaluation.
     pub fn new(mut assembler: Assembler, constraints: Constraints) -> Result<Self, NewtonError> {
-        if assembler.n() != constraints.n() {
-            return Err(NewtonError::Setting {
-                name: "constraints",
-                reason: format!("{} DOFs for a model of {}", constraints.n(), assembler.n()),
-            });
-        }
+        check_size(&assembler, &constraints)?;
         if !constraints.ties().is_empty() {
             assembler.tie(&constraints)?;
         }
@@ -74,6 +77,67 @@ impl StructuralProblem {
             constraints,
             reactions: vec![0.0; n],
         })
+    }
+
+    /// The assembler: mesh, materials, kernels, pattern (for partial internal forces, stresses,
+    /// a bare assembly).
+    pub fn assembler(&self) -> &Assembler {
+        &self.assembler
+    }
+
+    /// Supports, prescribed values, ties and loads.
+    pub fn constraints(&self) -> &Constraints {
+        &self.constraints
+    }
+
+    /// Reactions of the last evaluation: f_int − f_ext at the constrained DOFs (a tie's force
+    /// at its slave), zero elsewhere; zeros before the first evaluation.
+    pub fn reactions(&self) -> &[f64] {
+        &self.reactions
+    }
+
+    /// Adds the reference force `value` (N) at DOF `dof`: it acts as λ·`value`
+    /// ([`Constraints::add_load`]).
+    pub fn add_load(&mut self, dof: usize, value: f64) -> Result<(), NewtonError> {
+        Ok(self.constraints.add_load(dof, value)?)
+    }
+
+    /// Prescribes DOF `dof`: u = λ·`value` (m) ([`Constraints::prescribe`]).
+    pub fn prescribe_value(&mut self, dof: usize, value: f64) -> Result<(), NewtonError> {
+        Ok(self.constraints.prescribe(dof, value)?)
+    }
+
+    /// Replaces the constraints and loads as a whole (a new load step's). Refused when their
+    /// size is not the model's; ties whose couplings the pattern lacks (not those given to
+    /// [`new`](Self::new)) are refused at the next evaluation.
+    pub fn set_constraints(&mut self, constraints: Constraints) -> Result<(), NewtonError> {
+        check_size(&self.assembler, &constraints)?;
+        self.constraints = constraints;
+        Ok(())
+    }
+
+    /// The assembler and the constraints, taken apart.
+    pub fn into_parts(self) -> (Assembler, Constraints) {
+        (self.assembler, self.constraints)
+    }
+}
+
+/// Refuses constraints of another size than the assembler's.
+fn check_size(assembler: &Assembler, constraints: &Constraints) -> Result<(), NewtonError> {
+    if assembler.n() != constraints.n() {
+        return Err(NewtonError::Setting {
+            name: "constraints",
+            reason: format!("{} DOFs for a model of {}", constraints.n(), assembler.n()),
+        });
+    }
+    Ok(())
+}
+
+/// The perturbation protocol's door (thesis §3.2): the dead load is the λ-independent part
+/// f_dead of the external force.
+impl DeadLoads for StructuralProblem {
+    fn set_dead_load(&mut self, dof: usize, value: f64) -> Result<(), NewtonError> {
+        Ok(self.constraints.set_dead_load(dof, value)?)
     }
 }
 
