@@ -19,6 +19,7 @@
     warn(clippy::unwrap_used, clippy::expect_used, clippy::panic)
 )]
 
+mod cache;
 mod error;
 mod guard;
 mod level;
@@ -29,6 +30,7 @@ mod problem;
 mod session;
 mod solve;
 
+pub use cache::TangentCache;
 pub use error::NewtonError;
 pub use level::{LevelReport, solve_level};
 pub use path::{PathReport, Stepping, follow_path, follow_path_from, follow_path_with};
@@ -37,6 +39,6 @@ pub use predict::predicted_increment;
 pub use problem::{NonlinearProblem, StructuralProblem};
 pub use session::PathSolver;
 pub use solve::{
-    Bifurcation, IncrementReport, IterationRecord, NewtonSettings, REACHABLE, TangentCache,
-    Termination, negative_pivots_at, residual_tolerance, solve_increment, solve_increment_with,
+    Bifurcation, IncrementReport, IterationRecord, NewtonSettings, REACHABLE, Termination,
+    negative_pivots_at, residual_tolerance, solve_increment, solve_increment_with,
 };
