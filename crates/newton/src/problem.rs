@@ -5,7 +5,8 @@ use nonlin3d_assembly::{Assembler, Constraints};
 use nonlin3d_solver::{SymmetricMatrix, SymmetricPattern};
 use std::sync::Arc;
 
-/// A discrete nonlinear problem r(u, λ) = 0 with symmetric tangent ∂r/∂u.
+/// A discrete nonlinear problem r(u, λ) = 0 with symmetric tangent ∂r/∂u (thesis §2.1,
+/// eq. 2.1.3), solved by Newton–Raphson: K_T(u)·Δu = −r(u, λ).
 pub trait NonlinearProblem {
     /// Number of unknowns.
     fn n(&self) -> usize;
@@ -32,9 +33,12 @@ pub trait NonlinearProblem {
     ) -> Result<bool, NewtonError> {
         Ok(false)
     }
-    /// Residual at (u, λ) into `r` (zero at prescribed entries) and, when given, the tangent
-    /// (identity at prescribed entries). Returns a force scale for relative convergence tests
-    /// (the largest external or reaction force).
+    /// Residual r = f_int(u) − f_ext(λ) at (u, λ) into `r` (zero at prescribed entries) and,
+    /// when given, the tangent K_T = ∂r/∂u (identity at prescribed entries) (thesis §2.1).
+    /// Returns a force scale for relative convergence tests (the largest external or reaction
+    /// force). A problem's own failure (a crate above this one, with its own error type) is
+    /// returned boxed as [`NewtonError::Problem`] ([`NewtonError::problem`]) and comes out of
+    /// path following unchanged.
     fn evaluate(
         &mut self,
         u: &[f64],
@@ -215,5 +219,95 @@ impl NonlinearProblem for StructuralProblem {
             .fold(0.0f64, |a, v| a.max(v.abs()));
         self.reactions = reactions;
         Ok(scale)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{NewtonSettings, Stepping, follow_path};
+    use nonlin3d_element::{ElementKind, IntegrationRule, Kinematics};
+    use nonlin3d_laminate::{ShearCoupling, materials};
+    use nonlin3d_mesh::{BoxParams, structured_box};
+
+    /// A steel bar 4×1×1 mm of 4 Hex8 along x, fixed on x = 0, nonlinear kinematics; the DOFs
+    /// of the x = 0 and x = 4 mm faces.
+    fn bar() -> (StructuralProblem, Vec<usize>, Vec<usize>) {
+        let mesh = structured_box(&BoxParams::new(
+            ElementKind::Hex8,
+            [4, 1, 1],
+            [4e-3, 1e-3, 1e-3],
+        ))
+        .unwrap();
+        let steel = materials::steel().stiffness().unwrap();
+        let assembler = Assembler::new(
+            &mesh,
+            &[steel],
+            ShearCoupling::Exact,
+            IntegrationRule::Gauss2,
+            IntegrationRule::Gauss2,
+            Kinematics::Nonlinear,
+        )
+        .unwrap();
+        let mut c = Constraints::new(assembler.n());
+        for r in 0..3 {
+            c.fix_nodes(&mesh.node_sets["x0"], r).unwrap();
+        }
+        let dofs = |set: &str| mesh.node_sets[set].iter().map(|&n| 3 * n).collect();
+        let (x0, x1) = (dofs("x0"), dofs("x1"));
+        (StructuralProblem::new(assembler, c).unwrap(), x0, x1)
+    }
+
+    /// The reactions read through the accessor balance the applied load: Σ R_x on x = 0 =
+    /// −Σ F_x on x = 4 mm up to the x-residuals of the 16 free nodes (element forces sum to
+    /// zero), each within the tolerance 1e-8·F, F the largest nodal force = force/4: so
+    /// |Σ R_x + force| ≤ 16·1e-8·force/4 = 4e-8·force.
+    #[test]
+    fn the_reactions_balance_the_loads_added_through_the_problem() {
+        let (mut problem, x0, x1) = bar();
+        let force = 100.0;
+        for &d in &x1 {
+            problem.add_load(d, force / x1.len() as f64).unwrap();
+        }
+        assert!(problem.reactions().iter().all(|&r| r == 0.0));
+        let mut u = vec![0.0; problem.n()];
+        let settings = NewtonSettings::default();
+        follow_path(
+            &mut problem,
+            &mut u,
+            &[1.0],
+            &settings,
+            &Stepping::default(),
+        )
+        .unwrap();
+        let reaction: f64 = x0.iter().map(|&d| problem.reactions()[d]).sum();
+        assert!(
+            (reaction + force).abs() <= 4.0 * settings.relative_tolerance * force,
+            "{reaction} N"
+        );
+        assert!(u[x1[0]] > 0.0);
+    }
+
+    /// Constraints of another size are refused by name, and the problem keeps its own.
+    #[test]
+    fn constraints_of_another_size_are_refused() {
+        let (mut problem, _, x1) = bar();
+        problem.prescribe_value(x1[0], 1e-6).unwrap();
+        let before = problem.constraints().clone();
+        let n = problem.n();
+        let e = problem
+            .set_constraints(Constraints::new(n + 3))
+            .unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            format!(
+                "invalid setting constraints: {} DOFs for a model of {n}",
+                n + 3
+            )
+        );
+        assert_eq!(problem.constraints(), &before);
+        problem.set_constraints(Constraints::new(n)).unwrap();
+        let (assembler, constraints) = problem.into_parts();
+        assert_eq!((assembler.n(), constraints.prescribed().count()), (n, 0));
     }
 }
