@@ -117,3 +117,51 @@ fn inertia(
             .and_then(IncrementReport::negative_pivots))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::perturb::tests::compressed;
+    use crate::{NewtonSettings, NonlinearProblem, PathSolver, Stepping, solve_level};
+
+    /// One level from 0 to 1.3·ε_c on the through-width model: without a perturbation the
+    /// converged state is the trivial path past the bifurcation (negative pivots); with one,
+    /// the level is redone through the §3.2 protocol and ends on the buckled branch, stable
+    /// (no negative pivot) and lifted (above 0.3·h; the derivation in
+    /// `perturb::tests::a_wrapped_problem_follows_the_protocol_bitwise_like_the_bare_one`).
+    #[test]
+    fn an_unstable_level_is_redone_with_the_perturbation() {
+        let newton = NewtonSettings::default();
+        let stepping = Stepping {
+            initial: 0.25,
+            max: 0.25,
+            ..Stepping::default()
+        };
+        let run = |perturbation: &[(usize, f64)]| {
+            let (mut problem, top, h) = compressed();
+            let mut session = PathSolver::new(&problem, newton.solver).unwrap();
+            let mut u = vec![0.0; problem.n()];
+            let level = solve_level(
+                &mut problem,
+                &mut u,
+                0.0,
+                1.0,
+                perturbation,
+                &newton,
+                &stepping,
+                &mut session,
+            )
+            .unwrap();
+            (level, u[3 * top + 2] / h)
+        };
+        let (plain, w) = run(&[]);
+        assert!(!plain.perturbed);
+        assert!(plain.negative_pivots.is_some_and(|p| p > 0), "{plain:?}");
+        assert!(w.abs() < 0.3, "w/h = {w}");
+        let (_, top, _) = compressed();
+        let (level, w) = run(&[(3 * top + 2, 0.5)]);
+        assert!(level.perturbed);
+        assert_eq!(level.negative_pivots, Some(0));
+        assert!(w > 0.3, "w/h = {w}");
+        assert!(level.attempts.len() > plain.attempts.len());
+    }
+}

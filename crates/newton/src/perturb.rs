@@ -186,4 +186,4 @@ fn remove_in_parts<P: NonlinearProblem + DeadLoads>(
 }
 
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;

@@ -61,7 +61,7 @@ impl DeadLoads for Wrapped {
 /// Thesis §3.2's through-width model (the mesh crate's example: ℓ = 2a = 20 mm, h = 0.4 mm,
 /// steel) compressed to u = −ε_max·L on x = L at λ = 1, ε_max = 1.3·ε_c, ε_c = π²h²/(3ℓ²)
 /// the clamped column's buckling strain; the sublaminate's top node at x = 0.
-fn compressed() -> (StructuralProblem, usize, f64) {
+pub(crate) fn compressed() -> (StructuralProblem, usize, f64) {
     let p = ThroughWidthParams::example();
     let (mesh, _) = through_width_delamination(&p).unwrap();
     let steel = materials::steel().stiffness().unwrap();
