@@ -90,13 +90,13 @@ fn main() {
     println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|");
     for (name, p) in &cases {
         let (mesh, mut problem) = plate(p);
-        let n = problem.assembler.n();
+        let n = problem.assembler().n();
         let u = vec![0.0; n];
-        let mut k = problem.assembler.new_tangent();
+        let mut k = problem.assembler().new_tangent();
         let (t_asm, _) = best(3, || {
             problem
-                .assembler
-                .residual(&u, 1.0, &problem.constraints, Some(&mut k))
+                .assembler()
+                .residual(&u, 1.0, problem.constraints(), Some(&mut k))
                 .unwrap_or_else(|e| panic!("{e}"))
         });
         // The same element work streamed to a consumer that only touches the outputs.
@@ -132,7 +132,7 @@ fn main() {
         });
         let mut solver = SolverKind::FaerLdlt.build();
         solver
-            .analyze(problem.assembler.pattern())
+            .analyze(problem.assembler().pattern())
             .unwrap_or_else(|e| panic!("{e}"));
         let (t_fact, _) = best(3, || solver.factorize(&k).unwrap_or_else(|e| panic!("{e}")));
         let mut b = vec![1.0; n];

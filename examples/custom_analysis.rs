@@ -48,7 +48,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 
     // 3. Newton path following through six strain levels.
     let levels: Vec<f64> = (1..=6).map(|k| k as f64 / 6.0).collect();
-    let mut u = vec![0.0; problem.assembler.n()];
+    let mut u = vec![0.0; problem.assembler().n()];
     let stepping = Stepping {
         initial: 1.0 / 24.0,
         max: 1.0 / 24.0,
@@ -76,7 +76,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     println!("    strain | lift (mm) | G_I (J/m²) | G_II (J/m²) | G_III (J/m²)");
     for (lambda, state) in &path.states {
         let f = problem
-            .assembler
+            .assembler()
             .partial_internal(&above, state, Kinematics::Linear)?;
         let g = release_rates(&front, &mesh.nodes, state, &f)?;
         // A straight front in plane strain: G is uniform; report the mean over its corners.

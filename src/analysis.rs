@@ -14,10 +14,7 @@ use nonlin3d_mesh::{
     EllipticMap, EmbeddedParams, Imperfection, Mesh, PlyLayout, ThroughWidthParams,
     embedded_delamination_with_front, through_width_delamination,
 };
-use nonlin3d_newton::{
-    IncrementReport, NewtonSettings, PathSolver, Stepping, StructuralProblem, follow_path_with,
-    perturbed_step,
-};
+use nonlin3d_newton::{IncrementReport, NewtonSettings, PathSolver, Stepping, StructuralProblem};
 use nonlin3d_solver::SolverKind;
 use nonlin3d_vcct::{FrontRelease, cells_above, release_rates};
 use std::time::Instant;
@@ -332,20 +329,10 @@ pub fn settings(scene: &Scene) -> (NewtonSettings, Stepping) {
     (newton, stepping)
 }
 
-/// Solves one level: from the converged state `u` at load factor `from` to `to`. If the
-/// converged state is unstable (negative pivots: the trivial path past a bifurcation) and a
-/// `perturbation` is given, the step is redone from `from` by the §3.2 protocol
-/// ([`perturbed_step`]: perturbation on along the step, removed at `to`) to land on the buckled
-/// branch; `perturbation` lists (DOF, force) pairs, empty for none. Returns the attempts,
-/// whether the perturbation was applied, and the negative pivots of the tangent at the final
-/// state.
-///
-/// The thesis applied the perturbation at the first level and left it to the analyst to pick
-/// that level above the buckling strain; here the change of inertia picks the level, so a
-/// sweep may start below buckling (Fig. 5.1.1's flat part) and still find the branch. With a
-/// kept tangent (BFGS) the last factorisation may belong to an older state, so the inertia is
-/// then taken from one extra factorisation at the converged state
-/// ([`PathSolver::inertia_at`]), which `session` keeps as the next level's starting tangent.
+/// Solves one level: from the converged state `u` at load factor `from` to `to`, and past a
+/// bifurcation onto the buckled branch by the §3.2 perturbation (`perturbation`: (DOF, force)
+/// pairs, empty for none) — [`nonlin3d_newton::solve_level`]. Returns the attempts, whether
+/// the perturbation was applied, and the negative pivots of the tangent at the final state.
 #[allow(clippy::too_many_arguments)]
 pub fn solve_level(
     problem: &mut StructuralProblem,
@@ -357,63 +344,17 @@ pub fn solve_level(
     stepping: &Stepping,
     session: &mut PathSolver,
 ) -> Result<(Vec<IncrementReport>, bool, Option<usize>), Error> {
-    let stepping = Stepping {
-        initial: stepping.initial.min((to - from).abs().max(stepping.min)),
-        ..stepping.clone()
-    };
-    let start = u.clone();
-    let mut attempts =
-        follow_path_with(problem, u, from, &[to], newton, &stepping, session)?.attempts;
-    let inertia = |problem: &mut StructuralProblem,
-                   u: &[f64],
-                   attempts: &[IncrementReport],
-                   session: &mut PathSolver| {
-        if newton.keep_tangent {
-            session.inertia_at(problem, u, to).map(Some)
-        } else {
-            Ok(attempts
-                .iter()
-                .rev()
-                .find(|a| a.converged())
-                .and_then(IncrementReport::negative_pivots))
-        }
-    };
-    let mut pivots = inertia(problem, u, &attempts, session)?;
-    let unstable = pivots.is_some_and(|p| p > 0);
-    let mut perturbed = false;
-    if unstable && !perturbation.is_empty() {
-        *u = start;
-        // Through the bifurcation in quarters of the step, so the perturbed (imperfect) path is
-        // followed continuously onto the branch the perturbation favours (one increment can
-        // land on the wrong branch: seen on the 60 mm circle; eighths cost 17 % more time
-        // for the same answer on the reference models).
-        let quarter = ((to - from) / 4.0).abs().max(stepping.min);
-        let fine = Stepping {
-            initial: quarter,
-            max: quarter,
-            ..stepping.clone()
-        };
-        // Just past the bifurcation the branch the force is removed onto is nearly flat: the
-        // amplitude's restoring stiffness vanishes with ε − ε_b and Newton (its line search
-        // cutting most steps) closes in linearly: on the through-width example scene 56
-        // iterations at 2.3 % past ε_b, about 5 at 80 % past. Up to 4× the level's iterations.
-        let patient = NewtonSettings {
-            max_iterations: 4 * newton.max_iterations,
-            ..newton.clone()
-        };
-        attempts.extend(perturbed_step(
-            problem,
-            u,
-            from,
-            to,
-            perturbation,
-            &patient,
-            &fine,
-        )?);
-        perturbed = true;
-        pivots = inertia(problem, u, &attempts, session)?;
-    }
-    Ok((attempts, perturbed, pivots))
+    let level = nonlin3d_newton::solve_level(
+        problem,
+        u,
+        from,
+        to,
+        perturbation,
+        newton,
+        stepping,
+        session,
+    )?;
+    Ok((level.attempts, level.perturbed, level.negative_pivots))
 }
 
 /// G along the front at state `u`.
@@ -428,7 +369,7 @@ pub fn front_table(
         ForceKinematics::Linear => Kinematics::Linear,
     };
     let f = problem
-        .assembler
+        .assembler()
         .partial_internal(&cells_above(&model.front), u, kin)?;
     Ok(release_rates(&model.front, &model.mesh.nodes, u, &f)?)
 }
@@ -508,7 +449,7 @@ pub fn run(
     };
     progress(Progress::Built {
         model: &model,
-        dofs: problem.assembler.n(),
+        dofs: problem.assembler().n(),
         levels: factors.len(),
     })?;
     let (newton, stepping) = settings(scene);
@@ -519,7 +460,7 @@ pub fn run(
         perturbation_force(scene, &model)?
     };
     let perturbation = perturbation_loads(&model, force)?;
-    let mut u = vec![0.0; problem.assembler.n()];
+    let mut u = vec![0.0; problem.assembler().n()];
     // One solver for every level: analysed once; with BFGS each level starts from the
     // factorisation its predecessor's stability test left.
     let mut session = PathSolver::new(&problem, newton.solver)?;
@@ -651,7 +592,7 @@ pub fn run(
         model: ModelSummary {
             nodes: model.mesh.nodes.len(),
             cells: model.mesh.cells.len(),
-            dofs: problem.assembler.n(),
+            dofs: problem.assembler().n(),
             front_points: levels.first().map_or(0, |l| l.front.len()),
             perturbation_n: (force != 0.0).then_some(force),
             perturbed_at,

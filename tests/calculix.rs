@@ -346,7 +346,7 @@ fn calculix_nlgeom_agrees_with_our_newton_solution() {
             .unwrap();
     }
     let mut problem = StructuralProblem::new(assembler, constraints).unwrap();
-    let mut u = vec![0.0; problem.assembler.n()];
+    let mut u = vec![0.0; problem.assembler().n()];
     let settings = NewtonSettings {
         force_tolerance: 1e-6,
         relative_tolerance: 1e-10,

@@ -112,7 +112,7 @@ fn steel() -> Stiffness {
 fn load_and_g(d: &mut Dcb, u: &[f64]) -> (f64, f64) {
     let mut r = vec![0.0; u.len()];
     d.problem.evaluate(u, 1.0, &mut r, None).unwrap();
-    let p: f64 = d.upper.iter().map(|&k| d.problem.reactions[k]).sum();
+    let p: f64 = d.upper.iter().map(|&k| d.problem.reactions()[k]).sum();
     let mut cells: Vec<usize> = d
         .front
         .points
@@ -123,7 +123,7 @@ fn load_and_g(d: &mut Dcb, u: &[f64]) -> (f64, f64) {
     cells.dedup();
     let f = d
         .problem
-        .assembler
+        .assembler()
         .partial_internal(&cells, u, Kinematics::Nonlinear)
         .unwrap();
     let g = nonlin3d::vcct::release_rates(&d.front, &d.mesh.nodes, u, &f).unwrap();
@@ -153,7 +153,7 @@ fn open_with(
     settings: &NewtonSettings,
 ) -> Opened {
     let mut d = dcb(material, opening);
-    let mut u = vec![0.0; d.problem.assembler.n()];
+    let mut u = vec![0.0; d.problem.assembler().n()];
     let stepping = Stepping {
         initial: 1.0 / n as f64,
         max: 1.0 / n as f64,
@@ -310,7 +310,7 @@ fn inertia_guard_records_a_real_bifurcation() {
         c.prescribe(3 * n, -eps_max * p.length).unwrap();
     }
     let mut problem = StructuralProblem::new(assembler, c).unwrap();
-    let mut u = vec![0.0; problem.assembler.n()];
+    let mut u = vec![0.0; problem.assembler().n()];
     let stepping = Stepping {
         initial: 0.5,
         max: 0.5,
@@ -447,7 +447,7 @@ fn the_solve_command_opens_the_dcb_deck_in_one_increment() {
 
     let fine = open(composite(), 1e-3, 40, &Stepping::default());
     let mut d = dcb(composite(), 1e-3);
-    let n = d.problem.assembler.n();
+    let n = d.problem.assembler().n();
     let ours = read_csv(&out.join("displacements.csv"), n);
     let (p, _) = load_and_g(&mut d, &ours);
     let dp = (p - fine.p).abs() / fine.p;

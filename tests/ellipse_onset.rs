@@ -93,7 +93,7 @@ fn fe_onset(scene: &Scene, guess: f64, equibiaxial: bool) -> f64 {
     };
     let mut unstable = |strain: f64| {
         let lambda = -strain / reference;
-        let mut u = vec![0.0; problem.assembler.n()];
+        let mut u = vec![0.0; problem.assembler().n()];
         follow_path(&mut problem, &mut u, &[lambda], &newton, &one_step).unwrap();
         negative_pivots_at(&mut problem, &u, lambda, newton.solver).unwrap() > 0
     };

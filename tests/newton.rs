@@ -32,10 +32,7 @@ fn cantilever(p: f64) -> (Mesh, StructuralProblem) {
     );
     let tip = &mesh.node_sets["x1"];
     for &n in tip {
-        problem
-            .constraints
-            .add_load(3 * n + 2, p / tip.len() as f64)
-            .unwrap();
+        problem.add_load(3 * n + 2, p / tip.len() as f64).unwrap();
     }
     (mesh, problem)
 }
@@ -43,7 +40,7 @@ fn cantilever(p: f64) -> (Mesh, StructuralProblem) {
 #[test]
 fn assembly_is_bitwise_identical_on_1_and_2_threads() {
     let (_, problem) = cantilever(-1000.0);
-    let u: Vec<f64> = (0..problem.assembler.n())
+    let u: Vec<f64> = (0..problem.assembler().n())
         .map(|i| 1e-5 * ((i * 37 % 101) as f64 / 101.0 - 0.5))
         .collect();
     let mut results = Vec::new();
@@ -52,9 +49,9 @@ fn assembly_is_bitwise_identical_on_1_and_2_threads() {
             .num_threads(threads)
             .build()
             .unwrap();
-        let mut k = problem.assembler.new_tangent();
+        let mut k = problem.assembler().new_tangent();
         let a = pool
-            .install(|| problem.assembler.assemble(&u, Some(&mut k)))
+            .install(|| problem.assembler().assemble(&u, Some(&mut k)))
             .unwrap();
         results.push((a, k));
     }
@@ -71,7 +68,7 @@ fn assembly_is_bitwise_identical_on_1_and_2_threads() {
 #[test]
 fn full_newton_converges_quadratically() {
     let (_, mut problem) = cantilever(-3000.0);
-    let mut u = vec![0.0; problem.assembler.n()];
+    let mut u = vec![0.0; problem.assembler().n()];
     // One step to the full load from rest: several iterations, the last ones quadratic.
     let settings = NewtonSettings {
         force_tolerance: 1e-9,
@@ -113,8 +110,8 @@ fn modified_newton_converges_to_the_same_state() {
     let (_, mut full) = cantilever(-2000.0);
     let (_, mut modified) = cantilever(-2000.0);
     let (mut u1, mut u2) = (
-        vec![0.0; full.assembler.n()],
-        vec![0.0; modified.assembler.n()],
+        vec![0.0; full.assembler().n()],
+        vec![0.0; modified.assembler().n()],
     );
     let tight = NewtonSettings {
         force_tolerance: 1e-7,
@@ -161,7 +158,7 @@ fn kept_tangent_and_bfgs_reach_the_full_newton_state_with_fewer_factorisations()
         ..Stepping::default()
     };
     let (_, mut full) = cantilever(-500.0);
-    let mut u_full = vec![0.0; full.assembler.n()];
+    let mut u_full = vec![0.0; full.assembler().n()];
     follow_path(&mut full, &mut u_full, &[1.0], &tight, &stepping).unwrap();
     let scale = u_full.iter().fold(0.0f64, |a, v| a.max(v.abs()));
     let kept = NewtonSettings {
@@ -179,7 +176,7 @@ fn kept_tangent_and_bfgs_reach_the_full_newton_state_with_fewer_factorisations()
     };
     for (label, settings) in [("kept tangent", kept), ("BFGS", bfgs)] {
         let (_, mut problem) = cantilever(-500.0);
-        let mut u = vec![0.0; problem.assembler.n()];
+        let mut u = vec![0.0; problem.assembler().n()];
         let path = follow_path(&mut problem, &mut u, &[1.0], &settings, &stepping).unwrap();
         let iterations: Vec<_> = path.attempts.iter().flat_map(|a| &a.iterations).collect();
         let factorisations = iterations
@@ -231,7 +228,7 @@ fn kept_tangent_and_bfgs_reach_the_full_newton_state_with_fewer_factorisations()
     }
     // A non-positive refactor ratio is refused.
     let (_, mut problem) = cantilever(-500.0);
-    let mut u = vec![0.0; problem.assembler.n()];
+    let mut u = vec![0.0; problem.assembler().n()];
     let bad = NewtonSettings {
         refactor_ratio: 0.0,
         ..NewtonSettings::default()
@@ -259,7 +256,7 @@ fn a_session_carries_the_stability_factorisation_into_the_next_level() {
         ..Stepping::default()
     };
     let (_, mut full) = cantilever(-500.0);
-    let mut u_full = vec![0.0; full.assembler.n()];
+    let mut u_full = vec![0.0; full.assembler().n()];
     follow_path(&mut full, &mut u_full, &[1.0], &tight, &stepping).unwrap();
     let scale = u_full.iter().fold(0.0f64, |a, v| a.max(v.abs()));
     let bfgs = NewtonSettings {
@@ -275,7 +272,7 @@ fn a_session_carries_the_stability_factorisation_into_the_next_level() {
     let mut first_factors = Vec::new();
     for carried in [true, false] {
         let (_, mut problem) = cantilever(-500.0);
-        let mut u = vec![0.0; problem.assembler.n()];
+        let mut u = vec![0.0; problem.assembler().n()];
         let mut session = PathSolver::new(&problem, bfgs.solver).unwrap();
         follow_path_with(
             &mut problem,
@@ -318,7 +315,7 @@ fn a_session_carries_the_stability_factorisation_into_the_next_level() {
     assert_eq!(first_factors, [false, true]);
     // Another solver kind: the session is made anew (and still converges).
     let (_, mut problem) = cantilever(-500.0);
-    let mut u = vec![0.0; problem.assembler.n()];
+    let mut u = vec![0.0; problem.assembler().n()];
     let mut session = PathSolver::new(&problem, SolverKind::Profile).unwrap();
     let faer = NewtonSettings {
         solver: SolverKind::FaerLdlt,
@@ -341,7 +338,7 @@ fn a_session_carries_the_stability_factorisation_into_the_next_level() {
 fn a_huge_single_step_converges_by_cutback_or_fails_located_never_nan() {
     // 60 kN on the tip: the linear deflection is three times the span.
     let (_, mut problem) = cantilever(-60_000.0);
-    let mut u = vec![0.0; problem.assembler.n()];
+    let mut u = vec![0.0; problem.assembler().n()];
     let stepping = Stepping {
         initial: 1.0,
         min: 1e-3,
@@ -398,10 +395,7 @@ fn compressed_through_width(
         &[("x0", 0), ("y0", 1), ("y1", 1), ("z0", 2)],
     );
     for &n in &mesh.node_sets["x1"] {
-        problem
-            .constraints
-            .prescribe(3 * n, -eps_max * p.length)
-            .unwrap();
+        problem.prescribe_value(3 * n, -eps_max * p.length).unwrap();
     }
     (mesh, problem)
 }
@@ -421,7 +415,7 @@ fn through_width_bifurcation_from_inertia_matches_the_clamped_column() {
     let eps_c = std::f64::consts::PI.powi(2) * p.h * p.h / (3.0 * ell * ell);
     let eps_max = 1.5 * eps_c;
     let (_, mut problem) = compressed_through_width(&p, eps_max, 0.0);
-    let mut u = vec![0.0; problem.assembler.n()];
+    let mut u = vec![0.0; problem.assembler().n()];
     let levels: Vec<f64> = (1..=30).map(|k| k as f64 / 30.0).collect();
     let stepping = Stepping {
         initial: 1.0 / 30.0,
@@ -488,7 +482,7 @@ fn postbuckled_branch_by_perturbation_and_by_imperfection() {
     let (mut problem, top) = setup(0.0);
     let per_node = 0.5 / top.len() as f64;
     let perturbation: Vec<(usize, f64)> = top.iter().map(|&n| (3 * n + 2, per_node)).collect();
-    let mut u = vec![0.0; problem.assembler.n()];
+    let mut u = vec![0.0; problem.assembler().n()];
     let path = perturbed_path(
         &mut problem,
         &mut u,
@@ -510,7 +504,7 @@ fn postbuckled_branch_by_perturbation_and_by_imperfection() {
     // may interpenetrate, so a coarse step can jump to the mirror branch below).
     let amplitude = 0.05 * p.h;
     let (mut imperfect, top_i) = setup(amplitude);
-    let mut ui = vec![0.0; imperfect.assembler.n()];
+    let mut ui = vec![0.0; imperfect.assembler().n()];
     let fine = Stepping {
         initial: 0.02,
         max: 0.05,
@@ -571,7 +565,7 @@ fn postbuckled_branch_by_perturbation_and_by_imperfection() {
 fn displacement_criterion_adds_iterations_never_removes_them() {
     let (_, mut a) = cantilever(-2000.0);
     let (_, mut b) = cantilever(-2000.0);
-    let (mut ua, mut ub) = (vec![0.0; a.assembler.n()], vec![0.0; b.assembler.n()]);
+    let (mut ua, mut ub) = (vec![0.0; a.assembler().n()], vec![0.0; b.assembler().n()]);
     let residual_only = NewtonSettings {
         force_tolerance: 1e-2,
         ..NewtonSettings::default()

@@ -19,7 +19,9 @@ use nonlin3d::analysis::{
     Analysis, build_model, deflections, perturbation_force, perturbation_loads, settings,
     solve_level,
 };
-use nonlin3d::newton::{NonlinearProblem, PathSolver, negative_pivots_at, solve_increment};
+use nonlin3d::newton::{
+    DeadLoads, NonlinearProblem, PathSolver, negative_pivots_at, solve_increment,
+};
 use nonlin3d::scene::Geometry;
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -290,7 +292,7 @@ fn rust_api_runs_the_scene_and_the_inertia_pins_the_bifurcation() {
     let mut session = PathSolver::new(&problem, newton.solver).unwrap();
     let mut unstable = |strain: f64| {
         let lambda = -strain / reference;
-        let mut u = vec![0.0; problem.assembler.n()];
+        let mut u = vec![0.0; problem.assembler().n()];
         solve_level(
             &mut problem,
             &mut u,
@@ -327,9 +329,9 @@ fn rust_api_runs_the_scene_and_the_inertia_pins_the_bifurcation() {
     let mut problem = analysis.problem(&model).unwrap();
     let force = perturbation_force(&scene, &model).unwrap();
     for (dof, f) in perturbation_loads(&model, force).unwrap() {
-        problem.constraints.set_dead_load(dof, f).unwrap();
+        problem.set_dead_load(dof, f).unwrap();
     }
-    let mut u = vec![0.0; problem.assembler.n()];
+    let mut u = vec![0.0; problem.assembler().n()];
     let mut solver = newton.solver.build();
     solver.analyze(&problem.pattern()).unwrap();
     let mut k = nonlin3d::solver::SymmetricMatrix::zeros(problem.pattern());

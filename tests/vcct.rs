@@ -48,10 +48,10 @@ fn solve_linear(
     let settings = NewtonSettings::default();
     let mut solver = settings.solver.build();
     solver
-        .analyze(&problem.assembler.pattern().clone())
+        .analyze(&problem.assembler().pattern().clone())
         .unwrap();
-    let mut k = problem.assembler.new_tangent();
-    let mut u = vec![0.0; problem.assembler.n()];
+    let mut k = problem.assembler().new_tangent();
+    let mut u = vec![0.0; problem.assembler().n()];
     let report = solve_increment(
         &mut problem,
         &mut u,
@@ -62,7 +62,7 @@ fn solve_linear(
     )
     .unwrap();
     assert!(report.converged(), "{:?}", report.termination);
-    (problem.assembler, u)
+    (problem.into_parts().0, u)
 }
 
 fn rates(mesh: &Mesh, front: &Front, asm: &Assembler, u: &[f64]) -> Vec<FrontRelease> {

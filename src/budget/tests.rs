@@ -175,7 +175,7 @@ fn faer_entries(s: &Scene) -> u64 {
     let problem = crate::analysis::build_problem(s, &model).unwrap();
     let mut solver = FaerSolver::new(FaerMode::Ldlt);
     solver.memory_budget = Some(MemoryBudget::new(1, "test"));
-    match solver.analyze(problem.assembler.pattern()) {
+    match solver.analyze(problem.assembler().pattern()) {
         Err(SolverError::OverBudget { entries, .. }) => entries as u64,
         other => panic!("{other:?}"),
     }

@@ -112,7 +112,7 @@ pub(crate) fn run_step(
         } else {
             dt
         };
-        problem.constraints = history.constraints(model, frame, t, t + size)?;
+        problem.set_constraints(history.constraints(model, frame, t, t + size)?)?;
         let start = u.clone();
         let secant = previous
             .as_ref()

@@ -219,7 +219,7 @@ pub fn solve_deck_with(
         current.displacements = nodal(&u);
         observer(Progress::Step(&current))?;
         results.push(current);
-        assemblers.insert(step.nlgeom, problem.assembler);
+        assemblers.insert(step.nlgeom, problem.into_parts().0);
         start += frame.period;
     }
     Ok(results)

@@ -147,7 +147,7 @@ pub(crate) fn record(
             .contains(&OutputVariable::Rf)
     });
     let rf = if wants_rf {
-        Some(c.problem.assembler.assemble(c.u, None)?.internal)
+        Some(c.problem.assembler().assemble(c.u, None)?.internal)
     } else {
         None
     };

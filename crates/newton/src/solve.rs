@@ -2,9 +2,8 @@
 //! modified (a tangent kept for several iterations or increments) and quasi-Newton (BFGS
 //! updates of a kept tangent, Matthies & Strang 1979).
 
-use crate::{NewtonError, NonlinearProblem};
+use crate::{NewtonError, NonlinearProblem, TangentCache};
 use nonlin3d_solver::{LinearSolver, SolverKind, SymmetricMatrix};
-use std::collections::VecDeque;
 
 /// Settings of the Newton iteration.
 #[derive(Debug, Clone, PartialEq)]
@@ -207,92 +206,6 @@ fn norm_inf(v: &[f64]) -> f64 {
     )
 }
 
-/// What an iteration may reuse from earlier ones: whether the solver holds a valid
-/// factorisation, how many iterations it has served, and the BFGS pairs gathered since.
-#[derive(Debug, Clone, Default)]
-pub struct TangentCache {
-    factored: bool,
-    age: usize,
-    slow: bool,
-    pairs: VecDeque<(Vec<f64>, Vec<f64>, f64)>,
-}
-
-impl TangentCache {
-    /// An empty cache: the first iteration factors.
-    pub fn new() -> Self {
-        Self::default()
-    }
-
-    /// Forgets the factorisation and the pairs (after a failed attempt, or when the problem
-    /// changed in a way the old tangent does not describe).
-    pub fn invalidate(&mut self) {
-        *self = Self::default();
-    }
-
-    /// A cache vouching for a factorisation just made (age 0, no BFGS pairs).
-    pub(crate) fn factored_now() -> Self {
-        Self {
-            factored: true,
-            ..Self::default()
-        }
-    }
-
-    /// Whether the solver holds a factorisation this cache vouches for.
-    pub fn is_factored(&self) -> bool {
-        self.factored
-    }
-
-    /// Whether the next increment's first iteration will use the kept factorisation rather
-    /// than factor a tangent at its start.
-    pub(crate) fn serves(&self, settings: &NewtonSettings) -> bool {
-        settings.keep_tangent && self.factored && self.age < settings.refactor_every && !self.slow
-    }
-
-    /// Records a pair s = Δu, y = Δr unless its curvature yᵀs is not clearly positive.
-    fn push_pair(&mut self, s: Vec<f64>, y: Vec<f64>, limit: usize) {
-        let ys = dot(&y, &s);
-        let curved = ys > 1e-10 * (dot(&y, &y) * dot(&s, &s)).sqrt();
-        if !curved {
-            return;
-        }
-        if self.pairs.len() == limit {
-            self.pairs.pop_front();
-        }
-        self.pairs.push_back((s, y, 1.0 / ys));
-    }
-
-    /// d = −H r by the two-loop recursion with H₀ = K₀⁻¹ (the factorised tangent).
-    pub(crate) fn direction(
-        &self,
-        r: &[f64],
-        solver: &mut dyn LinearSolver,
-    ) -> Result<Vec<f64>, nonlin3d_solver::SolverError> {
-        let mut q: Vec<f64> = r.iter().map(|x| -x).collect();
-        let mut alphas = Vec::with_capacity(self.pairs.len());
-        for (s, y, rho) in self.pairs.iter().rev() {
-            let a = rho * dot(s, &q);
-            axpy(-a, y, &mut q);
-            alphas.push(a);
-        }
-        solver.solve_in_place(&mut q, 1)?;
-        for ((s, y, rho), a) in self.pairs.iter().zip(alphas.iter().rev()) {
-            let b = rho * dot(y, &q);
-            axpy(a - b, s, &mut q);
-        }
-        Ok(q)
-    }
-}
-
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
-}
-
-fn axpy(a: f64, x: &[f64], y: &mut [f64]) {
-    for (y, x) in y.iter_mut().zip(x) {
-        *y += a * x;
-    }
-}
-
 /// Negative pivots of the tangent at (u, λ), from one assembly and one factorisation with a
 /// new solver of `kind`: the stability test of a converged state (thesis §3.2: the trivial
 /// path past a bifurcation has K_T with negative eigenvalues) for strategies whose last
@@ -341,10 +254,12 @@ pub fn solve_increment_with(
     iterate(problem, u, lambda, settings, (solver, k, cache), false)
 }
 
-/// The Newton iterations of [`solve_increment_with`]; with `iterate_once` at least one
-/// iteration even if the start already meets the tolerance (after the tangent predictor, whose
-/// start may: the iteration's factorisation gives the inertia of the converged state, which
-/// path following and the stability test need).
+/// The Newton iterations of [`solve_increment_with`] (thesis §2.1: K_T(u)·Δu = −r(u, λ),
+/// u ← u + α·Δu); with `iterate_once` at least one iteration even if the start already meets
+/// the tolerance (after the tangent predictor, whose start may: the iteration's factorisation
+/// gives the inertia of the converged state, which path following and the stability test
+/// need). Each iteration: the tangent factorised when due ([`refactor`]), the direction, the
+/// line search ([`line_search`]), the BFGS pair, the convergence tests.
 pub(crate) fn iterate(
     problem: &mut dyn NonlinearProblem,
     u: &mut [f64],
@@ -357,18 +272,7 @@ pub(crate) fn iterate(
     ),
     iterate_once: bool,
 ) -> Result<IncrementReport, NewtonError> {
-    if settings.refactor_every == 0 || settings.max_iterations == 0 {
-        return Err(NewtonError::Setting {
-            name: "refactor_every / max_iterations",
-            reason: "must be ≥ 1".into(),
-        });
-    }
-    if settings.refactor_ratio.is_nan() || settings.refactor_ratio <= 0.0 {
-        return Err(NewtonError::Setting {
-            name: "refactor_ratio",
-            reason: format!("{} (must be > 0)", settings.refactor_ratio),
-        });
-    }
+    check_iteration(settings)?;
     if !settings.keep_tangent {
         cache.invalidate();
     }
@@ -403,21 +307,15 @@ pub(crate) fn iterate(
     let mut trial_u = vec![0.0; n];
     let mut trial_r = vec![0.0; n];
     for _ in 0..settings.max_iterations {
-        let mut pivots = None;
-        if !cache.factored || cache.age >= settings.refactor_every || cache.slow {
-            if !k_current {
-                problem.evaluate(u, lambda, &mut r, Some(k))?;
+        let tangent: (&mut dyn LinearSolver, _, _) = (&mut *solver, &mut *k, &mut *cache);
+        let pivots = match refactor(problem, u, lambda, &mut r, settings, tangent, k_current)? {
+            Refactor::Kept => None,
+            Refactor::Made(pivots) => Some(pivots),
+            Refactor::Singular(why) => {
+                report.termination = Termination::Singular(why);
+                return Ok(report);
             }
-            match solver.factorize(k) {
-                Ok(f) => pivots = Some(f.negative_pivots),
-                Err(e) => {
-                    cache.invalidate();
-                    report.termination = Termination::Singular(e.to_string());
-                    return Ok(report);
-                }
-            }
-            *cache = TangentCache::factored_now();
-        }
+        };
         cache.age += 1;
         let bfgs_pairs = cache.pairs.len();
         let mut du = match cache.direction(&r, solver) {
@@ -431,40 +329,14 @@ pub(crate) fn iterate(
         problem.expand(&mut du);
         // The next iteration refactors by count: evaluate the tangent with the residual.
         let need_k = cache.age >= settings.refactor_every;
-        let mut alpha = 1.0;
-        let mut accepted = false;
-        let mut trial_scale = 0.0;
-        for _ in 0..if settings.line_search { 6 } else { 1 } {
-            for ((t, &x), &d) in trial_u.iter_mut().zip(u.iter()).zip(&du) {
-                *t = x + alpha * d;
-            }
-            trial_scale = problem.evaluate(
-                &trial_u,
-                lambda,
-                &mut trial_r,
-                if need_k { Some(k) } else { None },
-            )?;
-            let trial = norm_inf(&trial_r);
-            if trial.is_finite() && (trial < norm || !settings.line_search) {
-                accepted = true;
-                break;
-            }
-            alpha *= 0.5;
-        }
-        if !accepted {
-            // No reduction along the Newton direction: take the full step anyway (the residual
-            // of a buckling problem may rise before it falls) and let the iteration decide.
-            alpha = 1.0;
-            for ((t, &x), &d) in trial_u.iter_mut().zip(u.iter()).zip(&du) {
-                *t = x + d;
-            }
-            trial_scale = problem.evaluate(
-                &trial_u,
-                lambda,
-                &mut trial_r,
-                if need_k { Some(k) } else { None },
-            )?;
-        }
+        let trial = (trial_u.as_mut_slice(), trial_r.as_mut_slice());
+        let (alpha, trial_scale) = line_search(
+            problem,
+            (u, &du, lambda, norm),
+            settings,
+            need_k.then_some(&mut *k),
+            trial,
+        )?;
         let previous = norm;
         norm = norm_inf(&trial_r);
         k_current = need_k;
@@ -508,4 +380,98 @@ pub(crate) fn iterate(
     }
     cache.invalidate();
     Ok(report)
+}
+
+/// Refuses `refactor_every` or `max_iterations` of 0 and a `refactor_ratio` not above 0.
+fn check_iteration(settings: &NewtonSettings) -> Result<(), NewtonError> {
+    if settings.refactor_every == 0 || settings.max_iterations == 0 {
+        return Err(NewtonError::Setting {
+            name: "refactor_every / max_iterations",
+            reason: "must be ≥ 1".into(),
+        });
+    }
+    if settings.refactor_ratio.is_nan() || settings.refactor_ratio <= 0.0 {
+        return Err(NewtonError::Setting {
+            name: "refactor_ratio",
+            reason: format!("{} (must be > 0)", settings.refactor_ratio),
+        });
+    }
+    Ok(())
+}
+
+/// What [`refactor`] did.
+enum Refactor {
+    /// The kept factorisation serves this iteration.
+    Kept,
+    /// A factorisation made at u, with its negative pivots.
+    Made(usize),
+    /// The tangent at u could not be factorised (the solver's message); the cache is empty.
+    Singular(String),
+}
+
+/// Factorises K_T(u) when the cache holds no factorisation, or one used `refactor_every`
+/// times, or one that stopped pulling the residual down; the tangent is evaluated first
+/// (with the residual into `r`) unless the last evaluation made it (`k_current`).
+fn refactor(
+    problem: &mut dyn NonlinearProblem,
+    u: &[f64],
+    lambda: f64,
+    r: &mut [f64],
+    settings: &NewtonSettings,
+    (solver, k, cache): (
+        &mut dyn LinearSolver,
+        &mut SymmetricMatrix,
+        &mut TangentCache,
+    ),
+    k_current: bool,
+) -> Result<Refactor, NewtonError> {
+    if cache.factored && cache.age < settings.refactor_every && !cache.slow {
+        return Ok(Refactor::Kept);
+    }
+    if !k_current {
+        problem.evaluate(u, lambda, r, Some(k))?;
+    }
+    match solver.factorize(k) {
+        Ok(f) => {
+            *cache = TangentCache::factored_now();
+            Ok(Refactor::Made(f.negative_pivots))
+        }
+        Err(e) => {
+            cache.invalidate();
+            Ok(Refactor::Singular(e.to_string()))
+        }
+    }
+}
+
+/// Backtracking line search along `du` from `u` (residual norm `norm`): α = 1, ½, … (6 tries;
+/// 1 without `settings.line_search`) until ‖r(u + α·du)‖∞ < `norm`, else the full step anyway
+/// (the residual of a buckling problem may rise before it falls). The accepted state and its
+/// residual are left in `trial`, the tangent there in `k` when given. Returns α and the force
+/// scale at the accepted state.
+fn line_search(
+    problem: &mut dyn NonlinearProblem,
+    (u, du, lambda, norm): (&[f64], &[f64], f64, f64),
+    settings: &NewtonSettings,
+    mut k: Option<&mut SymmetricMatrix>,
+    (trial_u, trial_r): (&mut [f64], &mut [f64]),
+) -> Result<(f64, f64), NewtonError> {
+    let mut alpha = 1.0;
+    for _ in 0..if settings.line_search { 6 } else { 1 } {
+        for ((t, &x), &d) in trial_u.iter_mut().zip(u).zip(du) {
+            *t = x + alpha * d;
+        }
+        let scale = problem.evaluate(trial_u, lambda, trial_r, k.as_deref_mut())?;
+        let trial = norm_inf(trial_r);
+        if trial.is_finite() && (trial < norm || !settings.line_search) {
+            return Ok((alpha, scale));
+        }
+        alpha *= 0.5;
+    }
+    // No reduction along the Newton direction: take the full step anyway and let the
+    // iteration decide.
+    for ((t, &x), &d) in trial_u.iter_mut().zip(u).zip(du) {
+        *t = x + d;
+    }
+    let scale = problem.evaluate(trial_u, lambda, trial_r, k)?;
+    Ok((1.0, scale))
 }

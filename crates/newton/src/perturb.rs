@@ -1,0 +1,189 @@
+//! The thesis's perturbation load (§3.2): a transverse force converged with a compression level
+//! as a dead load, then removed at the same level, so the solution lands on the postbuckled
+//! branch. Generic over [`DeadLoads`], so a problem that wraps another can use it.
+
+use crate::{
+    IncrementReport, NewtonError, NewtonSettings, NonlinearProblem, PathReport, Stepping,
+    follow_path, follow_path_from, solve_increment,
+};
+
+/// A problem whose external force has a λ-independent part: r(u, λ) = f_int(u) − λ·f_ref −
+/// f_dead. The perturbation protocol of thesis §3.2 applies its transverse load as f_dead
+/// (converged with a level) and then removes it (f_dead = 0) at the same λ.
+pub trait DeadLoads {
+    /// Sets the dead force at DOF `dof` to `value` (N), replacing the one there (0 removes it).
+    /// Errors name the DOF (out of range) or the value (not finite).
+    fn set_dead_load(&mut self, dof: usize, value: f64) -> Result<(), NewtonError>;
+}
+
+/// Sets the dead loads `loads` (DOF, force), each times `scale`.
+fn set_scaled<P: DeadLoads>(
+    problem: &mut P,
+    loads: &[(usize, f64)],
+    scale: f64,
+) -> Result<(), NewtonError> {
+    loads
+        .iter()
+        .try_for_each(|&(dof, f)| problem.set_dead_load(dof, scale * f))
+}
+
+/// The thesis's way onto the postbuckled branch (§3.2): the transverse `perturbation` loads
+/// (DOF, force) act as dead loads while the path is followed to the first target; then they are
+/// removed all at once and the same load level is solved again without them; the path then
+/// continues through the remaining targets. Removing them fails like any increment would (a
+/// located [`NewtonError::Cutback`] naming the level) if the structure does not stay on the
+/// buckled branch at that level.
+pub fn perturbed_path<P: NonlinearProblem + DeadLoads>(
+    problem: &mut P,
+    u: &mut Vec<f64>,
+    perturbation: &[(usize, f64)],
+    targets: &[f64],
+    settings: &NewtonSettings,
+    stepping: &Stepping,
+) -> Result<PathReport, NewtonError> {
+    let Some((&first, rest)) = targets.split_first() else {
+        return Ok(PathReport::default());
+    };
+    for &(dof, f) in perturbation {
+        problem.set_dead_load(dof, f)?;
+    }
+    let mut report = follow_path(problem, u, &[first], settings, stepping)?;
+    for &(dof, _) in perturbation {
+        problem.set_dead_load(dof, 0.0)?;
+    }
+    let mut solver = settings.solver.build();
+    solver.analyze(&problem.pattern())?;
+    let mut k = nonlin3d_solver::SymmetricMatrix::zeros(problem.pattern());
+    let mut trial = u.clone();
+    let removed = solve_increment(
+        problem,
+        &mut trial,
+        first,
+        settings,
+        solver.as_mut(),
+        &mut k,
+    )?;
+    let ok = removed.converged();
+    let reason = removed.termination.to_string();
+    report.attempts.push(removed);
+    if !ok {
+        return Err(NewtonError::Cutback {
+            target: first,
+            reached: first,
+            cutbacks: 0,
+            last_step: 0.0,
+            reason: format!("removing the perturbation load: {reason}"),
+        });
+    }
+    *u = trial;
+    if let Some(state) = report.states.last_mut() {
+        state.1 = u.clone();
+    }
+    let more = follow_path_from(problem, u, first, rest, settings, stepping)?;
+    report.attempts.extend(more.attempts);
+    report.states.extend(more.states);
+    Ok(report)
+}
+
+/// The §3.2 protocol over one step: from `u` converged at load factor `from` (a stable state,
+/// e.g. the last level before the trivial path lost stability), the `perturbation` dead loads
+/// (DOF, force) act while the path is followed to `to` (with cutback, so the response bends
+/// smoothly onto a branch instead of snapping); then they are removed at the same λ: all at
+/// once as in the thesis, and if that does not converge in parts with cutback (as the thesis
+/// did once in four parts, §4.2): a part that fails is halved, down to [`MIN_REMOVAL_PART`]
+/// (1/64) of the load, and after a success the part doubles again. `u` is updated only on
+/// success, and the dead loads are off afterwards either way; errors name the stage, and for
+/// the removal the fraction of the load still on.
+pub fn perturbed_step<P: NonlinearProblem + DeadLoads>(
+    problem: &mut P,
+    u: &mut Vec<f64>,
+    from: f64,
+    to: f64,
+    perturbation: &[(usize, f64)],
+    settings: &NewtonSettings,
+    stepping: &Stepping,
+) -> Result<Vec<IncrementReport>, NewtonError> {
+    let mut trial = u.clone();
+    set_scaled(problem, perturbation, 1.0)?;
+    let loaded = follow_path_from(problem, &mut trial, from, &[to], settings, stepping);
+    let mut attempts = match loaded {
+        Ok(report) => report.attempts,
+        Err(e) => {
+            set_scaled(problem, perturbation, 0.0)?;
+            return Err(e);
+        }
+    };
+    let removed = remove_in_parts(
+        problem,
+        &mut trial,
+        to,
+        perturbation,
+        settings,
+        &mut attempts,
+    );
+    if let Err(e) = removed {
+        set_scaled(problem, perturbation, 0.0)?;
+        return Err(e);
+    }
+    *u = trial;
+    Ok(attempts)
+}
+
+/// The smallest part of the perturbation load [`perturbed_step`] removes in one solve: 1/64.
+pub const MIN_REMOVAL_PART: f64 = 1.0 / 64.0;
+
+/// Takes the perturbation load `perturbation` from fully on to off at λ = `lambda`, `u`
+/// converged with it fully on: parts of the load, each a Newton solve at the same λ with
+/// f_dead = (1 − removed)·f_pert, the part halved after a failure and doubled after a success
+/// (at most the whole remainder).
+fn remove_in_parts<P: NonlinearProblem + DeadLoads>(
+    problem: &mut P,
+    u: &mut [f64],
+    lambda: f64,
+    perturbation: &[(usize, f64)],
+    settings: &NewtonSettings,
+    attempts: &mut Vec<IncrementReport>,
+) -> Result<(), NewtonError> {
+    let mut solver = settings.solver.build();
+    solver.analyze(&problem.pattern())?;
+    let mut k = nonlin3d_solver::SymmetricMatrix::zeros(problem.pattern());
+    let (mut remaining, mut part, mut cutbacks) = (1.0f64, 1.0f64, 0);
+    while remaining > 0.0 {
+        part = part.min(remaining);
+        // Parts are powers of two of the whole load: the remainder stays exact.
+        let next = remaining - part;
+        set_scaled(problem, perturbation, next)?;
+        let mut trial = u.to_vec();
+        let r = solve_increment(
+            problem,
+            &mut trial,
+            lambda,
+            settings,
+            solver.as_mut(),
+            &mut k,
+        )?;
+        let ok = r.converged();
+        let reason = r.termination.to_string();
+        attempts.push(r);
+        if ok {
+            u.copy_from_slice(&trial);
+            remaining = next;
+            part *= 2.0;
+        } else if part * 0.5 >= MIN_REMOVAL_PART {
+            part *= 0.5;
+            cutbacks += 1;
+        } else {
+            return Err(NewtonError::Perturbation {
+                lambda,
+                remaining: 100.0 * remaining,
+                part,
+                cutbacks,
+                reason,
+            });
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+pub(crate) mod tests;
