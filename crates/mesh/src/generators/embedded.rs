@@ -14,7 +14,7 @@
 //!    (Fig. 3.1.1c).
 //! 3. The elliptic map (eq. 3.1.1, conformal; or eq. 3.1.2 with parameter r) turns the front
 //!    circle of radius r₀ into the ellipse with semi-axes a (x) and b (y), stretching y when
-//!    b > a and x when a > b (module `planform`); the rectangular planform stretches it onto a
+//!    b > a and x when a > b (module `maps`); the rectangular planform stretches it onto a
 //!    rectangle (Fig. 3.1.3). The thesis applied the map to every node, which
 //!    bends the outer boundary; here the rings are mapped first and the rings beyond the
 //!    transition then blend into the square, so the boundary stays the square while the region
@@ -26,17 +26,17 @@
 //!    the mid-edge nodes between duplicated corners, or between a duplicated corner and the
 //!    front, are duplicated too. Everything else is shared.
 
+mod maps;
 mod params;
-mod planform;
 
+pub use maps::EllipticMap;
 pub use params::{Centre, EmbeddedParams, PlyLayout};
-pub use planform::EllipticMap;
 
 use crate::MeshError;
 use crate::front::{CellsTouching, Front, FrontPoint};
 use crate::model::{Cell, Mesh};
+use maps::{front_radius, planform, radial_stations};
 use nonlin3d_element::ElementKind;
-use planform::{front_radius, planform, radial_stations};
 use std::collections::HashMap;
 
 /// The embedded delamination mesh. Node sets: `x0`, `y0`, `z0`, `x1` (x = W), `y1` (y = W),

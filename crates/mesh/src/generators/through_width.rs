@@ -5,7 +5,7 @@
 
 use crate::MeshError;
 use crate::front::{CellsTouching, Front, FrontPoint};
-use crate::generate::{graded_coordinates, graded_from_first, grid_position};
+use crate::generators::{graded_coordinates, graded_from_first, grid_position};
 use crate::model::{Cell, Mesh};
 use nonlin3d_element::ElementKind;
 use std::collections::HashMap;

@@ -2,7 +2,7 @@
 
 use super::EllipticMap;
 use crate::MeshError;
-use crate::generate::graded_coordinates;
+use crate::generators::graded_coordinates;
 use nonlin3d_element::ElementKind;
 
 /// Parameters of [`embedded_delamination`](crate::embedded_delamination) (SI units).
