@@ -7,6 +7,7 @@ use crate::MeshError;
 use crate::front::{CellsTouching, Front, FrontPoint};
 use crate::generators::{graded_coordinates, graded_from_first, grid_position};
 use crate::model::{Cell, Mesh};
+use crate::names;
 use nonlin3d_element::ElementKind;
 use std::collections::HashMap;
 
@@ -91,34 +92,102 @@ pub fn through_width_delamination(p: &ThroughWidthParams) -> Result<(Mesh, Front
             reason: format!("need 0 < a < length ({} vs {})", p.a, p.length),
         });
     }
-    let xin = graded_coordinates(p.inside, p.a, p.front_grading)?;
-    // The element ahead of the front as long as the one behind it (VCCT, §2.8).
-    let behind = xin[xin.len() - 1] - xin[xin.len() - 2];
-    let xout = graded_from_first(p.outside, p.length - p.a, behind)?;
-    let mut xs = xin.clone();
-    xs.extend(xout.iter().skip(1).map(|d| p.a + d));
-    let ys = graded_coordinates(p.across, p.width, 1.0)?;
-    let zb = graded_coordinates(p.base_layers, p.base, p.base_grading)?;
-    let zs = graded_coordinates(p.sub_layers, p.h, 1.0)?;
-    let mut zz = zb.clone();
-    zz.extend(zs.iter().skip(1).map(|d| p.base + d));
-    let (gf, gh) = (2 * p.inside, 2 * p.base_layers); // doubled grid index of the front and of z = H
-    let at = grid_position;
-    let mut mesh = Mesh::default();
-    let mut ids: HashMap<(usize, usize, usize, bool), usize> = HashMap::new();
-    let mut id = |mesh: &mut Mesh, g: [usize; 3], below: bool| -> usize {
-        let lower = below && g[2] == gh && g[0] < gf;
-        *ids.entry((g[0], g[1], g[2], lower)).or_insert_with(|| {
-            mesh.nodes
-                .push([at(&xs, g[0]), at(&ys, g[1]), at(&zz, g[2])]);
-            mesh.nodes.len() - 1
+    let stations = Stations::new(p)?;
+    let (mut mesh, grid, cells) = hexes(p, &stations);
+    let (up, lo) = grid.crack_faces(p);
+    mesh.add_plane_sets(
+        &[
+            (names::X0, 0, 0.0),
+            (names::X1, 0, p.length),
+            (names::Y0, 1, 0.0),
+            (names::Y1, 1, p.width),
+            (names::Z0, 2, 0.0),
+        ],
+        1e-9 * p.length,
+    );
+    let (points, front_nodes) = grid.front(p, &CellsTouching::new(&mesh, &cells.1))?;
+    let top = 2 * (p.base_layers + p.sub_layers);
+    let centre = centre_top_nodes(p)
+        .iter()
+        .map(|&gy| {
+            grid.get([0, gy, top], false)
+                .ok_or_else(|| missing("centre top"))
         })
+        .collect::<Result<Vec<_>, _>>()?;
+    let sets = &mut mesh.node_sets;
+    sets.insert(names::CENTER_TOP.into(), centre);
+    sets.insert(names::CRACK_UPPER.into(), up);
+    sets.insert(names::CRACK_LOWER.into(), lo);
+    sets.insert(names::FRONT.into(), front_nodes);
+    mesh.cell_sets.insert(names::BASE.into(), cells.0);
+    mesh.cell_sets.insert(names::SUBLAMINATE.into(), cells.1);
+    mesh.cell_sets
+        .insert(names::ALL.into(), (0..mesh.cells.len()).collect());
+    mesh.validate()?;
+    mesh.check_geometry()?;
+    let front = Front { points }.finish_straight(&mesh.nodes, [0.0, -1.0]);
+    Ok((mesh, front))
+}
+
+/// An internal inconsistency: a node the sets or the VCCT pairs need is not in the grid.
+fn missing(what: &str) -> MeshError {
+    MeshError::Parameter {
+        name: "front",
+        reason: format!("internal: {what} node not found"),
+    }
+}
+
+/// The vertex positions of Fig. 3.2.3 along x (graded towards the front x = a, the element
+/// ahead as long as the one behind, §2.8), y (uniform) and z (base graded towards z = H,
+/// sublaminate uniform).
+struct Stations {
+    xs: Vec<f64>,
+    ys: Vec<f64>,
+    zz: Vec<f64>,
+}
+
+impl Stations {
+    /// The stations of `p`.
+    fn new(p: &ThroughWidthParams) -> Result<Self, MeshError> {
+        let xin = graded_coordinates(p.inside, p.a, p.front_grading)?;
+        // The element ahead of the front as long as the one behind it (VCCT, §2.8).
+        let behind = xin[xin.len() - 1] - xin[xin.len() - 2];
+        let xout = graded_from_first(p.outside, p.length - p.a, behind)?;
+        let mut xs = xin.clone();
+        xs.extend(xout.iter().skip(1).map(|d| p.a + d));
+        let ys = graded_coordinates(p.across, p.width, 1.0)?;
+        let zb = graded_coordinates(p.base_layers, p.base, p.base_grading)?;
+        let zs = graded_coordinates(p.sub_layers, p.h, 1.0)?;
+        let mut zz = zb.clone();
+        zz.extend(zs.iter().skip(1).map(|d| p.base + d));
+        Ok(Self { xs, ys, zz })
+    }
+}
+
+/// The nodes of Fig. 3.2.3 by doubled grid index (even: vertex, odd: Hex20 mid-edge) and copy:
+/// on z = H behind the front the base's cells use a lower copy (the delamination, §3.2).
+struct Grid {
+    ids: HashMap<(usize, usize, usize, bool), usize>,
+    /// Doubled grid index of the front x = a.
+    gf: usize,
+    /// Doubled grid index of the delamination plane z = H.
+    gh: usize,
+}
+
+/// The hexahedra of Fig. 3.2.3 layer by layer (z, then y, then x), nodes made on first use;
+/// returns the mesh, its node grid, and the (base, sublaminate) cells.
+fn hexes(p: &ThroughWidthParams, st: &Stations) -> (Mesh, Grid, (Vec<usize>, Vec<usize>)) {
+    let mut grid = Grid {
+        ids: HashMap::new(),
+        gf: 2 * p.inside,
+        gh: 2 * p.base_layers,
     };
+    let mut mesh = Mesh::default();
     let (mut base_cells, mut sub_cells) = (Vec::new(), Vec::new());
-    for k in 0..zz.len() - 1 {
+    for k in 0..st.zz.len() - 1 {
         let below = k < p.base_layers;
-        for j in 0..ys.len() - 1 {
-            for i in 0..xs.len() - 1 {
+        for j in 0..st.ys.len() - 1 {
+            for i in 0..st.xs.len() - 1 {
                 let nodes: Vec<usize> = p
                     .kind
                     .reference_nodes()
@@ -129,7 +198,7 @@ pub fn through_width_delamination(p: &ThroughWidthParams) -> Result<(Mesh, Front
                             (2 * j as i64 + 1 + r[1] as i64) as usize,
                             (2 * k as i64 + 1 + r[2] as i64) as usize,
                         ];
-                        id(&mut mesh, g, below)
+                        grid.node(&mut mesh, st, g, below)
                     })
                     .collect();
                 let c = mesh.cells.len();
@@ -147,75 +216,84 @@ pub fn through_width_delamination(p: &ThroughWidthParams) -> Result<(Mesh, Front
             }
         }
     }
-    let get = |g: [usize; 3], lower: bool| ids.get(&(g[0], g[1], g[2], lower)).copied();
-    let step = if p.kind == ElementKind::Hex20 { 1 } else { 2 };
-    let (mut up, mut lo) = (Vec::new(), Vec::new());
-    for gy in (0..=2 * p.across).step_by(step) {
-        for gx in (0..gf).step_by(step) {
-            if let (Some(u), Some(l)) = (get([gx, gy, gh], false), get([gx, gy, gh], true)) {
-                up.push(u);
-                lo.push(l);
+    (mesh, grid, (base_cells, sub_cells))
+}
+
+impl Grid {
+    /// The node at grid index g for a cell below z = H (`below`) or above, made on first use:
+    /// the lower copy when g is on z = H behind the front and the cell is below.
+    fn node(&mut self, mesh: &mut Mesh, st: &Stations, g: [usize; 3], below: bool) -> usize {
+        let lower = below && g[2] == self.gh && g[0] < self.gf;
+        *self
+            .ids
+            .entry((g[0], g[1], g[2], lower))
+            .or_insert_with(|| {
+                mesh.nodes.push([
+                    grid_position(&st.xs, g[0]),
+                    grid_position(&st.ys, g[1]),
+                    grid_position(&st.zz, g[2]),
+                ]);
+                mesh.nodes.len() - 1
+            })
+    }
+
+    /// The node at grid index g (`lower`: the base-side copy), if the mesh has one.
+    fn get(&self, g: [usize; 3], lower: bool) -> Option<usize> {
+        self.ids.get(&(g[0], g[1], g[2], lower)).copied()
+    }
+
+    /// The crack faces (§3.2): (upper, lower) node pairs on z = H behind the front, y outer,
+    /// x inner (every grid index for Hex20, vertices only for Hex8).
+    fn crack_faces(&self, p: &ThroughWidthParams) -> (Vec<usize>, Vec<usize>) {
+        let step = if p.kind == ElementKind::Hex20 { 1 } else { 2 };
+        let (mut up, mut lo) = (Vec::new(), Vec::new());
+        for gy in (0..=2 * p.across).step_by(step) {
+            for gx in (0..self.gf).step_by(step) {
+                let g = [gx, gy, self.gh];
+                if let (Some(u), Some(l)) = (self.get(g, false), self.get(g, true)) {
+                    up.push(u);
+                    lo.push(l);
+                }
             }
         }
+        (up, lo)
     }
-    let tol = 1e-9 * p.length;
-    mesh.add_plane_sets(
-        &[
-            ("x0", 0, 0.0),
-            ("x1", 0, p.length),
-            ("y0", 1, 0.0),
-            ("y1", 1, p.width),
-            ("z0", 2, 0.0),
-        ],
-        tol,
-    );
-    // Front from y = W down to y = 0.
-    let missing = |what: &str| MeshError::Parameter {
-        name: "front",
-        reason: format!("internal: {what} node not found"),
-    };
-    let cells_of = CellsTouching::new(&mesh, &sub_cells);
-    let mut points = Vec::new();
-    let mut front_nodes = Vec::new();
-    for gy in (0..=2 * p.across).rev().step_by(step) {
-        let corner = gy.is_multiple_of(2);
-        let c = get([gf, gy, gh], false).ok_or_else(|| missing("c"))?;
-        let a_up = get([gf - 2, gy, gh], false).ok_or_else(|| missing("a"))?;
-        let a_lo = get([gf - 2, gy, gh], true).ok_or_else(|| missing("a′"))?;
-        let hex20_corner = p.kind == ElementKind::Hex20 && corner;
-        let (b, d) = if hex20_corner {
-            let pair = get([gf - 1, gy, gh], false).zip(get([gf - 1, gy, gh], true));
-            (pair, get([gf + 1, gy, gh], false))
-        } else {
-            (None, None)
-        };
-        front_nodes.push(c);
-        points.push(FrontPoint::new(
-            c,
-            corner,
-            (a_up, a_lo),
-            b,
-            d,
-            cells_of.touching(c, d),
-        ));
+
+    /// The front points of §2.8 along x = a from y = W down to y = 0 (a/a′ one element behind;
+    /// for Hex20 corners b/b′ half an element behind and d half an element ahead), and the
+    /// front nodes in the same order.
+    fn front(
+        &self,
+        p: &ThroughWidthParams,
+        cells: &CellsTouching,
+    ) -> Result<(Vec<FrontPoint>, Vec<usize>), MeshError> {
+        let (gf, gh) = (self.gf, self.gh);
+        let step = if p.kind == ElementKind::Hex20 { 1 } else { 2 };
+        let mut points = Vec::new();
+        let mut front_nodes = Vec::new();
+        for gy in (0..=2 * p.across).rev().step_by(step) {
+            let corner = gy.is_multiple_of(2);
+            let c = self.get([gf, gy, gh], false).ok_or_else(|| missing("c"))?;
+            let a_up = self
+                .get([gf - 2, gy, gh], false)
+                .ok_or_else(|| missing("a"))?;
+            let a_lo = self
+                .get([gf - 2, gy, gh], true)
+                .ok_or_else(|| missing("a′"))?;
+            let (b, d) = if p.kind == ElementKind::Hex20 && corner {
+                let pair = self
+                    .get([gf - 1, gy, gh], false)
+                    .zip(self.get([gf - 1, gy, gh], true));
+                (pair, self.get([gf + 1, gy, gh], false))
+            } else {
+                (None, None)
+            };
+            front_nodes.push(c);
+            let touching = cells.touching(c, d);
+            points.push(FrontPoint::new(c, corner, (a_up, a_lo), b, d, touching));
+        }
+        Ok((points, front_nodes))
     }
-    let top = 2 * (p.base_layers + p.sub_layers);
-    let centre = centre_top_nodes(p)
-        .iter()
-        .map(|&gy| get([0, gy, top], false).ok_or_else(|| missing("centre top")))
-        .collect::<Result<Vec<_>, _>>()?;
-    mesh.node_sets.insert("center_top".into(), centre);
-    mesh.node_sets.insert("crack_upper".into(), up);
-    mesh.node_sets.insert("crack_lower".into(), lo);
-    mesh.node_sets.insert("front".into(), front_nodes);
-    mesh.cell_sets.insert("base".into(), base_cells);
-    mesh.cell_sets.insert("sublaminate".into(), sub_cells);
-    mesh.cell_sets
-        .insert("all".into(), (0..mesh.cells.len()).collect());
-    mesh.validate()?;
-    mesh.check_geometry()?;
-    let front = Front { points }.finish_straight(&mesh.nodes, [0.0, -1.0]);
-    Ok((mesh, front))
 }
 
 #[cfg(test)]
@@ -241,7 +319,7 @@ mod tests {
                 ..ThroughWidthParams::example()
             };
             let (m, _) = through_width_delamination(&p).unwrap();
-            let set = &m.node_sets["center_top"];
+            let set = &m.node_sets[names::CENTER_TOP];
             assert_eq!(set.len(), count, "{kind:?} across {across}");
             let mean_y = set.iter().map(|&n| m.nodes[n][1]).sum::<f64>() / count as f64;
             assert!(
