@@ -3,6 +3,7 @@
 //! delamination (Fig. 3.2.3). Each names its sets with the constants of [`crate::names`].
 
 mod embedded;
+mod grading;
 mod structured;
 mod through_width;
 
@@ -10,6 +11,7 @@ pub use embedded::{
     Centre, EllipticMap, EmbeddedParams, PlyLayout, edge_delamination, embedded_delamination,
     embedded_delamination_with_front, thin_film,
 };
-pub(crate) use structured::grid_position;
-pub use structured::{BoxParams, graded_coordinates, graded_from_first, structured_box};
+pub(crate) use grading::grid_position;
+pub use grading::{graded_coordinates, graded_from_first};
+pub use structured::{BoxParams, structured_box};
 pub use through_width::{ThroughWidthParams, through_width_delamination};
