@@ -117,6 +117,9 @@ impl EmbeddedParams {
         }
     }
 
+    /// The parameters' checks (thesis §3.1–3.2): positive finite sizes, an even number of
+    /// slices, at least one element per count, a core inside the front circle, the transition
+    /// ring inside the square, eq. 3.1.2's r within the front circle, and the ply layout.
     pub(super) fn check(&self) -> Result<(), MeshError> {
         let bad = |name: &'static str, reason: String| Err(MeshError::Parameter { name, reason });
         for (name, v) in [
@@ -173,33 +176,10 @@ impl EmbeddedParams {
                 ),
             );
         }
-        if let Some(pl) = &self.plies {
-            let t = pl.ply_thickness;
-            if !(t.is_finite() && t > 0.0) || pl.sublaminate.is_empty() {
-                return bad(
-                    "plies",
-                    "positive ply thickness and at least one sublaminate ply".into(),
-                );
-            }
-            if ((pl.sublaminate.len() as f64 * t) - self.h).abs() > 1e-9 * self.h {
-                return bad(
-                    "plies",
-                    format!("{} plies × {t} m ≠ h = {} m", pl.sublaminate.len(), self.h),
-                );
-            }
-            if pl.base_below.len() as f64 * t >= self.base {
-                return bad("plies", "base plies leave no homogenised base".into());
-            }
-            if pl
-                .sublaminate
-                .iter()
-                .chain(&pl.base_below)
-                .any(|a| !a.is_finite())
-            {
-                return bad("plies", "ply angles must be finite".into());
-            }
+        match &self.plies {
+            Some(pl) => pl.check(self.h, self.base),
+            None => Ok(()),
         }
-        Ok(())
     }
 
     /// z stations and, per layer between them, (material, ply angle); and the index of z = H.
@@ -229,6 +209,39 @@ impl EmbeddedParams {
             layers.push((1, angle));
         }
         Ok((z, layers, zh))
+    }
+}
+
+impl PlyLayout {
+    /// The layout's checks (chapter 7): a positive ply thickness, sublaminate plies that fill
+    /// h, base plies that leave some homogenised base below them, finite angles.
+    fn check(&self, h: f64, base: f64) -> Result<(), MeshError> {
+        let bad = |name: &'static str, reason: String| Err(MeshError::Parameter { name, reason });
+        let t = self.ply_thickness;
+        if !(t.is_finite() && t > 0.0) || self.sublaminate.is_empty() {
+            return bad(
+                "plies",
+                "positive ply thickness and at least one sublaminate ply".into(),
+            );
+        }
+        if ((self.sublaminate.len() as f64 * t) - h).abs() > 1e-9 * h {
+            return bad(
+                "plies",
+                format!("{} plies × {t} m ≠ h = {} m", self.sublaminate.len(), h),
+            );
+        }
+        if self.base_below.len() as f64 * t >= base {
+            return bad("plies", "base plies leave no homogenised base".into());
+        }
+        if self
+            .sublaminate
+            .iter()
+            .chain(&self.base_below)
+            .any(|a| !a.is_finite())
+        {
+            return bad("plies", "ply angles must be finite".into());
+        }
+        Ok(())
     }
 }
 
