@@ -247,3 +247,46 @@ impl PlyLayout {
 
 /// Thickness stations, (material, ply angle) of each layer, index of z = H.
 pub(super) type Layers = (Vec<f64>, Vec<(usize, f64)>, usize);
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Each broken ply layout is refused under the name `plies`, and the reference layout of
+    /// four 0.1 mm plies in h = 0.4 mm passes.
+    #[test]
+    fn ply_layouts_that_do_not_fit_are_named() {
+        let p = EmbeddedParams::thesis_reference();
+        let good = PlyLayout {
+            ply_thickness: 0.1e-3,
+            sublaminate: vec![0.0, 90.0, 90.0, 0.0],
+            base_below: vec![45.0],
+        };
+        assert!(good.check(p.h, p.base).is_ok());
+        let broken = [
+            PlyLayout {
+                ply_thickness: 0.0,
+                ..good.clone()
+            },
+            PlyLayout {
+                sublaminate: vec![0.0, 90.0, 0.0],
+                ..good.clone()
+            },
+            PlyLayout {
+                base_below: vec![0.0; 40],
+                ..good.clone()
+            },
+            PlyLayout {
+                base_below: vec![f64::NAN],
+                ..good.clone()
+            },
+        ];
+        for layout in broken {
+            let err = layout.check(p.h, p.base).unwrap_err();
+            assert!(
+                matches!(err, MeshError::Parameter { name: "plies", .. }),
+                "{layout:?}: {err}"
+            );
+        }
+    }
+}
