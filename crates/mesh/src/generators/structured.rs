@@ -47,7 +47,19 @@ pub fn structured_box(p: &BoxParams) -> Result<Mesh, MeshError> {
         graded_coordinates(p.counts[1], p.size[1], p.grading[1])?,
         graded_coordinates(p.counts[2], p.size[2], p.grading[2])?,
     ];
-    let at = grid_position;
+    let (mut mesh, grid) = box_cells(p, &axes);
+    add_end_node_sets(&mut mesh, &grid, p.counts);
+    add_end_face_sets(&mut mesh, p.counts);
+    mesh.cell_sets
+        .insert(names::ALL.into(), (0..mesh.cells.len()).collect());
+    mesh.validate()?;
+    Ok(mesh)
+}
+
+/// The cells of the box, x fastest then y then z, nodes made on first use at the vertex
+/// positions `axes` (mid-edge nodes at the midpoints); returns the mesh and each node's doubled
+/// grid index.
+fn box_cells(p: &BoxParams, axes: &[Vec<f64>; 3]) -> (Mesh, Vec<[usize; 3]>) {
     let mut ids: HashMap<[usize; 3], usize> = HashMap::new();
     let mut mesh = Mesh::default();
     let mut grid = Vec::new();
@@ -63,9 +75,9 @@ pub fn structured_box(p: &BoxParams) -> Result<Mesh, MeshError> {
                     ];
                     let id = *ids.entry(g).or_insert_with(|| {
                         mesh.nodes.push([
-                            at(&axes[0], g[0]),
-                            at(&axes[1], g[1]),
-                            at(&axes[2], g[2]),
+                            grid_position(&axes[0], g[0]),
+                            grid_position(&axes[1], g[1]),
+                            grid_position(&axes[2], g[2]),
                         ]);
                         grid.push(g);
                         mesh.nodes.len() - 1
@@ -81,38 +93,43 @@ pub fn structured_box(p: &BoxParams) -> Result<Mesh, MeshError> {
             }
         }
     }
+    (mesh, grid)
+}
+
+/// The node sets `x0` … `z1`: the nodes whose grid index is 0 or 2·count along the axis.
+fn add_end_node_sets(mesh: &mut Mesh, grid: &[[usize; 3]], counts: [usize; 3]) {
     for axis in 0..3 {
         let (low, high) = names::box_ends(axis);
-        for (end, name) in [(0, low), (2 * p.counts[axis], high)] {
+        for (end, name) in [(0, low), (2 * counts[axis], high)] {
             let set: Vec<usize> = (0..mesh.nodes.len())
                 .filter(|&n| grid[n][axis] == end)
                 .collect();
             mesh.node_sets.insert(name.into(), set);
         }
     }
+}
+
+/// The face sets `x0` … `z1`: (cell, Abaqus face) of the cells on each end of the box.
+fn add_end_face_sets(mesh: &mut Mesh, counts: [usize; 3]) {
     // Faces: (axis, side) → Abaqus face number (zero-based): ζ−: 0, ζ+: 1, η−: 2, ξ+: 3, η+: 4, ξ−: 5.
     let face_of = [[5u8, 3], [2, 4], [0, 1]];
     for axis in 0..3 {
         let (low, high) = names::box_ends(axis);
         for (side, name) in [(0usize, low), (1, high)] {
             let mut faces = Vec::new();
-            for (c, _) in mesh.cells.iter().enumerate() {
+            for c in 0..mesh.cells.len() {
                 let idx = [
-                    c % p.counts[0],
-                    (c / p.counts[0]) % p.counts[1],
-                    c / (p.counts[0] * p.counts[1]),
+                    c % counts[0],
+                    (c / counts[0]) % counts[1],
+                    c / (counts[0] * counts[1]),
                 ];
-                if (side == 0 && idx[axis] == 0) || (side == 1 && idx[axis] + 1 == p.counts[axis]) {
+                if (side == 0 && idx[axis] == 0) || (side == 1 && idx[axis] + 1 == counts[axis]) {
                     faces.push((c, face_of[axis][side]));
                 }
             }
             mesh.face_sets.insert(name.into(), faces);
         }
     }
-    mesh.cell_sets
-        .insert(names::ALL.into(), (0..mesh.cells.len()).collect());
-    mesh.validate()?;
-    Ok(mesh)
 }
 
 #[cfg(test)]
