@@ -74,6 +74,12 @@ pub fn graded_coordinates(n: usize, length: f64, ratio: f64) -> Result<Vec<f64>,
     Ok(x)
 }
 
+/// The doubled grid index of the node at reference coordinates `r` (each −1, 0 or 1) of cell
+/// (i, j, k) of a structured grid: 2·i + 1 + r per axis (even: a vertex, odd: a mid-edge node).
+pub(crate) fn grid_index(cell: [usize; 3], r: &[f64; 3]) -> [usize; 3] {
+    std::array::from_fn(|a| (2 * cell[a] as i64 + 1 + r[a] as i64) as usize)
+}
+
 /// Position of doubled grid index `g` along an axis with vertex positions `axis`: even `g` is
 /// vertex g/2, odd `g` the midpoint of its element (where Hex20 mid-edge nodes sit).
 pub(crate) fn grid_position(axis: &[f64], g: usize) -> f64 {

@@ -11,7 +11,7 @@ pub use embedded::{
     Centre, EllipticMap, EmbeddedParams, PlyLayout, edge_delamination, embedded_delamination,
     embedded_delamination_with_front, thin_film,
 };
-pub(crate) use grading::grid_position;
 pub use grading::{graded_coordinates, graded_from_first};
+pub(crate) use grading::{grid_index, grid_position};
 pub use structured::{BoxParams, structured_box};
 pub use through_width::{ThroughWidthParams, through_width_delamination};

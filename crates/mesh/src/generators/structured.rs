@@ -1,7 +1,7 @@
 //! The structured box: a graded hexahedral block with its end sets (the meshes of the
 //! element and convergence tests, and the DCB of §5).
 
-use super::grading::{graded_coordinates, grid_position};
+use super::grading::{graded_coordinates, grid_index, grid_position};
 use crate::MeshError;
 use crate::model::{Cell, Mesh};
 use crate::names;
@@ -68,11 +68,7 @@ fn box_cells(p: &BoxParams, axes: &[Vec<f64>; 3]) -> (Mesh, Vec<[usize; 3]>) {
             for i in 0..p.counts[0] {
                 let mut nodes = Vec::with_capacity(p.kind.nodes());
                 for r in p.kind.reference_nodes() {
-                    let g = [
-                        (2 * i as i64 + 1 + r[0] as i64) as usize,
-                        (2 * j as i64 + 1 + r[1] as i64) as usize,
-                        (2 * k as i64 + 1 + r[2] as i64) as usize,
-                    ];
+                    let g = grid_index([i, j, k], r);
                     let id = *ids.entry(g).or_insert_with(|| {
                         mesh.nodes.push([
                             grid_position(&axes[0], g[0]),

@@ -5,7 +5,7 @@
 
 use crate::MeshError;
 use crate::front::{CellsTouching, Front, FrontPoint};
-use crate::generators::{graded_coordinates, graded_from_first, grid_position};
+use crate::generators::{graded_coordinates, graded_from_first, grid_index, grid_position};
 use crate::model::{Cell, Mesh};
 use crate::names;
 use nonlin3d_element::ElementKind;
@@ -192,14 +192,7 @@ fn hexes(p: &ThroughWidthParams, st: &Stations) -> (Mesh, Grid, (Vec<usize>, Vec
                     .kind
                     .reference_nodes()
                     .iter()
-                    .map(|r| {
-                        let g = [
-                            (2 * i as i64 + 1 + r[0] as i64) as usize,
-                            (2 * j as i64 + 1 + r[1] as i64) as usize,
-                            (2 * k as i64 + 1 + r[2] as i64) as usize,
-                        ];
-                        grid.node(&mut mesh, st, g, below)
-                    })
+                    .map(|r| grid.node(&mut mesh, st, grid_index([i, j, k], r), below))
                     .collect();
                 let c = mesh.cells.len();
                 mesh.cells.push(Cell {
