@@ -4,7 +4,7 @@
 //! y = 0 and y = W it responds in plane strain (§3.2).
 
 use crate::MeshError;
-use crate::front::{CellsTouching, Front, FrontPoint};
+use crate::front::{CellsTouching, Front, FrontPoint, missing_node as missing};
 use crate::generators::{graded_coordinates, graded_from_first, grid_index, grid_position};
 use crate::model::{Cell, Mesh};
 use crate::names;
@@ -127,14 +127,6 @@ pub fn through_width_delamination(p: &ThroughWidthParams) -> Result<(Mesh, Front
     mesh.check_geometry()?;
     let front = Front { points }.finish_straight(&mesh.nodes, [0.0, -1.0]);
     Ok((mesh, front))
-}
-
-/// An internal inconsistency: a node the sets or the VCCT pairs need is not in the grid.
-fn missing(what: &str) -> MeshError {
-    MeshError::Parameter {
-        name: "front",
-        reason: format!("internal: {what} node not found"),
-    }
 }
 
 /// The vertex positions of Fig. 3.2.3 along x (graded towards the front x = a, the element

@@ -71,18 +71,19 @@ fn corner_nodes(s: &Section, z: &[f64], zh: usize) -> Solid {
 }
 
 impl Solid {
-    /// The upper (sublaminate-side) node of vertex v on z = H.
+    /// The upper (sublaminate-side) node of vertex v on the delamination plane z = H (§3.2).
     pub(super) fn upper(&self, v: usize) -> usize {
         self.corner[self.zh][v]
     }
 
-    /// The base-side node of vertex v on z = H: its lower copy inside the front, the shared
-    /// node elsewhere.
+    /// The base-side node of vertex v on z = H (§3.2): its lower copy inside the front, the
+    /// shared node elsewhere.
     pub(super) fn lower_or_shared(&self, v: usize) -> usize {
         self.lower[v].unwrap_or(self.corner[self.zh][v])
     }
 
-    /// The Hex20 mid-edge node between corner nodes a and b, if there is one.
+    /// The Hex20 mid-edge node between corner nodes a and b, if there is one (at their
+    /// midpoint, §3.1's re-centring after eq. 3.1.1–3.1.2).
     pub(super) fn midside(&self, a: usize, b: usize) -> Option<usize> {
         self.mid.get(&(a.min(b), a.max(b))).copied()
     }

@@ -6,16 +6,8 @@ use super::EmbeddedParams;
 use super::extrusion::Solid;
 use super::planform::Section;
 use crate::MeshError;
-use crate::front::{CellsTouching, Front, FrontPoint};
+use crate::front::{CellsTouching, Front, FrontPoint, missing_node as missing};
 use nonlin3d_element::ElementKind;
-
-/// An internal inconsistency: a node the VCCT pairs need is not in the mesh.
-fn missing(what: &str) -> MeshError {
-    MeshError::Parameter {
-        name: "front",
-        reason: format!("internal: {what} node not found"),
-    }
-}
 
 /// The §2.8 front descriptor of the §3.1 mesh, from the y axis (q = slices) to the x axis
 /// (q = 0): a corner point per slice line and, for Hex20, a mid-edge point between each two.

@@ -94,7 +94,7 @@ fn ring_point(p: &EmbeddedParams, wt: f64, r: f64, q: usize) -> [f64; 2] {
 }
 
 impl Section {
-    /// Adds a vertex; returns its index.
+    /// Adds a vertex of the §3.1 section (`inside`: strictly inside the front); its index.
     fn push(&mut self, point: [f64; 2], inside: bool) -> usize {
         self.points.push(point);
         self.inside.push(inside);
