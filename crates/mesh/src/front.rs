@@ -73,6 +73,15 @@ impl FrontPoint {
     }
 }
 
+/// A generator's internal inconsistency: a node the sets or the VCCT pairs (§2.8) need is not
+/// in its mesh.
+pub(crate) fn missing_node(what: &str) -> crate::MeshError {
+    crate::MeshError::Parameter {
+        name: "front",
+        reason: format!("internal: {what} node not found"),
+    }
+}
+
 /// Which of a set of cells contain each node: for the cells above the delamination plane that
 /// touch c and d.
 pub(crate) struct CellsTouching(std::collections::HashMap<usize, Vec<usize>>);

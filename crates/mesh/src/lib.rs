@@ -25,29 +25,26 @@
     warn(clippy::unwrap_used, clippy::expect_used, clippy::panic)
 )]
 
-mod embedded;
 mod error;
 mod front;
-mod generate;
-pub mod inp;
+mod generators;
 mod inp_read;
+mod io;
 mod model;
 pub mod names;
 mod quality;
-mod through_width;
-pub mod vtu;
 
-pub use embedded::{
-    Centre, EllipticMap, EmbeddedParams, PlyLayout, edge_delamination, embedded_delamination,
-    embedded_delamination_with_front, thin_film,
-};
 pub use error::MeshError;
 pub use front::{Front, FrontPoint};
-pub use generate::{BoxParams, graded_coordinates, graded_from_first, structured_box};
+pub use generators::{
+    BoxParams, Centre, EllipticMap, EmbeddedParams, PlyLayout, ThroughWidthParams,
+    edge_delamination, embedded_delamination, embedded_delamination_with_front, graded_coordinates,
+    graded_from_first, structured_box, thin_film, through_width_delamination,
+};
 pub use inp_read::{
     Amplitude, Controls, InpModel, NodeRef, NotUsed, OutputKind, OutputRequest, OutputVariable,
     ReadBoundary, ReadCload, ReadStep, StaticData, Totals, read_inp, read_inp_file,
 };
+pub use io::{inp, vtu};
 pub use model::{Cell, Imperfection, Mesh};
 pub use quality::{CellQuality, quality};
-pub use through_width::{ThroughWidthParams, through_width_delamination};

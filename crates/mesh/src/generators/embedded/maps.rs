@@ -9,7 +9,7 @@
 
 use super::EmbeddedParams;
 use crate::MeshError;
-use crate::generate::{graded_coordinates, graded_from_first};
+use crate::generators::{graded_coordinates, graded_from_first};
 
 /// Which elliptic map turns the front circle into the ellipse.
 #[derive(Debug, Clone, Copy, PartialEq)]

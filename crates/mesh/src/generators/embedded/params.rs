@@ -2,7 +2,7 @@
 
 use super::EllipticMap;
 use crate::MeshError;
-use crate::generate::graded_coordinates;
+use crate::generators::graded_coordinates;
 use nonlin3d_element::ElementKind;
 
 /// Parameters of [`embedded_delamination`](crate::embedded_delamination) (SI units).
@@ -117,6 +117,9 @@ impl EmbeddedParams {
         }
     }
 
+    /// The parameters' checks (thesis §3.1–3.2): positive finite sizes, an even number of
+    /// slices, at least one element per count, a core inside the front circle, the transition
+    /// ring inside the square, eq. 3.1.2's r within the front circle, and the ply layout.
     pub(super) fn check(&self) -> Result<(), MeshError> {
         let bad = |name: &'static str, reason: String| Err(MeshError::Parameter { name, reason });
         for (name, v) in [
@@ -173,33 +176,10 @@ impl EmbeddedParams {
                 ),
             );
         }
-        if let Some(pl) = &self.plies {
-            let t = pl.ply_thickness;
-            if !(t.is_finite() && t > 0.0) || pl.sublaminate.is_empty() {
-                return bad(
-                    "plies",
-                    "positive ply thickness and at least one sublaminate ply".into(),
-                );
-            }
-            if ((pl.sublaminate.len() as f64 * t) - self.h).abs() > 1e-9 * self.h {
-                return bad(
-                    "plies",
-                    format!("{} plies × {t} m ≠ h = {} m", pl.sublaminate.len(), self.h),
-                );
-            }
-            if pl.base_below.len() as f64 * t >= self.base {
-                return bad("plies", "base plies leave no homogenised base".into());
-            }
-            if pl
-                .sublaminate
-                .iter()
-                .chain(&pl.base_below)
-                .any(|a| !a.is_finite())
-            {
-                return bad("plies", "ply angles must be finite".into());
-            }
+        match &self.plies {
+            Some(pl) => pl.check(self.h, self.base),
+            None => Ok(()),
         }
-        Ok(())
     }
 
     /// z stations and, per layer between them, (material, ply angle); and the index of z = H.
@@ -232,5 +212,81 @@ impl EmbeddedParams {
     }
 }
 
+impl PlyLayout {
+    /// The layout's checks (chapter 7): a positive ply thickness, sublaminate plies that fill
+    /// h, base plies that leave some homogenised base below them, finite angles.
+    fn check(&self, h: f64, base: f64) -> Result<(), MeshError> {
+        let bad = |name: &'static str, reason: String| Err(MeshError::Parameter { name, reason });
+        let t = self.ply_thickness;
+        if !(t.is_finite() && t > 0.0) || self.sublaminate.is_empty() {
+            return bad(
+                "plies",
+                "positive ply thickness and at least one sublaminate ply".into(),
+            );
+        }
+        if ((self.sublaminate.len() as f64 * t) - h).abs() > 1e-9 * h {
+            return bad(
+                "plies",
+                format!("{} plies × {t} m ≠ h = {} m", self.sublaminate.len(), h),
+            );
+        }
+        if self.base_below.len() as f64 * t >= base {
+            return bad("plies", "base plies leave no homogenised base".into());
+        }
+        if self
+            .sublaminate
+            .iter()
+            .chain(&self.base_below)
+            .any(|a| !a.is_finite())
+        {
+            return bad("plies", "ply angles must be finite".into());
+        }
+        Ok(())
+    }
+}
+
 /// Thickness stations, (material, ply angle) of each layer, index of z = H.
 pub(super) type Layers = (Vec<f64>, Vec<(usize, f64)>, usize);
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Each broken ply layout is refused under the name `plies`, and the reference layout of
+    /// four 0.1 mm plies in h = 0.4 mm passes.
+    #[test]
+    fn ply_layouts_that_do_not_fit_are_named() {
+        let p = EmbeddedParams::thesis_reference();
+        let good = PlyLayout {
+            ply_thickness: 0.1e-3,
+            sublaminate: vec![0.0, 90.0, 90.0, 0.0],
+            base_below: vec![45.0],
+        };
+        assert!(good.check(p.h, p.base).is_ok());
+        let broken = [
+            PlyLayout {
+                ply_thickness: 0.0,
+                ..good.clone()
+            },
+            PlyLayout {
+                sublaminate: vec![0.0, 90.0, 0.0],
+                ..good.clone()
+            },
+            PlyLayout {
+                base_below: vec![0.0; 40],
+                ..good.clone()
+            },
+            PlyLayout {
+                base_below: vec![f64::NAN],
+                ..good.clone()
+            },
+        ];
+        for layout in broken {
+            let err = layout.check(p.h, p.base).unwrap_err();
+            assert!(
+                matches!(err, MeshError::Parameter { name: "plies", .. }),
+                "{layout:?}: {err}"
+            );
+        }
+    }
+}

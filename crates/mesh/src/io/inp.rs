@@ -180,8 +180,29 @@ pub(crate) const ANISO_ORDER: [(usize, usize); 21] = [
     (4, 4),
 ];
 
-/// The deck as text.
+/// The deck as text: heading, mesh (nodes, elements, sets, surfaces), materials, sections with
+/// their orientations, steps; each written by one function below, in that order.
 pub fn inp_string(deck: &InpDeck<'_>) -> Result<String, MeshError> {
+    check_deck(deck)?;
+    let m = deck.mesh;
+    let mut s = String::new();
+    let _ = writeln!(s, "*HEADING\n{}", deck.heading.replace('\n', " "));
+    write_nodes(&mut s, m);
+    write_elements(&mut s, m);
+    write_sets(&mut s, m);
+    for mat in deck.materials {
+        write_material(&mut s, mat)?;
+    }
+    write_sections(&mut s, deck);
+    for (k, step) in deck.steps.iter().enumerate() {
+        write_step(&mut s, m, k, step)?;
+    }
+    Ok(s)
+}
+
+/// What the deck needs before a line is written: a valid mesh, material and set names the
+/// readers accept, and a material for every cell's index.
+fn check_deck(deck: &InpDeck<'_>) -> Result<(), MeshError> {
     let m = deck.mesh;
     m.validate()?;
     for mat in deck.materials {
@@ -206,12 +227,19 @@ pub fn inp_string(deck: &InpDeck<'_>) -> Result<String, MeshError> {
             deck.materials.len()
         )));
     }
-    let mut s = String::new();
-    let _ = writeln!(s, "*HEADING\n{}", deck.heading.replace('\n', " "));
+    Ok(())
+}
+
+/// `*NODE, NSET=NALL`: id (index + 1) and x, y, z.
+fn write_nodes(s: &mut String, m: &Mesh) {
     s.push_str("*NODE, NSET=NALL\n");
     for (i, x) in m.nodes.iter().enumerate() {
         let _ = writeln!(s, "{}, {}, {}, {}", i + 1, num(x[0]), num(x[1]), num(x[2]));
     }
+}
+
+/// `*ELEMENT` blocks, C3D8 then C3D20, in the elsets EC3D8 / EC3D20: id (index + 1), nodes.
+fn write_elements(s: &mut String, m: &Mesh) {
     for (kind, name) in [(ElementKind::Hex8, "C3D8"), (ElementKind::Hex20, "C3D20")] {
         let cells: Vec<usize> = (0..m.cells.len())
             .filter(|&c| m.cells[c].kind == kind)
@@ -230,13 +258,17 @@ pub fn inp_string(deck: &InpDeck<'_>) -> Result<String, MeshError> {
             let _ = writeln!(s, "{}", lines.join(",\n"));
         }
     }
+}
+
+/// The mesh's sets: `*NSET`, `*ELSET`, and `*SURFACE, TYPE=ELEMENT` (faces as `S1`…`S6`).
+fn write_sets(s: &mut String, m: &Mesh) {
     for (name, set) in &m.node_sets {
         let _ = writeln!(s, "*NSET, NSET={name}");
-        id_lines(&mut s, set.iter().map(|n| n + 1));
+        id_lines(s, set.iter().map(|n| n + 1));
     }
     for (name, set) in &m.cell_sets {
         let _ = writeln!(s, "*ELSET, ELSET={name}");
-        id_lines(&mut s, set.iter().map(|c| c + 1));
+        id_lines(s, set.iter().map(|c| c + 1));
     }
     for (name, set) in &m.face_sets {
         let _ = writeln!(s, "*SURFACE, NAME={name}, TYPE=ELEMENT");
@@ -244,56 +276,69 @@ pub fn inp_string(deck: &InpDeck<'_>) -> Result<String, MeshError> {
             let _ = writeln!(s, "{}, S{}", c + 1, f + 1);
         }
     }
-    for mat in deck.materials {
-        let _ = writeln!(s, "*MATERIAL, NAME={}", mat.name);
-        match &mat.elastic {
-            InpElastic::Isotropic { e, nu } => {
-                let _ = writeln!(s, "*ELASTIC, TYPE=ISO\n{}, {}", num(*e), num(*nu));
-            }
-            InpElastic::Engineering(o) => {
-                o.validate()
-                    .map_err(|e| bad(format!("material {}: {e}", mat.name)))?;
-                let _ = writeln!(
-                    s,
-                    "*ELASTIC, TYPE=ENGINEERING CONSTANTS\n{}, {}, {}, {}, {}, {}, {}, {}\n{}",
-                    num(o.e11),
-                    num(o.e22),
-                    num(o.e33),
-                    num(o.nu12),
-                    num(o.nu13),
-                    num(o.nu23),
-                    num(o.g12),
-                    num(o.g13),
-                    num(o.g23)
-                );
-            }
-            InpElastic::Orthotropic(c) => {
-                let k = c.c();
-                let scale = (0..6).map(|i| k[i][i]).fold(0.0, f64::max);
-                let coupled = (0..6)
-                    .flat_map(|i| (0..6).map(move |j| (i, j)))
-                    .any(|(i, j)| (i >= 3 || j >= 3) && i != j && k[i][j].abs() > 1e-12 * scale);
-                if coupled {
-                    return Err(bad(format!(
-                        "material {}: ORTHO needs no shear coupling; use ANISO",
-                        mat.name
-                    )));
-                }
-                let v: Vec<String> = ORTHO_ORDER.iter().map(|&(i, j)| num(k[i][j])).collect();
-                let _ = writeln!(s, "*ELASTIC, TYPE=ORTHO\n{}\n{}", v[..8].join(", "), v[8]);
-            }
-            InpElastic::Anisotropic(c) => {
-                let v: Vec<String> = ANISO_ORDER.iter().map(|&(i, j)| num(c.c()[i][j])).collect();
-                let _ = writeln!(s, "*ELASTIC, TYPE=ANISO");
-                for chunk in v.chunks(8) {
-                    let _ = writeln!(s, "{}", chunk.join(", "));
-                }
+}
+
+/// `*MATERIAL` and its `*ELASTIC` card (ISO, ENGINEERING CONSTANTS, ORTHO or ANISO); an
+/// invalid orthotropic material, or shear coupling under ORTHO, is an error naming it.
+fn write_material(s: &mut String, mat: &InpMaterial) -> Result<(), MeshError> {
+    let _ = writeln!(s, "*MATERIAL, NAME={}", mat.name);
+    match &mat.elastic {
+        InpElastic::Isotropic { e, nu } => {
+            let _ = writeln!(s, "*ELASTIC, TYPE=ISO\n{}, {}", num(*e), num(*nu));
+        }
+        InpElastic::Engineering(o) => {
+            o.validate()
+                .map_err(|e| bad(format!("material {}: {e}", mat.name)))?;
+            let _ = writeln!(
+                s,
+                "*ELASTIC, TYPE=ENGINEERING CONSTANTS\n{}, {}, {}, {}, {}, {}, {}, {}\n{}",
+                num(o.e11),
+                num(o.e22),
+                num(o.e33),
+                num(o.nu12),
+                num(o.nu13),
+                num(o.nu23),
+                num(o.g12),
+                num(o.g13),
+                num(o.g23)
+            );
+        }
+        InpElastic::Orthotropic(c) => write_ortho(s, &mat.name, c)?,
+        InpElastic::Anisotropic(c) => {
+            let v: Vec<String> = ANISO_ORDER.iter().map(|&(i, j)| num(c.c()[i][j])).collect();
+            let _ = writeln!(s, "*ELASTIC, TYPE=ANISO");
+            for chunk in v.chunks(8) {
+                let _ = writeln!(s, "{}", chunk.join(", "));
             }
         }
     }
-    // One orientation per distinct ply angle, one section per (material, angle).
+    Ok(())
+}
+
+/// `*ELASTIC, TYPE=ORTHO`: the nine constants in [`ORTHO_ORDER`]; refused when a shear couples
+/// to anything (an off-diagonal entry in a shear row or column above 1e-12 of the largest
+/// diagonal entry), which ORTHO cannot hold.
+fn write_ortho(s: &mut String, name: &str, c: &Stiffness) -> Result<(), MeshError> {
+    let k = c.c();
+    let scale = (0..6).map(|i| k[i][i]).fold(0.0, f64::max);
+    let coupled = (0..6)
+        .flat_map(|i| (0..6).map(move |j| (i, j)))
+        .any(|(i, j)| (i >= 3 || j >= 3) && i != j && k[i][j].abs() > 1e-12 * scale);
+    if coupled {
+        return Err(bad(format!(
+            "material {name}: ORTHO needs no shear coupling; use ANISO"
+        )));
+    }
+    let v: Vec<String> = ORTHO_ORDER.iter().map(|&(i, j)| num(k[i][j])).collect();
+    let _ = writeln!(s, "*ELASTIC, TYPE=ORTHO\n{}\n{}", v[..8].join(", "), v[8]);
+    Ok(())
+}
+
+/// One `*ORIENTATION` (rectangular, rotated about z by the ply angle) per distinct ply angle,
+/// and one `*SOLID SECTION` per (material, ply angle) group of cells, on an elset SECTIONg.
+fn write_sections(s: &mut String, deck: &InpDeck<'_>) {
     let mut groups: BTreeMap<(usize, u64), Vec<usize>> = BTreeMap::new();
-    for (c, cell) in m.cells.iter().enumerate() {
+    for (c, cell) in deck.mesh.cells.iter().enumerate() {
         groups
             .entry((cell.material, cell.ply_angle_deg.to_bits()))
             .or_default()
@@ -318,58 +363,59 @@ pub fn inp_string(deck: &InpDeck<'_>) -> Result<String, MeshError> {
     }
     for (g, ((mat, bits), cells)) in groups.iter().enumerate() {
         let _ = writeln!(s, "*ELSET, ELSET=SECTION{g}");
-        id_lines(&mut s, cells.iter().map(|c| c + 1));
+        id_lines(s, cells.iter().map(|c| c + 1));
         let _ = writeln!(
             s,
             "*SOLID SECTION, ELSET=SECTION{g}, MATERIAL={}, ORIENTATION=OR{}",
             deck.materials[*mat].name, orientations[bits]
         );
     }
-    for (k, step) in deck.steps.iter().enumerate() {
-        if !(step.increment > 0.0 && step.period >= step.increment) {
+}
+
+/// Step k: `*STEP` (NLGEOM when asked), `*STATIC`, `*BOUNDARY`, `*CLOAD` and the output
+/// requests (U at the nodes, S in the elements); an unknown node set, a DOF outside 1–3 or a
+/// non-finite value is an error naming the step.
+fn write_step(s: &mut String, m: &Mesh, k: usize, step: &InpStep) -> Result<(), MeshError> {
+    if !(step.increment > 0.0 && step.period >= step.increment) {
+        return Err(bad(format!(
+            "step {k}: increment {} and period {} must satisfy 0 < increment ≤ period",
+            step.increment, step.period
+        )));
+    }
+    // *STATIC: initial increment, period, minimum (1e-5 of the period), maximum (the period).
+    let _ = writeln!(
+        s,
+        "*STEP{}\n*STATIC\n{}, {}, {}, {}",
+        if step.nlgeom { ", NLGEOM" } else { "" },
+        num(step.increment),
+        num(step.period),
+        num(1e-5 * step.period),
+        num(step.period)
+    );
+    if !step.boundaries.is_empty() {
+        s.push_str("*BOUNDARY\n");
+    }
+    for b in &step.boundaries {
+        if !m.node_sets.contains_key(&b.nset) {
             return Err(bad(format!(
-                "step {k}: increment {} and period {} must satisfy 0 < increment ≤ period",
-                step.increment, step.period
+                "step {k}: boundary on unknown node set '{}'",
+                b.nset
             )));
         }
-        // *STATIC: initial increment, period, minimum (1e-5 of the period), maximum (the period).
-        let _ = writeln!(
-            s,
-            "*STEP{}\n*STATIC\n{}, {}, {}, {}",
-            if step.nlgeom { ", NLGEOM" } else { "" },
-            num(step.increment),
-            num(step.period),
-            num(1e-5 * step.period),
-            num(step.period)
-        );
-        if !step.boundaries.is_empty() {
-            s.push_str("*BOUNDARY\n");
+        if !(1..=3).contains(&b.first) || !(b.first..=3).contains(&b.last) || !b.value.is_finite() {
+            return Err(bad(format!("step {k}: boundary {b:?} invalid")));
         }
-        for b in &step.boundaries {
-            if !m.node_sets.contains_key(&b.nset) {
-                return Err(bad(format!(
-                    "step {k}: boundary on unknown node set '{}'",
-                    b.nset
-                )));
-            }
-            if !(1..=3).contains(&b.first)
-                || !(b.first..=3).contains(&b.last)
-                || !b.value.is_finite()
-            {
-                return Err(bad(format!("step {k}: boundary {b:?} invalid")));
-            }
-            let _ = writeln!(s, "{}, {}, {}, {}", b.nset, b.first, b.last, num(b.value));
-        }
-        if !step.cloads.is_empty() {
-            s.push_str("*CLOAD\n");
-        }
-        for l in &step.cloads {
-            if l.node >= m.nodes.len() || !(1..=3).contains(&l.dof) || !l.value.is_finite() {
-                return Err(bad(format!("step {k}: load {l:?} invalid")));
-            }
-            let _ = writeln!(s, "{}, {}, {}", l.node + 1, l.dof, num(l.value));
-        }
-        s.push_str("*NODE PRINT, NSET=NALL\nU\n*NODE FILE\nU\n*EL FILE\nS\n*END STEP\n");
+        let _ = writeln!(s, "{}, {}, {}, {}", b.nset, b.first, b.last, num(b.value));
     }
-    Ok(s)
+    if !step.cloads.is_empty() {
+        s.push_str("*CLOAD\n");
+    }
+    for l in &step.cloads {
+        if l.node >= m.nodes.len() || !(1..=3).contains(&l.dof) || !l.value.is_finite() {
+            return Err(bad(format!("step {k}: load {l:?} invalid")));
+        }
+        let _ = writeln!(s, "{}, {}, {}", l.node + 1, l.dof, num(l.value));
+    }
+    s.push_str("*NODE PRINT, NSET=NALL\nU\n*NODE FILE\nU\n*EL FILE\nS\n*END STEP\n");
+    Ok(())
 }

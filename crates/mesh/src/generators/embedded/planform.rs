@@ -1,0 +1,165 @@
+//! The planform mesh of thesis §3.1 (Fig. 3.1.1): the 2-D quarter section 0 ≤ x, y ≤ W of
+//! quadrilaterals — a centre, rings graded towards the front circle, the rings beyond the
+//! transition blended into the square — with every point taken through the planform map
+//! (eq. 3.1.1–3.1.2 or the rectangle, module `maps`).
+
+use super::maps::{front_radius, planform, radial_stations};
+use super::{Centre, EmbeddedParams};
+use crate::MeshError;
+
+/// The 2-D quarter section of §3.1, already mapped onto the planform.
+pub(super) struct Section {
+    /// Vertex positions (x, y), m.
+    pub(super) points: Vec<[f64; 2]>,
+    /// Whether each vertex lies strictly inside the front (its node on z = H is duplicated).
+    pub(super) inside: Vec<bool>,
+    /// Quadrilaterals, counter-clockwise seen from +z: the centre's, then ring by ring.
+    pub(super) quads: Vec<[usize; 4]>,
+    /// `rings[m][q]`: the vertex of ring m at slice q (q = 0 on the x axis, q = slices on the
+    /// y axis); ring 0 is the boundary of the centre, ring m ≥ 1 radial station m − 1.
+    pub(super) rings: Vec<Vec<usize>>,
+    /// The vertex at the centre (x = y = 0, or the thesis's arc node on y = 0).
+    pub(super) centre: usize,
+    /// The index in `rings` of the front ring (the front circle ρ = min(a, b) before the map).
+    pub(super) front_ring: usize,
+}
+
+/// The angle φ = (π/2)·q/slices of slice line q in the circular mesh (§3.1).
+fn angle(p: &EmbeddedParams, q: usize) -> f64 {
+    std::f64::consts::FRAC_PI_2 * q as f64 / p.slices as f64
+}
+
+/// A point (x, y) of the circular mesh taken through the planform map (eq. 3.1.1–3.1.2 or the
+/// rectangle of Fig. 3.1.3).
+fn mapped(p: &EmbeddedParams, x: f64, y: f64) -> [f64; 2] {
+    let (u, v) = planform(p.map, p.a, p.b, x, y);
+    [u, v]
+}
+
+/// The §3.1 planform mesh: centre, rings at the radial stations (the front ring mapped onto
+/// the ellipse by eq. 3.1.1–3.1.2), and their quadrilaterals.
+pub(super) fn section(p: &EmbeddedParams) -> Result<Section, MeshError> {
+    let (rho, front) = radial_stations(p)?;
+    let mut s = Section {
+        points: Vec::new(),
+        inside: Vec::new(),
+        quads: Vec::new(),
+        rings: Vec::new(),
+        centre: 0,
+        front_ring: front + 1,
+    };
+    let ring0 = match p.centre {
+        Centre::OGrid => s.o_grid_core(p, 0.5 * rho[0]),
+        Centre::ThesisArc => s.thesis_arc(p),
+    };
+    s.rings.push(ring0);
+    // Ring nodes: the planform map (ellipse or rectangle) of the circle point up to the
+    // transition ring; beyond it, points on the straight line from the mapped transition ring to
+    // the square boundary, reached on the last ring. Monotone whenever the mapped transition
+    // ring lies inside the square, which `check` ensures: it needs transition·max(a, b) < W, and
+    // every map sends the ring ρ = t·r₀ (t ≥ 1) inside |x| ≤ t·a, |y| ≤ t·b (eq. 3.1.1 for
+    // a ≤ b: semi-axes t·a and √(t²a² + b² − a²) ≤ t·b; mirrored for a > b).
+    let wt = p.transition * front_radius(p);
+    for (m0, &r) in rho.iter().enumerate() {
+        let ring = (0..=p.slices)
+            .map(|q| s.push(ring_point(p, wt, r, q), m0 < front))
+            .collect();
+        s.rings.push(ring);
+    }
+    s.ring_quads(p.slices);
+    Ok(s)
+}
+
+/// Ring point at radius `r` (circular mesh) on slice line q (§3.1, Fig. 3.1.1c): the planform
+/// map (eq. 3.1.1–3.1.2) of the circle point for r ≤ `wt` (the transition radius); beyond, the
+/// straight blend from the mapped transition ring (β = 0) to the square boundary (β = 1 at W).
+fn ring_point(p: &EmbeddedParams, wt: f64, r: f64, q: usize) -> [f64; 2] {
+    let phi = angle(p, q);
+    if r <= wt {
+        return mapped(p, r * phi.cos(), r * phi.sin());
+    }
+    let on_ring = mapped(p, wt * phi.cos(), wt * phi.sin());
+    let beta = (r - wt) / (p.w - wt);
+    let sq = if q == p.slices {
+        [0.0, p.w]
+    } else if phi <= std::f64::consts::FRAC_PI_4 {
+        [p.w, p.w * phi.tan()]
+    } else {
+        [p.w / phi.tan(), p.w]
+    };
+    [
+        (1.0 - beta) * on_ring[0] + beta * sq[0],
+        (1.0 - beta) * on_ring[1] + beta * sq[1],
+    ]
+}
+
+impl Section {
+    /// Adds a vertex of the §3.1 section (`inside`: strictly inside the front); its index.
+    fn push(&mut self, point: [f64; 2], inside: bool) -> usize {
+        self.points.push(point);
+        self.inside.push(inside);
+        self.points.len() - 1
+    }
+
+    /// The O-grid centre (this crate's change to §3.1): a square core [0, c]² with c = ρ₀/2
+    /// (its corner at 0.71 ρ₀) of k × k cells, k = slices/2, mapped by eq. 3.1.1–3.1.2; one ring
+    /// of cells joins its boundary to the first circle ρ₀, so no cell is degenerate. Returns
+    /// the core boundary counter-clockwise from the x axis (q ≤ k on x = c, q ≥ k on y = c).
+    fn o_grid_core(&mut self, p: &EmbeddedParams, c: f64) -> Vec<usize> {
+        let k = p.slices / 2;
+        let mut core_id = vec![vec![0usize; k + 1]; k + 1];
+        for (j, row) in core_id.iter_mut().enumerate() {
+            for (i, id) in row.iter_mut().enumerate() {
+                let pt = mapped(p, c * i as f64 / k as f64, c * j as f64 / k as f64);
+                *id = self.push(pt, true);
+            }
+        }
+        self.centre = core_id[0][0];
+        for j in 0..k {
+            for i in 0..k {
+                self.quads.push([
+                    core_id[j][i],
+                    core_id[j][i + 1],
+                    core_id[j + 1][i + 1],
+                    core_id[j + 1][i],
+                ]);
+            }
+        }
+        (0..=p.slices)
+            .map(|q| {
+                if q <= k {
+                    core_id[q][k]
+                } else {
+                    core_id[k][2 * k - q]
+                }
+            })
+            .collect()
+    }
+
+    /// The thesis's centre (§3.1): the axis nodes spread on an arc of radius 1e-9 m (mapped by
+    /// eq. 3.1.1–3.1.2), so the first ring of cells is nearly triangular. Returns the arc nodes.
+    fn thesis_arc(&mut self, p: &EmbeddedParams) -> Vec<usize> {
+        let ring: Vec<usize> = (0..=p.slices)
+            .map(|q| {
+                let phi = angle(p, q);
+                self.push(mapped(p, 1e-9 * phi.cos(), 1e-9 * phi.sin()), true)
+            })
+            .collect();
+        self.centre = ring[0];
+        ring
+    }
+
+    /// The quadrilaterals between consecutive rings (Fig. 3.1.1), counter-clockwise from +z.
+    fn ring_quads(&mut self, slices: usize) {
+        for m in 0..self.rings.len() - 1 {
+            for q in 0..slices {
+                self.quads.push([
+                    self.rings[m][q],
+                    self.rings[m + 1][q],
+                    self.rings[m + 1][q + 1],
+                    self.rings[m][q + 1],
+                ]);
+            }
+        }
+    }
+}

@@ -1,0 +1,17 @@
+//! The mesh generators of thesis chapter 3: the structured box, the embedded delamination
+//! (§3.1–3.2, Fig. 3.1.1 / 3.2.1, with its edge and thin-film variants) and the through-width
+//! delamination (Fig. 3.2.3). Each names its sets with the constants of [`crate::names`].
+
+mod embedded;
+mod grading;
+mod structured;
+mod through_width;
+
+pub use embedded::{
+    Centre, EllipticMap, EmbeddedParams, PlyLayout, edge_delamination, embedded_delamination,
+    embedded_delamination_with_front, thin_film,
+};
+pub use grading::{graded_coordinates, graded_from_first};
+pub(crate) use grading::{grid_index, grid_position};
+pub use structured::{BoxParams, structured_box};
+pub use through_width::{ThroughWidthParams, through_width_delamination};
