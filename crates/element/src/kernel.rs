@@ -411,15 +411,14 @@ impl PointMaterial for Turning<'_> {
             dot::<NS, FMA>(n, &xs[1]),
             dot::<NS, FMA>(n, &xs[2]),
         ];
-        self.here = self.local.rotated(&self.axes.axes_at(x)).map_err(|e| {
-            ElementError::MaterialAtPoint {
+        self.here = Stiffness::new(crate::material::turn(self.local.c(), &self.axes.axes_at(x)))
+            .map_err(|e| ElementError::MaterialAtPoint {
                 element: None,
                 material: self.index,
                 point: g,
                 x,
                 reason: e.to_string(),
-            }
-        })?;
+            })?;
         if self.selective {
             let coupling = self.here.transverse_shear_coupling();
             if coupling > 1e-12 {
