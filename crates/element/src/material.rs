@@ -439,4 +439,30 @@ mod tests {
         assert!(max_diff(&f, &b.forces) < 1e-11 * max_abs(&b.forces));
         assert!(max_diff(&k, &b.tangent) < 1e-11 * max_abs(&b.tangent));
     }
+
+    /// The selective-reduced Hex8 rule needs each station's C free of coupling between the
+    /// transverse shears and ε1–ε4; a graphite ring in cylindrical axes about z keeps that
+    /// (the axes turn about z), one about x does not: refused at its first station.
+    #[test]
+    fn the_selective_reduced_rule_checks_each_station() {
+        let table = ShapeTable::new(ElementKind::Hex8, IntegrationRule::SelectiveReduced).unwrap();
+        let (x, u) = ring_segment();
+        let (x, u) = (&x[..8], &u[..8]);
+        let mut out = ElementOutput::new(&table);
+        let mut ws = Workspace::new(&table);
+        let mut go =
+            |m: &Material| evaluate(&table, x, u, m, Kinematics::Linear, true, &mut ws, &mut out);
+        assert!(go(&graphite_in_ring()).is_ok());
+        let Material::Cylindrical { local, .. } = graphite_in_ring() else {
+            unreachable!()
+        };
+        let about_x = Material::Cylindrical {
+            local,
+            axes: CylindricalAxes::new([0.0; 3], [1.0, 0.0, 0.0]).unwrap(),
+        };
+        assert!(matches!(
+            go(&about_x),
+            Err(crate::ElementError::CoupledTransverseShear { coupling, .. }) if coupling > 1e-3
+        ));
+    }
 }
