@@ -8,7 +8,7 @@
 use super::StepOptions;
 use super::loads::History;
 use crate::Error;
-use nonlin3d_element::{ElementKind, IntegrationRule};
+use nonlin3d_element::{ElementKind, IntegrationRule, Material};
 use nonlin3d_laminate::{Orthotropic, Stiffness};
 use nonlin3d_mesh::inp::InpElastic;
 use nonlin3d_mesh::{InpModel, Mesh, MeshError};
@@ -18,7 +18,7 @@ use std::collections::BTreeMap;
 /// material, orientation), and the Hex20 rule.
 pub(crate) struct Prepared {
     pub mesh: Mesh,
-    pub materials: Vec<Stiffness>,
+    pub materials: Vec<Material>,
     pub rule: IntegrationRule,
 }
 
@@ -80,8 +80,9 @@ fn stiffness(e: &InpElastic) -> Result<Stiffness, Error> {
 }
 
 /// The mesh with one material per distinct (deck material, orientation), each rotated to its
-/// axes, and no ply angles; and those materials.
-fn oriented(model: &InpModel) -> Result<(Mesh, Vec<Stiffness>), Error> {
+/// axes (rectangular: once; cylindrical: at each integration point, by the element kernel), and
+/// no ply angles; and those materials.
+fn oriented(model: &InpModel) -> Result<(Mesh, Vec<Material>), Error> {
     let base: Vec<Stiffness> = model
         .materials
         .iter()
@@ -91,20 +92,39 @@ fn oriented(model: &InpModel) -> Result<(Mesh, Vec<Stiffness>), Error> {
         })
         .collect::<Result<_, _>>()?;
     let mut mesh = model.mesh.clone();
-    let mut index: BTreeMap<(usize, [u64; 9]), usize> = BTreeMap::new();
+    // Key: material, cylindrical (or not), the nine numbers of the axes (a and b's direction).
+    let mut index: BTreeMap<(usize, bool, [u64; 9]), usize> = BTreeMap::new();
     let mut materials = Vec::new();
     for (c, cell) in mesh.cells.iter_mut().enumerate() {
+        let cylindrical = model.cylindrical.get(c).copied().flatten();
         let r = model.orientations.get(c).copied().unwrap_or([
             [1.0, 0.0, 0.0],
             [0.0, 1.0, 0.0],
             [0.0, 0.0, 1.0],
         ]);
-        let bits: Vec<u64> = r.iter().flatten().map(|v| v.to_bits()).collect();
-        let key = (cell.material, bits.try_into().unwrap_or([0; 9]));
+        let numbers: Vec<f64> = match cylindrical {
+            Some(a) => a
+                .origin()
+                .into_iter()
+                .chain(a.direction())
+                .chain([0.0; 3])
+                .collect(),
+            None => r.iter().flatten().copied().collect(),
+        };
+        let bits: Vec<u64> = numbers.iter().map(|v| v.to_bits()).collect();
+        let key = (
+            cell.material,
+            cylindrical.is_some(),
+            bits.try_into().unwrap_or([0; 9]),
+        );
         let id = match index.get(&key) {
             Some(&id) => id,
             None => {
-                materials.push(base[cell.material].rotated(&r)?);
+                let local = base[cell.material];
+                materials.push(match cylindrical {
+                    Some(axes) => Material::Cylindrical { local, axes },
+                    None => Material::Uniform(local.rotated(&r)?),
+                });
                 index.insert(key, materials.len() - 1);
                 materials.len() - 1
             }

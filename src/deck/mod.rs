@@ -7,7 +7,8 @@
 //!
 //! C3D20 cells are integrated with 3×3×3 points, C3D20R and C3D8 with 2×2×2 (a deck mixing
 //! C3D20 and C3D20R is refused). Each cell's material is rotated to its `*ORIENTATION` axes
-//! (exact tensor rotation). NLGEOM steps use the nonlinear kernels (total Lagrangian, St.
+//! (exact tensor rotation): once for a rectangular system, at each integration point for a
+//! cylindrical one (`nonlin3d_element::Material::Cylindrical`). NLGEOM steps use the nonlinear kernels (total Lagrangian, St.
 //! Venant–Kirchhoff), other steps the linear kernels (one Newton iteration solves them).
 
 mod check;

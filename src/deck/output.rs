@@ -18,6 +18,7 @@ use super::drive::Converged;
 use super::loads::Frame;
 use crate::Error;
 use nonlin3d_assembly::{StressRules, station_stresses};
+use nonlin3d_element::{ElementKind, Material};
 use nonlin3d_mesh::{InpModel, Mesh, OutputKind, OutputVariable, ReadStep, Totals};
 use std::fmt::Write as _;
 use std::path::Path;
@@ -128,11 +129,46 @@ fn to_local(s: &[f64; 6], r: &[[f64; 3]; 3]) -> [f64; 6] {
     [l[0][0], l[1][1], l[2][2], l[0][1], l[1][2], l[0][2]]
 }
 
+/// The material axes of `cell` at each integration point of its rule (columns: local axes in
+/// global coordinates): the same at every point for a rectangular orientation; for a
+/// cylindrical one, the axes at the point's position x = Σ_m N^m(ξ) x^m in the undeformed
+/// configuration, where CalculiX evaluates them too.
+fn material_axes(
+    model: &InpModel,
+    mesh: &Mesh,
+    rules: &StressRules<'_, Material>,
+    cell: usize,
+) -> Vec<[[f64; 3]; 3]> {
+    let Some(axes) = model.cylindrical.get(cell).copied().flatten() else {
+        return vec![model.orientations[cell]];
+    };
+    let kind = mesh.cells[cell].kind;
+    let rule = match kind {
+        ElementKind::Hex20 => rules.hex20_rule,
+        ElementKind::Hex8 => rules.hex8_rule,
+    };
+    let x = mesh.cell_coordinates(cell);
+    let mut n = vec![0.0; kind.nodes()];
+    rule.stations()
+        .iter()
+        .map(|st| {
+            kind.shape_values(st.xi, &mut n);
+            let mut p = [0.0; 3];
+            for (nm, xm) in n.iter().zip(&x) {
+                for r in 0..3 {
+                    p[r] += nm * xm[r];
+                }
+            }
+            axes.axes_at(p)
+        })
+        .collect()
+}
+
 /// Appends the converged increment `c` to the tables that are due.
 pub(crate) fn record(
     model: &InpModel,
     mesh: &Mesh,
-    rules: &StressRules<'_>,
+    rules: &StressRules<'_, Material>,
     step: &ReadStep,
     frame: Frame,
     tables: &mut [OutputTable],
@@ -200,10 +236,12 @@ pub(crate) fn record(
             OutputKind::ElPrint | OutputKind::ElFile => {
                 let stresses = station_stresses(mesh, rules, c.u, &nodes)?;
                 for (&cell, points) in nodes.iter().zip(&stresses) {
+                    let axes = (o.local_axes && model.orientation_names[cell].is_some())
+                        .then(|| material_axes(model, mesh, rules, cell));
                     for (g, s) in points.iter().enumerate() {
-                        let s = match (&model.orientation_names[cell], o.local_axes) {
-                            (Some(_), true) => to_local(s, &model.orientations[cell]),
-                            _ => *s,
+                        let s = match &axes {
+                            Some(r) => to_local(s, &r[g.min(r.len() - 1)]),
+                            None => *s,
                         };
                         let _ = writeln!(
                             t.csv,

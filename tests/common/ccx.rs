@@ -5,7 +5,7 @@ use std::path::Path;
 use std::process::Command;
 
 /// The feature decks of `tests/decks/` (docs/DECKS.md), each with its committed `.ccx.dat`.
-pub const FEATURE_DECKS: [&str; 9] = [
+pub const FEATURE_DECKS: [&str; 10] = [
     "amplitude_cload",
     "amplitude_total_time",
     "op_new",
@@ -14,6 +14,7 @@ pub const FEATURE_DECKS: [&str; 9] = [
     "el_print_nlgeom",
     "ortho_tilted",
     "ortho_tilted_nlgeom",
+    "ring_cylindrical",
     "time_reset_fixed",
 ];
 

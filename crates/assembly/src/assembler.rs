@@ -10,10 +10,10 @@ use crate::scatter::{
 use crate::share::{Count, Pack, Positions, Scatter, Unpack, walk};
 use crate::{AssemblyError, Constraints};
 use nonlin3d_element::{
-    BatchInput, ElementError, ElementKind, ElementOutput, IntegrationRule, Kinematics, Prefetch,
-    ShapeTable, Workspace, evaluate, evaluate_listed_prefetching, prefetch_line,
+    BatchInput, ElementError, ElementKind, ElementOutput, IntegrationRule, Kinematics, Material,
+    Prefetch, ShapeTable, Workspace, evaluate, evaluate_listed_prefetching, prefetch_line,
 };
-use nonlin3d_laminate::{ShearCoupling, Stiffness};
+use nonlin3d_laminate::ShearCoupling;
 use nonlin3d_mesh::Mesh;
 use nonlin3d_solver::{SymmetricMatrix, SymmetricPattern, reverse_cuthill_mckee};
 use rayon::prelude::*;
@@ -88,7 +88,7 @@ struct TieMask {
 pub struct Assembler {
     n: usize,
     groups: Vec<Group>,
-    stiffness: Vec<Stiffness>,
+    stiffness: Vec<Material>,
     dofs: Vec<Vec<usize>>,
     pattern: Arc<SymmetricPattern>,
     kinematics: Kinematics,
@@ -177,17 +177,19 @@ fn relabel(err: ElementError, cell: impl Fn(Option<usize>) -> Option<usize>) -> 
 }
 
 impl Assembler {
-    /// Sets up `mesh` with `materials[cell.material]` in ply axes, rotated about z by each cell's
-    /// ply angle (`coupling` as in [`Stiffness::rotated_about_z`]); Hex20 cells integrated with
+    /// Sets up `mesh` with `materials[cell.material]` in ply axes (stiffnesses, or [`Material`]s
+    /// whose axes may vary with the position), rotated about z by each cell's ply angle
+    /// (`coupling` as in [`Material::rotated_about_z`]); Hex20 cells integrated with
     /// `hex20_rule`, Hex8 cells with `hex8_rule`.
-    pub fn new(
+    pub fn new<M: Copy + Into<Material>>(
         mesh: &Mesh,
-        materials: &[Stiffness],
+        materials: &[M],
         coupling: ShearCoupling,
         hex20_rule: IntegrationRule,
         hex8_rule: IntegrationRule,
         kinematics: Kinematics,
     ) -> Result<Self, AssemblyError> {
+        let materials: Vec<Material> = materials.iter().map(|&m| m.into()).collect();
         mesh.validate()?;
         let n = 3 * mesh.nodes.len();
         // One stiffness per distinct (material, angle).
@@ -954,6 +956,7 @@ fn fold_ties(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use nonlin3d_laminate::Stiffness;
     use nonlin3d_mesh::{BoxParams, EmbeddedParams, embedded_delamination, structured_box};
 
     /// A 2×2×2, nonlinear-kinematics assembler for `mesh` and a deterministic displacement

@@ -5,7 +5,8 @@
 
 use crate::AssemblyError;
 use nonlin3d_element::{
-    ElementKind, ElementOutput, IntegrationRule, Kinematics, ShapeTable, Workspace, evaluate,
+    ElementKind, ElementOutput, IntegrationRule, Kinematics, Material, ShapeTable, Workspace,
+    evaluate,
 };
 use nonlin3d_laminate::{ShearCoupling, Stiffness};
 use nonlin3d_mesh::Mesh;
@@ -13,9 +14,10 @@ use nonlin3d_mesh::Mesh;
 /// How the stresses of a mesh are evaluated: the same materials, rules and kinematics as the
 /// [`Assembler`](crate::Assembler) built from the same arguments.
 #[derive(Debug, Clone, Copy)]
-pub struct StressRules<'a> {
-    /// Materials in ply axes, by `cell.material`, rotated about z by each cell's ply angle.
-    pub materials: &'a [Stiffness],
+pub struct StressRules<'a, M = Stiffness> {
+    /// Materials in ply axes, by `cell.material`, rotated about z by each cell's ply angle
+    /// (stiffnesses, or [`Material`]s whose axes may vary with the position).
+    pub materials: &'a [M],
     /// Rotation coupling, as for the assembler.
     pub coupling: ShearCoupling,
     /// Rule of Hex20 cells.
@@ -30,9 +32,9 @@ pub struct StressRules<'a> {
 /// then η, then ζ), global axes, components xx, yy, zz, xy, yz, xz: Cauchy for nonlinear
 /// kinematics, σ = C ε for linear. `u` holds three displacements per node. Stations of the
 /// selective-reduced Hex8 rule carry only the components integrated there.
-pub fn station_stresses(
+pub fn station_stresses<M: Copy + Into<Material>>(
     mesh: &Mesh,
-    rules: &StressRules<'_>,
+    rules: &StressRules<'_, M>,
     u: &[f64],
     cells: &[usize],
 ) -> Result<Vec<Vec<[f64; 6]>>, AssemblyError> {
@@ -51,9 +53,10 @@ pub fn station_stresses(
             expected: mesh.cells.len(),
             got: c,
         })?;
-        let base = rules
+        let base: &Material = &rules
             .materials
             .get(cell.material)
+            .map(|&m| m.into())
             .ok_or(AssemblyError::Material {
                 cell: c,
                 material: cell.material,

@@ -8,7 +8,7 @@
 
 use crate::kernel::{Job, OutView, check_finite, check_material, run};
 use crate::prefetch::Prefetch;
-use crate::{ElementError, ElementOutput, Kinematics, ShapeTable, Workspace};
+use crate::{AsMaterial, ElementError, ElementOutput, Kinematics, ShapeTable, Workspace};
 use nonlin3d_laminate::Stiffness;
 use rayon::prelude::*;
 
@@ -16,15 +16,17 @@ use rayon::prelude::*;
 /// ~10 µs per Hex20, small enough to balance 2–64 threads on meshes of a few thousand cells.
 const CHUNK: usize = 32;
 
-/// Inputs of a batch: all elements share the table; each has a material index.
+/// Inputs of a batch: all elements share the table; each has a material index. The materials
+/// are [`Stiffness`]es (uniform), or [`Material`](crate::Material)s, of which some may vary
+/// with the position.
 #[derive(Debug, Clone, Copy)]
-pub struct BatchInput<'a> {
+pub struct BatchInput<'a, M = Stiffness> {
     /// Node coordinates, `nodes()` triples per element, element after element.
     pub coords: &'a [[f64; 3]],
     /// Nodal displacements, same layout as `coords`.
     pub disp: &'a [[f64; 3]],
     /// The materials (already rotated to each cell's ply angle).
-    pub materials: &'a [Stiffness],
+    pub materials: &'a [M],
     /// Index into `materials` for each element.
     pub material_of: &'a [usize],
 }
@@ -63,7 +65,7 @@ impl BatchOutput {
     }
 }
 
-impl BatchInput<'_> {
+impl<M: AsMaterial> BatchInput<'_, M> {
     /// Checks the input lengths against `table`, the material indices, and each material
     /// against the rule (see [`ElementError::CoupledTransverseShear`]).
     fn validate(&self, table: &ShapeTable) -> Result<(), ElementError> {
@@ -95,7 +97,10 @@ impl BatchInput<'_> {
             });
         }
         for (i, m) in self.materials.iter().enumerate() {
-            check_material(table, m, i)?;
+            // A material in varying axes is checked at each station, as it is turned.
+            if let (m, None) = m.parts() {
+                check_material(table, m, i)?;
+            }
         }
         Ok(())
     }
@@ -115,12 +120,15 @@ impl BatchInput<'_> {
         let nn = table.nodes();
         let coords = &self.coords[e * nn..(e + 1) * nn];
         let disp = &self.disp[e * nn..(e + 1) * nn];
-        let material = &self.materials[self.material_of[e]];
+        let index = self.material_of[e];
+        let (material, axes) = self.materials[index].parts();
         let job = Job {
             table,
             coords,
             disp,
             material,
+            axes,
+            index,
             nonlinear,
             tangent,
             prefetch,
@@ -135,9 +143,9 @@ impl BatchInput<'_> {
 /// Evaluates every element of the batch into `out` (sized by [`BatchOutput::new`]), in
 /// parallel on the current rayon pool. The tangents are computed when `out.tangents` is
 /// non-empty. The first failing element (lowest index) is reported.
-pub fn evaluate_batch(
+pub fn evaluate_batch<M: AsMaterial>(
     table: &ShapeTable,
-    input: &BatchInput<'_>,
+    input: &BatchInput<'_, M>,
     kinematics: Kinematics,
     out: &mut BatchOutput,
 ) -> Result<(), ElementError> {
@@ -219,9 +227,9 @@ pub fn evaluate_batch(
 /// in cache. The building block of an owner-computes assembly, where each thread runs its own
 /// list and scatters into its own part of the global arrays. The per-element arithmetic is that
 /// of [`evaluate`](crate::evaluate); the first failing element stops the run and is named.
-pub fn evaluate_listed_with<F>(
+pub fn evaluate_listed_with<M: AsMaterial, F>(
     table: &ShapeTable,
-    input: &BatchInput<'_>,
+    input: &BatchInput<'_, M>,
     kinematics: Kinematics,
     tangent: bool,
     elements: &[usize],
@@ -245,9 +253,9 @@ where
 /// the k-th listed element (k counts from 0 along `elements`): they are prefetched during that
 /// element's tangent product, so their misses overlap its arithmetic instead of stalling the
 /// consumer. Results are the same as without hints, bit for bit.
-pub fn evaluate_listed_prefetching<'p, A, F>(
+pub fn evaluate_listed_prefetching<'p, M: AsMaterial, A, F>(
     table: &ShapeTable,
-    input: &BatchInput<'_>,
+    input: &BatchInput<'_, M>,
     kinematics: Kinematics,
     tangent: bool,
     elements: &[usize],
@@ -286,9 +294,9 @@ where
 ///
 /// `consume(state, element, output)` sees the element's strains, stresses, forces, energy and,
 /// when `tangent` is true, its tangent.
-pub fn evaluate_batch_with<S, I, F>(
+pub fn evaluate_batch_with<M: AsMaterial, S, I, F>(
     table: &ShapeTable,
-    input: &BatchInput<'_>,
+    input: &BatchInput<'_, M>,
     kinematics: Kinematics,
     tangent: bool,
     init: I,

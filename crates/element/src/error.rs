@@ -67,6 +67,25 @@ pub enum ElementError {
         /// max |C_ij| (i < 4 ≤ j) relative to the largest diagonal entry.
         coupling: f64,
     },
+    /// A material given in axes that vary with the position is not a valid stiffness once
+    /// turned to the axes at a quadrature point (it lost definiteness to round-off).
+    #[error(
+        "{}: material {material} turned to its axes at quadrature point {point}, {}, is not a valid stiffness: {reason}",
+        which(*element),
+        triple(x)
+    )]
+    MaterialAtPoint {
+        /// Element index in a batch.
+        element: Option<usize>,
+        /// Material index.
+        material: usize,
+        /// Station index in the rule's order.
+        point: usize,
+        /// Global coordinates of the station.
+        x: [f64; 3],
+        /// What is wrong with the turned stiffness.
+        reason: String,
+    },
     /// A material index is out of range.
     #[error("element {element}: material index {material} out of range ({count} materials)")]
     MaterialIndex {
@@ -128,6 +147,19 @@ impl ElementError {
                 element: Some(e),
                 material,
                 coupling,
+            },
+            Self::MaterialAtPoint {
+                material,
+                point,
+                x,
+                reason,
+                ..
+            } => Self::MaterialAtPoint {
+                element: Some(e),
+                material,
+                point,
+                x,
+                reason,
             },
             other => other,
         }

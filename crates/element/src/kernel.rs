@@ -5,6 +5,7 @@
 //! Total Lagrangian: strains are Green–Lagrange (eq. 2.1.4), stresses second Piola–Kirchhoff,
 //! σ = C ε, both referred to the undeformed configuration.
 
+use crate::material::{AsMaterial, CylindricalAxes};
 use crate::prefetch::Prefetch;
 use crate::simd::{acc3, comb3, dot};
 use crate::syrk::syrk_lower;
@@ -100,13 +101,18 @@ impl Workspace {
 /// Evaluates one element: strains, stresses, internal forces and energy, and the tangent when
 /// `tangent` is true. `coords` and `disp` hold one triple per node in Abaqus order.
 ///
-/// Errors: wrong lengths, non-finite input, det J ≤ 0 at a station (named), or a material
-/// that couples the transverse shears under the selective-reduced rule.
-pub fn evaluate(
+/// `material` is a [`Stiffness`] (uniform) or a [`Material`](crate::Material) (uniform, or
+/// in axes that vary with the position: its stiffness is turned to the axes at each station).
+///
+/// Errors: wrong lengths, non-finite input, det J ≤ 0 at a station (named), a material that
+/// couples the transverse shears under the selective-reduced rule, or one that is no longer
+/// positive definite once turned to a station's axes.
+#[allow(clippy::too_many_arguments)]
+pub fn evaluate<M: AsMaterial + ?Sized>(
     table: &ShapeTable,
     coords: &[[f64; 3]],
     disp: &[[f64; 3]],
-    material: &Stiffness,
+    material: &M,
     kinematics: Kinematics,
     tangent: bool,
     workspace: &mut Workspace,
@@ -115,13 +121,18 @@ pub fn evaluate(
     check_lengths(table, coords, disp, workspace, out)?;
     check_finite(coords, "coordinates")?;
     check_finite(disp, "displacements")?;
-    check_material(table, material, 0)?;
+    let (material, axes) = material.parts();
+    if axes.is_none() {
+        check_material(table, material, 0)?;
+    }
     let nonlinear = kinematics == Kinematics::Nonlinear;
     let job = Job {
         table,
         coords,
         disp,
         material,
+        axes,
+        index: 0,
         nonlinear,
         tangent,
         prefetch: Prefetch::NONE,
@@ -135,7 +146,12 @@ pub(crate) struct Job<'a> {
     pub(crate) table: &'a ShapeTable,
     pub(crate) coords: &'a [[f64; 3]],
     pub(crate) disp: &'a [[f64; 3]],
+    /// The stiffness: in global axes, or in the local axes of `axes` when those are given.
     pub(crate) material: &'a Stiffness,
+    /// Axes that vary with the position (None: `material` holds everywhere).
+    pub(crate) axes: Option<&'a CylindricalAxes>,
+    /// Index of the material (for messages).
+    pub(crate) index: usize,
     pub(crate) nonlinear: bool,
     pub(crate) tangent: bool,
     /// Lines the consumer will need, prefetched during the tangent product.
@@ -286,28 +302,135 @@ fn dispatch<const NS: usize>(
             got: job.coords.len(),
         });
     };
+    match job.axes {
+        None => with_simd::<NS, _>(job, Fixed(job.material), x, u, ws, out),
+        Some(axes) => {
+            let turning = Turning {
+                local: job.material,
+                axes,
+                index: job.index,
+                selective: job.table.rule() == crate::IntegrationRule::SelectiveReduced,
+                here: *job.material,
+            };
+            with_simd::<NS, _>(job, turning, x, u, ws, out)
+        }
+    }
+}
+
+/// The kernel with AVX2 + FMA when the CPU has them, portable otherwise.
+#[inline(always)]
+fn with_simd<const NS: usize, P: PointMaterial>(
+    job: Job<'_>,
+    points: P,
+    x: &[[f64; 3]; NS],
+    u: &[[f64; 3]; NS],
+    ws: &mut Workspace,
+    out: OutView<'_>,
+) -> Result<(), ElementError> {
     #[cfg(target_arch = "x86_64")]
     {
         if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
         {
             // SAFETY: `kernel_avx2` only needs the AVX2 and FMA instruction sets, which were
             // detected on this CPU just above.
-            return unsafe { kernel_avx2::<NS>(job, x, u, ws, out) };
+            return unsafe { kernel_avx2::<NS, P>(job, points, x, u, ws, out) };
         }
     }
-    kernel::<NS, false>(job, x, u, ws, out)
+    kernel::<NS, false, P>(job, points, x, u, ws, out)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-fn kernel_avx2<const NS: usize>(
+fn kernel_avx2<const NS: usize, P: PointMaterial>(
     job: Job<'_>,
+    points: P,
     x: &[[f64; 3]; NS],
     u: &[[f64; 3]; NS],
     ws: &mut Workspace,
     out: OutView<'_>,
 ) -> Result<(), ElementError> {
-    kernel::<NS, true>(job, x, u, ws, out)
+    kernel::<NS, true, P>(job, points, x, u, ws, out)
+}
+
+/// The stiffness at each station: the same one everywhere ([`Fixed`], the uniform path), or
+/// the local one turned to the axes at the station's position ([`Turning`]).
+trait PointMaterial {
+    /// The stiffness at station `g`, whose shape values are `n`; `xs` are the element's
+    /// coordinates as three runs over the nodes.
+    fn at<const NS: usize, const FMA: bool>(
+        &mut self,
+        g: usize,
+        n: &[f64],
+        xs: &[[f64; NS]; 3],
+    ) -> Result<&Stiffness, ElementError>;
+}
+
+/// A uniform material: the stiffness, untouched, at every station.
+struct Fixed<'a>(&'a Stiffness);
+
+impl PointMaterial for Fixed<'_> {
+    #[inline(always)]
+    fn at<const NS: usize, const FMA: bool>(
+        &mut self,
+        _: usize,
+        _: &[f64],
+        _: &[[f64; NS]; 3],
+    ) -> Result<&Stiffness, ElementError> {
+        Ok(self.0)
+    }
+}
+
+/// A material in varying axes: at each station x = Σ_m N^m x^m, R = the axes at x, then
+/// C = R·C_local (tensor rotation) and its Cholesky factor, as the kernel needs Q (eq. 2.3.4).
+struct Turning<'a> {
+    local: &'a Stiffness,
+    axes: &'a CylindricalAxes,
+    index: usize,
+    /// The selective-reduced rule: each station's C must not couple the transverse shears.
+    selective: bool,
+    here: Stiffness,
+}
+
+impl PointMaterial for Turning<'_> {
+    #[inline(always)]
+    fn at<const NS: usize, const FMA: bool>(
+        &mut self,
+        g: usize,
+        n: &[f64],
+        xs: &[[f64; NS]; 3],
+    ) -> Result<&Stiffness, ElementError> {
+        let Some(n) = n.first_chunk::<NS>() else {
+            return Err(ElementError::LengthMismatch {
+                what: "shape values",
+                expected: NS,
+                got: n.len(),
+            });
+        };
+        let x = [
+            dot::<NS, FMA>(n, &xs[0]),
+            dot::<NS, FMA>(n, &xs[1]),
+            dot::<NS, FMA>(n, &xs[2]),
+        ];
+        self.here = Stiffness::new(crate::material::turn(self.local.c(), &self.axes.axes_at(x)))
+            .map_err(|e| ElementError::MaterialAtPoint {
+                element: None,
+                material: self.index,
+                point: g,
+                x,
+                reason: e.to_string(),
+            })?;
+        if self.selective {
+            let coupling = self.here.transverse_shear_coupling();
+            if coupling > 1e-12 {
+                return Err(ElementError::CoupledTransverseShear {
+                    element: None,
+                    material: self.index,
+                    coupling,
+                });
+            }
+        }
+        Ok(&self.here)
+    }
 }
 
 /// Green–Lagrange strains from H = ∂u/∂x (eq. 2.1.4), or ε = sym H when `nonlinear` is false:
@@ -384,8 +507,9 @@ fn runs<const NS: usize>(v: &[f64]) -> Option<[&[f64; NS]; 3]> {
 /// values. Each T row is three AXPYs of gradient runs (one per direction), interleaved into
 /// node-major DOF order as it is written, so K comes out of TᵀT in node-major order.
 #[inline(always)]
-fn kernel<const NS: usize, const FMA: bool>(
+fn kernel<const NS: usize, const FMA: bool, P: PointMaterial>(
     job: Job<'_>,
+    mut points: P,
     x: &[[f64; 3]; NS],
     u: &[[f64; 3]; NS],
     ws: &mut Workspace,
@@ -393,13 +517,10 @@ fn kernel<const NS: usize, const FMA: bool>(
 ) -> Result<(), ElementError> {
     let Job {
         table,
-        material,
         nonlinear,
         tangent: want_tangent,
         ..
     } = job;
-    let c = material.c();
-    let q = material.q();
     let nd = 3 * NS;
     let p = table.t_stride();
     let mut xs = [[0.0; NS]; 3];
@@ -451,7 +572,10 @@ fn kernel<const NS: usize, const FMA: bool>(
                 h[i][jj] = dot::<NS, FMA>(&us[i], &gr[jj]);
             }
         }
-        // Task 5: strains (eq. 2.1.4); stresses on this station's components.
+        // Task 5: strains (eq. 2.1.4); stresses on this station's components, with the
+        // station's stiffness (the same at every station for a uniform material).
+        let material = points.at::<NS, FMA>(g, table.values(g), &xs)?;
+        let (c, q) = (material.c(), material.q());
         let e = strains(&h, nonlinear);
         let (lo, hi) = (st.first, st.last);
         let mut s = [0.0; 6];

@@ -11,6 +11,7 @@
 //! | [`Kinematics::Linear`], [`linear_stiffness`] | small-strain variants | §2.6, §2.8 |
 //! | [`evaluate_batch`], [`evaluate_batch_with`] | many elements of one kind, rayon across chunks; stored, or streamed to a consumer | §2.4 |
 //! | [`evaluate_listed_with`], [`evaluate_listed_prefetching`], [`Prefetch`] | a listed run on the calling thread (owner-computes assembly), with cache-line hints for the consumer | — |
+//! | [`Material`], [`CylindricalAxes`], [`AsMaterial`] | a stiffness uniform over the element, or in axes that vary with the position (turned to them at each station) | §2.1 eq. 2.1.5 |
 //! | [`eigen_analysis`] | eigenvalues and zero-energy modes of an element stiffness | §2.5 |
 //! | [`reference`](mod@reference) | a plain per-point nalgebra implementation (B explicit, Bᵀ C B): the oracle | — |
 //! | `strategies` (feature `proptest`) | random distorted elements, SPD materials, displacements | — |
@@ -47,6 +48,7 @@ mod batch;
 mod eigen;
 mod error;
 mod kernel;
+mod material;
 mod prefetch;
 mod quadrature;
 pub mod reference;
@@ -66,6 +68,7 @@ pub use error::ElementError;
 pub use kernel::{
     ElementOutput, Kinematics, Workspace, b0bl3d, estif3d, evaluate, linear_stiffness,
 };
+pub use material::{AsMaterial, CylindricalAxes, Material};
 pub use prefetch::{Prefetch, prefetch_line};
 pub use quadrature::{IntegrationRule, Station, gauss_1d};
 pub use shape::{ElementKind, HEX20_EDGES, HEX20_NODES, THESIS_NODE_HEX8, THESIS_NODE_HEX20};

@@ -4,7 +4,7 @@
 //! against and the baseline the benchmarks measure their speed-up over. Not for production.
 
 use crate::kernel::{check_finite, strains};
-use crate::{ElementError, Kinematics, ShapeTable};
+use crate::{AsMaterial, ElementError, Kinematics, ShapeTable};
 use nalgebra::{DMatrix, DVector, Matrix3, Matrix6, Vector6};
 use nonlin3d_laminate::Stiffness;
 
@@ -20,12 +20,13 @@ pub struct ReferenceOutput {
 }
 
 /// Evaluates one element the textbook way. Same inputs and conventions as
-/// [`evaluate`](crate::evaluate).
-pub fn evaluate_reference(
+/// [`evaluate`](crate::evaluate); a material in varying axes is turned to the axes at each
+/// station's position x = Σ_m N^m x^m.
+pub fn evaluate_reference<M: AsMaterial + ?Sized>(
     table: &ShapeTable,
     coords: &[[f64; 3]],
     disp: &[[f64; 3]],
-    material: &Stiffness,
+    material: &M,
     kinematics: Kinematics,
 ) -> Result<ReferenceOutput, ElementError> {
     let nn = table.nodes();
@@ -42,7 +43,7 @@ pub fn evaluate_reference(
     check_finite(coords, "coordinates")?;
     check_finite(disp, "displacements")?;
     let nonlinear = kinematics == Kinematics::Nonlinear;
-    let c_full = material.matrix();
+    let (material, axes) = material.parts();
     let mut forces = DVector::zeros(nd);
     let mut tangent = DMatrix::zeros(nd, nd);
     let mut energy = 0.0;
@@ -98,6 +99,27 @@ pub fn evaluate_reference(
                 b[(5, col)] = f(r, 0) * nz + f(r, 2) * nx;
             }
         }
+        let c_full = match axes {
+            None => material.matrix(),
+            Some(axes) => {
+                let mut x = [0.0; 3];
+                for (m, n) in table.values(g).iter().enumerate() {
+                    for r in 0..3 {
+                        x[r] += n * coords[m][r];
+                    }
+                }
+                let here: Stiffness = material.rotated(&axes.axes_at(x)).map_err(|e| {
+                    ElementError::MaterialAtPoint {
+                        element: None,
+                        material: 0,
+                        point: g,
+                        x,
+                        reason: e.to_string(),
+                    }
+                })?;
+                here.matrix()
+            }
+        };
         // C restricted to the components integrated at this station.
         let mut c = Matrix6::zeros();
         for i in st.first..st.last {

@@ -438,9 +438,9 @@ fn refusals_name_line_keyword_and_parameter() {
             "RF alone",
         ),
         (
-            "*ORIENTATION, NAME=C, SYSTEM=CYLINDRICAL\n0, 0, 0, 0, 0, 1\n".into(),
-            "*ORIENTATION, SYSTEM",
-            "cylindrical",
+            "*ORIENTATION, NAME=C, SYSTEM=CYLINDRICAL\n0, 0, 0, 0, 0, 1\n3, 30.\n".into(),
+            "*ORIENTATION data",
+            "rectangular systems only",
         ),
         (
             "*STEP, PERTURBATION\n".into(),

@@ -21,6 +21,7 @@ use crate::MeshError;
 use crate::inp::InpMaterial;
 use crate::model::Mesh;
 use lexer::{Keyword, Line, Loc, logical_lines};
+use nonlin3d_element::CylindricalAxes;
 use std::collections::{BTreeMap, HashMap};
 use std::path::Path;
 
@@ -281,6 +282,10 @@ pub struct InpModel {
     pub orientations: Vec<[[f64; 3]; 3]>,
     /// Name of each cell's orientation, if any.
     pub orientation_names: Vec<Option<String>>,
+    /// The axes of each cell whose orientation is cylindrical (`SYSTEM=CYLINDRICAL`): they
+    /// vary with the position, local 1 radial, 2 tangential, 3 axial
+    /// ([`CylindricalAxes::axes_at`]); `orientations` holds identity for such cells.
+    pub cylindrical: Vec<Option<CylindricalAxes>>,
     /// Boundary conditions given before the first step (ramped in the first step from zero,
     /// as CalculiX does).
     pub initial_boundaries: Vec<ReadBoundary>,
@@ -328,7 +333,7 @@ pub(crate) struct Reader {
     /// Upper-case set name → the spelling stored in the mesh.
     pub node_set_names: HashMap<String, String>,
     pub cell_set_names: HashMap<String, String>,
-    pub orientations: HashMap<String, [[f64; 3]; 3]>,
+    pub orientations: HashMap<String, sections::Axes>,
     pub sections: Vec<sections::Section>,
     /// Where each element was defined.
     pub element_at: Vec<Loc>,

@@ -2,7 +2,7 @@
 //! and the data a static mechanical step does not use (accepted and listed).
 
 use super::lexer::{Keyword, Line, Loc, fields, float, float_param, int};
-use super::sections::{Section, rectangular_axes};
+use super::sections::{Axes, Section, cylindrical_axes, rectangular_axes};
 use super::{Amplitude, Reader};
 use crate::MeshError;
 use crate::inp::{InpElastic, InpMaterial};
@@ -71,17 +71,10 @@ impl Reader {
             "ORIENTATION" => {
                 kw.allow(&["NAME", "SYSTEM"])?;
                 let name = kw.require("NAME")?.to_uppercase();
-                if kw
-                    .choice("SYSTEM", &["RECTANGULAR", "R", "CYLINDRICAL", "C"])?
-                    .is_some_and(|s| s.starts_with('C'))
-                {
-                    return Err(kw.param_error(
-                        "SYSTEM",
-                        "cylindrical orientations are not supported (their axes vary per \
-                         integration point)",
-                    ));
-                }
-                let axes = rectangular_axes(kw, data)?;
+                let axes = match kw.choice("SYSTEM", &["RECTANGULAR", "R", "CYLINDRICAL", "C"])? {
+                    Some(s) if s.starts_with('C') => Axes::Cylindrical(cylindrical_axes(kw, data)?),
+                    _ => Axes::Fixed(rectangular_axes(kw, data)?),
+                };
                 self.orientations.insert(name, axes);
             }
             "SOLID SECTION" => {

@@ -3,6 +3,16 @@
 use super::Reader;
 use super::lexer::{Keyword, Line, Loc, deck_error, fields, float, int};
 use crate::MeshError;
+use nonlin3d_element::CylindricalAxes;
+
+/// The material axes an `*ORIENTATION` defines.
+#[derive(Debug, Clone, Copy)]
+pub(crate) enum Axes {
+    /// A rectangular system: columns are the local axes in global coordinates.
+    Fixed([[f64; 3]; 3]),
+    /// A cylindrical system: the axes vary with the position.
+    Cylindrical(CylindricalAxes),
+}
 
 /// A `*SOLID SECTION`, resolved after the whole deck is read.
 pub(crate) struct Section {
@@ -78,6 +88,34 @@ pub(crate) fn rectangular_axes(kw: &Keyword, data: &[Line]) -> Result<[[f64; 3];
     ])
 }
 
+/// The axis of a cylindrical `*ORIENTATION` (CalculiX's definition): the data line gives
+/// points a and b on the axis; local 1 is radial, 3 axial from a to b, 2 = 3 × 1 tangential.
+/// CalculiX allows the second line (a rotation about a local axis) only for rectangular
+/// systems: one here is refused by its line.
+pub(crate) fn cylindrical_axes(kw: &Keyword, data: &[Line]) -> Result<CylindricalAxes, MeshError> {
+    let l = data.first().ok_or_else(|| kw.error("data line missing"))?;
+    let f = fields(&l.text);
+    if f.len() != 6 {
+        return Err(kw.data_error(
+            &l.at,
+            "expected a1, a2, a3, b1, b2, b3 (two points on the axis)",
+        ));
+    }
+    let v: Vec<f64> = f
+        .iter()
+        .map(|x| float(kw, &l.at, x))
+        .collect::<Result<_, _>>()?;
+    if let Some(l2) = data.get(1) {
+        return Err(kw.data_error(
+            &l2.at,
+            "a second data line (a rotation about a local axis) is defined for rectangular \
+             systems only; a cylindrical system takes the two points on its axis alone",
+        ));
+    }
+    CylindricalAxes::new([v[0], v[1], v[2]], [v[3], v[4], v[5]])
+        .ok_or_else(|| kw.data_error(&l.at, "points a and b coincide: they define no axis"))
+}
+
 /// The angle about z (degrees) of axes whose local 3 is global z, else None.
 fn angle_about_z(r: &[[f64; 3]; 3]) -> Option<f64> {
     let z = [r[0][2], r[1][2], r[2][2]];
@@ -93,6 +131,7 @@ impl Reader {
         let cells = self.m.mesh.cells.len();
         self.m.orientations = vec![IDENTITY; cells];
         self.m.orientation_names = vec![None; cells];
+        self.m.cylindrical = vec![None; cells];
         let sections = std::mem::take(&mut self.sections);
         let mut assigned = vec![false; cells];
         for sec in &sections {
@@ -139,9 +178,15 @@ impl Reader {
                 assigned[c] = true;
                 let cell = &mut self.m.mesh.cells[c];
                 cell.material = mi;
-                if let Some(r) = axes {
-                    cell.ply_angle_deg = angle_about_z(&r).unwrap_or(0.0);
-                    self.m.orientations[c] = r;
+                match axes {
+                    None => {}
+                    Some(Axes::Fixed(r)) => {
+                        cell.ply_angle_deg = angle_about_z(&r).unwrap_or(0.0);
+                        self.m.orientations[c] = r;
+                    }
+                    Some(Axes::Cylindrical(a)) => self.m.cylindrical[c] = Some(a),
+                }
+                if axes.is_some() {
                     self.m.orientation_names[c] = sec.orientation.clone();
                 }
             }
@@ -192,5 +237,31 @@ mod tests {
         let col = |k: usize| [t[0][k], t[1][k], t[2][k]];
         assert!((cross(col(0), col(1))[2] - col(2)[2]).abs() < 1e-15);
         assert!(angle_about_z(&t).is_none());
+    }
+
+    fn cylindrical(text: &str) -> Result<CylindricalAxes, MeshError> {
+        let lines = logical_lines(text, None).unwrap();
+        let kw = Keyword::parse(&lines[0].text, lines[0].at.clone());
+        cylindrical_axes(&kw, &lines[1..])
+    }
+
+    /// Two points on the axis; a rotation line or a degenerate axis is refused by its line.
+    #[test]
+    fn cylindrical_axes_take_two_points_and_nothing_else() {
+        let a =
+            cylindrical("*ORIENTATION, NAME=C, SYSTEM=CYLINDRICAL\n0, 0, 1, 0, 0, 3\n").unwrap();
+        assert_eq!(a.direction(), [0.0, 0.0, 1.0]);
+        assert_eq!(a.origin(), [0.0, 0.0, 1.0]);
+        let e = cylindrical("*ORIENTATION, NAME=C, SYSTEM=C\n0, 0, 0, 1, 0, 0\n3, 30.\n")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("line 3") && e.contains("rectangular systems only"),
+            "{e}"
+        );
+        let e = cylindrical("*ORIENTATION, NAME=C, SYSTEM=C\n1, 2, 3, 1, 2, 3\n")
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("line 2") && e.contains("coincide"), "{e}");
     }
 }
