@@ -6,13 +6,14 @@
 //! the bare kernel over every cell (`evaluate_batch_with`, outputs consumed in cache), the
 //! assembly of r + K with prefetch hints (the default) and without. The ratio kernel / assembly
 //! is the issue's measure. Also the residual r + K with constraints (the base clamped, a tip
-//! load: `Assembler::residual`), the figure kept within 5 % across the System split (issue 17).
+//! load: `Assembler::residual`), the figure kept within 5 % across the System split (issue 17),
+//! and the same through a `System` holding the solid as its one contribution.
 //! Figures go to docs/PERFORMANCE.md.
 //!
 //! Run: `cargo bench --bench assembly`.
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
-use nonlin3d::assembly::{Assembler, Constraints};
+use nonlin3d::assembly::{Assembler, Constraints, System};
 use nonlin3d::element::{
     BatchInput, ElementKind, IntegrationRule, Kinematics, ShapeTable, evaluate_batch_with,
 };
@@ -105,6 +106,21 @@ fn bench_assembly(c: &mut Criterion) {
         constraints
             .add_load(n - 1, 1.0)
             .unwrap_or_else(|e| panic!("{e}"));
+        let system = System::builder(constraints.clone())
+            .contribution(
+                Assembler::new(
+                    &mesh,
+                    &[steel],
+                    ShearCoupling::Exact,
+                    IntegrationRule::Gauss2,
+                    IntegrationRule::Gauss2,
+                    Kinematics::Nonlinear,
+                )
+                .unwrap_or_else(|e| panic!("{e}")),
+            )
+            .build()
+            .unwrap_or_else(|e| panic!("{e}"));
+        let mut ks = system.new_tangent();
         group.throughput(Throughput::Elements(mesh.cells.len() as u64));
         for threads in [1usize, 2] {
             let pool = rayon::ThreadPoolBuilder::new()
@@ -154,6 +170,17 @@ fn bench_assembly(c: &mut Criterion) {
                             .install(|| asm.residual(&u, 1.0, &constraints, Some(&mut k)))
                             .unwrap_or_else(|e| panic!("{e}"));
                         black_box((r[0], e, k.values()[0]));
+                    })
+                },
+            );
+            group.bench_function(
+                BenchmarkId::new(format!("{name}_system_threads"), threads),
+                |b| {
+                    b.iter(|| {
+                        let e = pool
+                            .install(|| system.evaluate(&u, 1.0, Some(&mut ks)))
+                            .unwrap_or_else(|e| panic!("{e}"));
+                        black_box((e.residual[0], e.energy, ks.values()[0]));
                     })
                 },
             );

@@ -316,3 +316,62 @@ impl Constraints {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tie(slave: usize, master: usize) -> Tie {
+        Tie {
+            slave,
+            masters: vec![(master, 1.0)],
+            offset: 0.0,
+        }
+    }
+
+    /// A group is replaced as a whole, after the other groups' ties; a replacement that breaks
+    /// a rule (here a chain through another group's slave) changes nothing.
+    #[test]
+    fn a_tie_group_is_replaced_all_or_nothing() {
+        let mut c = Constraints::new(30);
+        c.tie(0, &[(1, 1.0)], 0.0).unwrap();
+        c.replace_tie_group(TieGroup(2), &[tie(3, 4), tie(5, 6)])
+            .unwrap();
+        c.tie(7, &[(8, 1.0)], 0.0).unwrap();
+        c.replace_tie_group(TieGroup(2), &[tie(9, 10)]).unwrap();
+        let slaves: Vec<usize> = c.ties().iter().map(|t| t.slave).collect();
+        assert_eq!(slaves, [0, 7, 9]);
+        assert_eq!(
+            c.tie_groups(),
+            [TieGroup::DEFAULT, TieGroup::DEFAULT, TieGroup(2)]
+        );
+        let before = c.clone();
+        // The second new tie's master is the first's slave: a chain, refused, nothing changes.
+        let err = c.replace_tie_group(TieGroup(2), &[tie(11, 12), tie(13, 11)]);
+        assert!(matches!(err, Err(AssemblyError::Tie { slave: 13, .. })));
+        // A master that is another group's slave.
+        let err = c.replace_tie_group(TieGroup(2), &[tie(14, 0)]);
+        assert!(matches!(err, Err(AssemblyError::Tie { slave: 14, .. })));
+        assert_eq!(c, before);
+        // The replaced group's old slave may be used again, as a master now.
+        c.replace_tie_group(TieGroup(2), &[tie(15, 9)]).unwrap();
+        c.replace_tie_group(TieGroup(2), &[]).unwrap();
+        assert_eq!(c.tie_group(TieGroup(2)).count(), 0);
+        assert_eq!(c.ties().len(), 2);
+    }
+
+    /// A released DOF is free: not constrained, its value left alone by `apply`, and it may
+    /// become a slave.
+    #[test]
+    fn a_released_dof_is_free() {
+        let mut c = Constraints::new(6);
+        c.prescribe(2, 0.5).unwrap();
+        assert!(c.tie(2, &[(3, 1.0)], 0.0).is_err());
+        assert!(c.release(2));
+        assert!(!c.is_constrained(2) && !c.release(2));
+        let mut u = vec![7.0; 6];
+        c.apply(&mut u, 1.0);
+        assert_eq!(u[2], 7.0);
+        c.tie(2, &[(3, 1.0)], 0.0).unwrap();
+    }
+}

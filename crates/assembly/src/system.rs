@@ -343,6 +343,24 @@ impl System {
         })
     }
 
+    /// v ← Tᵀ v with zeros at constrained rows: a force vector constrained as the residual is
+    /// (each slave's entry added to its masters, c·v_s, then zeroed; prescribed rows zeroed),
+    /// e.g. the coupling force K_fc·Δu_c − Δf_ext of a change of prescribed values.
+    pub fn fold(&self, v: &mut [f64]) -> Result<(), AssemblyError> {
+        check_len("force vector", v, self.n)?;
+        for t in self.constraints.ties() {
+            let s = v[t.slave];
+            for &(m, c) in &t.masters {
+                v[m] += c * s;
+            }
+            v[t.slave] = 0.0;
+        }
+        for (d, _) in self.constraints.prescribed() {
+            v[d] = 0.0;
+        }
+        Ok(())
+    }
+
     /// y = Σ_c ∂f_int,c/∂u(u)·v, the unconstrained tangent times v.
     pub fn tangent_product(&self, u: &[f64], v: &[f64]) -> Result<Vec<f64>, AssemblyError> {
         check_len("displacements", u, self.n)?;

@@ -194,7 +194,7 @@ fn largest(x: &[f64]) -> f64 {
 
 /// The System holding only the solid gives bitwise what `Assembler::residual` gives (the
 /// engine and the constraint application are the same code), with ties and prescribed DOFs,
-/// on 1 and 2 threads.
+/// on 1 and 2 threads; `System::fold` of the unconstrained residual is its residual.
 #[test]
 fn a_system_of_the_solid_alone_is_the_assembler_bitwise() {
     let mesh = hex20_box([3, 1, 1]);
@@ -231,6 +231,14 @@ fn a_system_of_the_solid_alone_is_the_assembler_bitwise() {
             k1.values() == k2.values(),
             "{threads} threads: tangents differ"
         );
+        // The unconstrained sum minus the loads, folded, is the residual (the same operations).
+        let mut r = vec![0.0; system.n()];
+        system.assemble(&u, &mut r, None).unwrap();
+        for (r, f) in r.iter_mut().zip(system.external(0.7)) {
+            *r -= f;
+        }
+        system.fold(&mut r).unwrap();
+        assert!(r == e.residual);
     }
 }
 
