@@ -305,16 +305,19 @@ fn a_spring_contribution_adds_its_stiffness() {
     assert!((ys[b] - yp[b] + k_spring).abs() <= 1e-6 * k_spring);
 }
 
-/// A dense block over 132 DOFs (three Hex20 cells' linear stiffness, condensed to a matrix,
-/// with a load on its DOFs) added to a System gives the residual and tangent of the same cells
-/// added as elements, with clamps, a load and a tie. Linear kinematics, so f_int = K u of
-/// each cell exactly in arithmetic; the two paths differ by the order of the sums (≈ 60 terms
-/// an entry, each rounded to 1.1e-16 of its size): 1e-12 of the largest entry or force.
+/// A dense block over 276 DOFs (seven Hex20 cells' linear stiffness condensed to one matrix
+/// over their 92 nodes, more than the solid's scatter takes in one cell, with a load on its
+/// DOFs) added to a System gives the residual and tangent of the same cells added as
+/// elements, with clamps, a load and a tie. Linear kinematics, so f_int = K u of each cell
+/// exactly in arithmetic; the two paths differ by the order of the sums: a force is a sum of
+/// ≲ 300 products (the block's row), each rounded to 1.1e-16 of its size, so ≲ 3.3e-14 of
+/// the largest term; 1e-12 of the largest entry or force leaves a margin of 30.
 #[test]
 fn a_dense_block_equals_the_same_stiffness_as_elements() {
-    let mesh = hex20_box([4, 1, 1]);
+    let mesh = hex20_box([8, 1, 1]);
     let n = 3 * mesh.nodes.len();
-    let (front, back) = (only_cells(&mesh, &[0]), only_cells(&mesh, &[1, 2, 3]));
+    let back_cells: Vec<usize> = (1..8).collect();
+    let (front, back) = (only_cells(&mesh, &[0]), only_cells(&mesh, &back_cells));
     // The block: the back cells' tangent at u = 0, over their DOFs.
     let back_solid = solid(&back, Kinematics::Linear);
     let mut kb = back_solid.new_tangent();
@@ -322,7 +325,7 @@ fn a_dense_block_equals_the_same_stiffness_as_elements() {
     let mut dofs: Vec<usize> = back_solid.cell_dofs().iter().flatten().copied().collect();
     dofs.sort_unstable();
     dofs.dedup();
-    assert!(dofs.len() > 100, "{} DOFs", dofs.len());
+    assert!(dofs.len() > 91 * 3, "{} DOFs", dofs.len());
     let nd = dofs.len();
     let k: Vec<f64> = (0..nd * nd)
         .map(|p| kb.get(dofs[p / nd], dofs[p % nd]))
