@@ -5,12 +5,15 @@
 //! small displacement field; ~10 k and ~89 k DOF; 1 and 2 threads. Per model and thread count:
 //! the bare kernel over every cell (`evaluate_batch_with`, outputs consumed in cache), the
 //! assembly of r + K with prefetch hints (the default) and without. The ratio kernel / assembly
-//! is the issue's measure. Figures go to docs/PERFORMANCE.md.
+//! is the issue's measure. Also the residual r + K with constraints (the base clamped, a tip
+//! load: `Assembler::residual`), the figure kept within 5 % across the System split (issue 17),
+//! and the same through a `System` holding the solid as its one contribution.
+//! Figures go to docs/PERFORMANCE.md.
 //!
 //! Run: `cargo bench --bench assembly`.
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
-use nonlin3d::assembly::Assembler;
+use nonlin3d::assembly::{Assembler, Constraints, System};
 use nonlin3d::element::{
     BatchInput, ElementKind, IntegrationRule, Kinematics, ShapeTable, evaluate_batch_with,
 };
@@ -84,6 +87,40 @@ fn bench_assembly(c: &mut Criterion) {
             materials: &mats,
             material_of: &of,
         };
+        // The base clamped, a load at the last DOF: the constraints of the residual cases.
+        let zmin = mesh
+            .nodes
+            .iter()
+            .map(|p| p[2])
+            .fold(f64::INFINITY, f64::min);
+        let mut constraints = Constraints::new(n);
+        for (v, p) in mesh.nodes.iter().enumerate() {
+            if p[2] == zmin {
+                constraints
+                    .fix_nodes(&[v], 0)
+                    .and_then(|_| constraints.fix_nodes(&[v], 1))
+                    .and_then(|_| constraints.fix_nodes(&[v], 2))
+                    .unwrap_or_else(|e| panic!("{e}"));
+            }
+        }
+        constraints
+            .add_load(n - 1, 1.0)
+            .unwrap_or_else(|e| panic!("{e}"));
+        let system = System::builder(constraints.clone())
+            .contribution(
+                Assembler::new(
+                    &mesh,
+                    &[steel],
+                    ShearCoupling::Exact,
+                    IntegrationRule::Gauss2,
+                    IntegrationRule::Gauss2,
+                    Kinematics::Nonlinear,
+                )
+                .unwrap_or_else(|e| panic!("{e}")),
+            )
+            .build()
+            .unwrap_or_else(|e| panic!("{e}"));
+        let mut ks = system.new_tangent();
         group.throughput(Throughput::Elements(mesh.cells.len() as u64));
         for threads in [1usize, 2] {
             let pool = rayon::ThreadPoolBuilder::new()
@@ -124,6 +161,29 @@ fn bench_assembly(c: &mut Criterion) {
                     },
                 );
             }
+            asm.set_prefetch(true);
+            group.bench_function(
+                BenchmarkId::new(format!("{name}_residual_threads"), threads),
+                |b| {
+                    b.iter(|| {
+                        let (r, _, e) = pool
+                            .install(|| asm.residual(&u, 1.0, &constraints, Some(&mut k)))
+                            .unwrap_or_else(|e| panic!("{e}"));
+                        black_box((r[0], e, k.values()[0]));
+                    })
+                },
+            );
+            group.bench_function(
+                BenchmarkId::new(format!("{name}_system_threads"), threads),
+                |b| {
+                    b.iter(|| {
+                        let e = pool
+                            .install(|| system.evaluate(&u, 1.0, Some(&mut ks)))
+                            .unwrap_or_else(|e| panic!("{e}"));
+                        black_box((e.residual[0], e.energy, ks.values()[0]));
+                    })
+                },
+            );
         }
     }
     group.finish();

@@ -79,10 +79,7 @@ fn fe_onset(scene: &Scene, guess: f64, equibiaxial: bool) -> f64 {
     if equibiaxial {
         for &n in &model.mesh.node_sets[names::Y1] {
             let y = model.mesh.nodes[n][1];
-            problem
-                .constraints
-                .prescribe(3 * n + 1, y * reference)
-                .unwrap();
+            problem.prescribe_value(3 * n + 1, y * reference).unwrap();
         }
     }
     let (newton, _) = settings(scene);

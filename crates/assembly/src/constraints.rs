@@ -1,4 +1,5 @@
-//! Fixed and prescribed DOFs and nodal loads, scaled by the load factor λ.
+//! Fixed and prescribed DOFs, ties in replaceable groups and nodal loads, scaled by the load
+//! factor λ. How they are applied to an assembled system is `constrain.rs`.
 
 use crate::AssemblyError;
 use std::collections::BTreeMap;
@@ -17,6 +18,24 @@ pub struct Constraints {
     loads: Vec<f64>,
     dead: Vec<f64>,
     ties: Vec<Tie>,
+    /// The group of each tie (parallel to `ties`).
+    groups: Vec<TieGroup>,
+}
+
+/// A set of ties replaced or removed as a whole ([`Constraints::replace_tie_group`]), e.g. the
+/// active contact pairs of one surface. [`Constraints::tie`] adds to [`TieGroup::DEFAULT`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default)]
+pub struct TieGroup(pub u32);
+
+impl TieGroup {
+    /// The group of the ties added with [`Constraints::tie`].
+    pub const DEFAULT: Self = Self(0);
+}
+
+impl std::fmt::Display for TieGroup {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "tie group {}", self.0)
+    }
 }
 
 /// A linear tie between DOFs: u_slave = Σ c_k·u_{master_k} + λ·offset (a multi-point
@@ -42,15 +61,86 @@ impl Constraints {
             loads: vec![0.0; n],
             dead: vec![0.0; n],
             ties: Vec::new(),
+            groups: Vec::new(),
         }
     }
 
-    /// Ties DOF `slave` to `masters`: u_slave = Σ c·u_master + λ·`offset`. Errors: a DOF out
-    /// of range, a non-finite coefficient, the slave among its masters, a slave that is already
-    /// a slave or prescribed, or a chain (a master that is a slave, or a slave that is a master
-    /// of an earlier tie).
+    /// Ties DOF `slave` to `masters`: u_slave = Σ c·u_master + λ·`offset`, in
+    /// [`TieGroup::DEFAULT`]. Errors: a DOF out of range, a non-finite coefficient, the slave
+    /// among its masters, a slave that is already a slave or prescribed, or a chain (a master
+    /// that is a slave, or a slave that is a master of an earlier tie).
     pub fn tie(
         &mut self,
+        slave: usize,
+        masters: &[(usize, f64)],
+        offset: f64,
+    ) -> Result<(), AssemblyError> {
+        self.tie_in(TieGroup::DEFAULT, slave, masters, offset)
+    }
+
+    /// [`tie`](Self::tie) into group `group` (appended after every tie there is).
+    pub fn tie_in(
+        &mut self,
+        group: TieGroup,
+        slave: usize,
+        masters: &[(usize, f64)],
+        offset: f64,
+    ) -> Result<(), AssemblyError> {
+        self.check_tie(&self.ties, slave, masters, offset)?;
+        self.ties.push(Tie {
+            slave,
+            masters: masters.to_vec(),
+            offset,
+        });
+        self.groups.push(group);
+        Ok(())
+    }
+
+    /// Replaces every tie of `group` by `ties` (none: the group is removed), all or nothing:
+    /// each new tie is checked as [`tie`](Self::tie) checks it against the ties of the other
+    /// groups and the new ones before it; on error nothing changes. The replaced group's ties
+    /// move to the end of [`ties`](Self::ties) (the fold order).
+    pub fn replace_tie_group(
+        &mut self,
+        group: TieGroup,
+        ties: &[Tie],
+    ) -> Result<(), AssemblyError> {
+        let mut kept: Vec<Tie> = Vec::with_capacity(self.ties.len() + ties.len());
+        let mut groups = Vec::with_capacity(kept.capacity());
+        for (t, &g) in self.ties.iter().zip(&self.groups) {
+            if g != group {
+                kept.push(t.clone());
+                groups.push(g);
+            }
+        }
+        for t in ties {
+            self.check_tie(&kept, t.slave, &t.masters, t.offset)?;
+            kept.push(t.clone());
+            groups.push(group);
+        }
+        self.ties = kept;
+        self.groups = groups;
+        Ok(())
+    }
+
+    /// The ties of `group`, in fold order.
+    pub fn tie_group(&self, group: TieGroup) -> impl Iterator<Item = &Tie> + '_ {
+        self.ties
+            .iter()
+            .zip(&self.groups)
+            .filter(move |(_, g)| **g == group)
+            .map(|(t, _)| t)
+    }
+
+    /// The group of each tie of [`ties`](Self::ties), in the same order.
+    pub fn tie_groups(&self) -> &[TieGroup] {
+        &self.groups
+    }
+
+    /// Checks a tie against the ties `ties` (see [`tie`](Self::tie)).
+    fn check_tie(
+        &self,
+        ties: &[Tie],
         slave: usize,
         masters: &[(usize, f64)],
         offset: f64,
@@ -75,7 +165,7 @@ impl Constraints {
             if masters.iter().filter(|x| x.0 == m).count() > 1 {
                 return Err(bad(format!("master {m} listed twice")));
             }
-            if self.ties.iter().any(|t| t.slave == m) {
+            if ties.iter().any(|t| t.slave == m) {
                 return Err(bad(format!(
                     "master {m} is itself a slave (chains are not supported)"
                 )));
@@ -84,18 +174,12 @@ impl Constraints {
         if self.prescribed.contains_key(&slave) {
             return Err(bad("the slave is prescribed".into()));
         }
-        if self
-            .ties
+        if ties
             .iter()
             .any(|t| t.slave == slave || t.masters.iter().any(|&(m, _)| m == slave))
         {
             return Err(bad("already a slave, or a master of another tie".into()));
         }
-        self.ties.push(Tie {
-            slave,
-            masters: masters.to_vec(),
-            offset,
-        });
         Ok(())
     }
 
@@ -151,6 +235,12 @@ impl Constraints {
         }
         self.prescribed.insert(dof, (from, to - from));
         Ok(())
+    }
+
+    /// Releases DOF `dof` (no longer prescribed: free, or a slave-to-be). Returns whether it
+    /// was prescribed.
+    pub fn release(&mut self, dof: usize) -> bool {
+        self.prescribed.remove(&dof).is_some()
     }
 
     /// Fixes DOF `r` (0 = x, 1 = y, 2 = z) of every node in `nodes`.
@@ -224,5 +314,64 @@ impl Constraints {
         for ((fi, l), d) in f.iter_mut().zip(&self.loads).zip(&self.dead) {
             *fi = lambda * l + d;
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tie(slave: usize, master: usize) -> Tie {
+        Tie {
+            slave,
+            masters: vec![(master, 1.0)],
+            offset: 0.0,
+        }
+    }
+
+    /// A group is replaced as a whole, after the other groups' ties; a replacement that breaks
+    /// a rule (here a chain through another group's slave) changes nothing.
+    #[test]
+    fn a_tie_group_is_replaced_all_or_nothing() {
+        let mut c = Constraints::new(30);
+        c.tie(0, &[(1, 1.0)], 0.0).unwrap();
+        c.replace_tie_group(TieGroup(2), &[tie(3, 4), tie(5, 6)])
+            .unwrap();
+        c.tie(7, &[(8, 1.0)], 0.0).unwrap();
+        c.replace_tie_group(TieGroup(2), &[tie(9, 10)]).unwrap();
+        let slaves: Vec<usize> = c.ties().iter().map(|t| t.slave).collect();
+        assert_eq!(slaves, [0, 7, 9]);
+        assert_eq!(
+            c.tie_groups(),
+            [TieGroup::DEFAULT, TieGroup::DEFAULT, TieGroup(2)]
+        );
+        let before = c.clone();
+        // The second new tie's master is the first's slave: a chain, refused, nothing changes.
+        let err = c.replace_tie_group(TieGroup(2), &[tie(11, 12), tie(13, 11)]);
+        assert!(matches!(err, Err(AssemblyError::Tie { slave: 13, .. })));
+        // A master that is another group's slave.
+        let err = c.replace_tie_group(TieGroup(2), &[tie(14, 0)]);
+        assert!(matches!(err, Err(AssemblyError::Tie { slave: 14, .. })));
+        assert_eq!(c, before);
+        // The replaced group's old slave may be used again, as a master now.
+        c.replace_tie_group(TieGroup(2), &[tie(15, 9)]).unwrap();
+        c.replace_tie_group(TieGroup(2), &[]).unwrap();
+        assert_eq!(c.tie_group(TieGroup(2)).count(), 0);
+        assert_eq!(c.ties().len(), 2);
+    }
+
+    /// A released DOF is free: not constrained, its value left alone by `apply`, and it may
+    /// become a slave.
+    #[test]
+    fn a_released_dof_is_free() {
+        let mut c = Constraints::new(6);
+        c.prescribe(2, 0.5).unwrap();
+        assert!(c.tie(2, &[(3, 1.0)], 0.0).is_err());
+        assert!(c.release(2));
+        assert!(!c.is_constrained(2) && !c.release(2));
+        let mut u = vec![7.0; 6];
+        c.apply(&mut u, 1.0);
+        assert_eq!(u[2], 7.0);
+        c.tie(2, &[(3, 1.0)], 0.0).unwrap();
     }
 }

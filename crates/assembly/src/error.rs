@@ -56,6 +56,23 @@ pub enum AssemblyError {
         /// Given.
         got: usize,
     },
+    /// A tie replaced into a [`System`](crate::System) whose fold needs a coupling outside the
+    /// system's pattern (reserve it when building the system).
+    #[error(
+        "{group}: the tie of {} onto master {} needs {} coupled with {}, which the system's \
+         pattern does not hold (reserve the tie or the coupling when building the System)",
+        dof_name(*slave), dof_name(*master), dof_name(*master), dof_name(*dof)
+    )]
+    Unreserved {
+        /// The tie group being replaced.
+        group: crate::TieGroup,
+        /// The tie's slave DOF.
+        slave: usize,
+        /// The master whose coupling is missing.
+        master: usize,
+        /// The DOF it would have to be coupled with.
+        dof: usize,
+    },
     /// The sparsity pattern is not node-blocked (three DOFs per node, every node coupled with
     /// all three DOFs of its neighbours), which the scatter relies on.
     #[error("pattern column {column}: {reason}")]
@@ -65,4 +82,9 @@ pub enum AssemblyError {
         /// What is wrong.
         reason: String,
     },
+}
+
+/// "DOF d (node v, x)": a DOF in the user's words (3 per node, node-major, 0-based).
+fn dof_name(d: usize) -> String {
+    format!("DOF {d} (node {}, {})", d / 3, ["x", "y", "z"][d % 3])
 }

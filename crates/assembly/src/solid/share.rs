@@ -9,7 +9,7 @@
 //! diagonal block, the stored pairs, the added pairs); what is done at each step is a [`Sink`]:
 //! scatter from the full tangent, pack for a hand-over, scatter from a pack, list positions.
 
-use crate::scatter::{column_bases, segment};
+use super::scatter::{column_bases, segment};
 
 /// What a [`walk`] does at each step.
 pub(crate) trait Sink {
@@ -26,7 +26,7 @@ pub(crate) trait Sink {
 /// Walks the share of ranks [lo, hi) of a cell (`nodes`, its [`pair_lists`] table `pairs`)
 /// into `sink`, in scatter order.
 ///
-/// [`pair_lists`]: crate::scatter::pair_lists
+/// [`pair_lists`]: super::scatter::pair_lists
 pub(crate) fn walk(
     nodes: &[usize],
     pairs: &[u32],
@@ -105,7 +105,7 @@ pub(crate) struct Scatter<'a, 'v> {
     ke: &'a [f64],
     nd: usize,
     col_ptr: &'a [usize],
-    values: &'a crate::scatter::Shared<'v>,
+    values: &'a super::scatter::Shared<'v>,
     base: [usize; 3],
     rows: [&'a [f64]; 3],
 }
@@ -115,7 +115,7 @@ impl<'a, 'v> Scatter<'a, 'v> {
         ke: &'a [f64],
         nd: usize,
         col_ptr: &'a [usize],
-        values: &'a crate::scatter::Shared<'v>,
+        values: &'a super::scatter::Shared<'v>,
     ) -> Self {
         Self {
             ke,
@@ -222,7 +222,7 @@ impl Sink for Pack<'_, '_> {
 pub(crate) struct Unpack<'a, 'v> {
     pack: &'a [f64],
     col_ptr: &'a [usize],
-    values: &'a crate::scatter::Shared<'v>,
+    values: &'a super::scatter::Shared<'v>,
     at: usize,
     base: [usize; 3],
 }
@@ -231,7 +231,7 @@ impl<'a, 'v> Unpack<'a, 'v> {
     pub(crate) fn new(
         pack: &'a [f64],
         col_ptr: &'a [usize],
-        values: &'a crate::scatter::Shared<'v>,
+        values: &'a super::scatter::Shared<'v>,
     ) -> Self {
         Self {
             pack,
