@@ -48,6 +48,66 @@ pub enum Error {
         /// What is wrong with it.
         reason: String,
     },
+    /// The model lacks a node or cell set that its supports, load or output need.
+    #[error("the model has no {kind} set '{name}'")]
+    MissingSet {
+        /// `node` or `cell`.
+        kind: &'static str,
+        /// The set's name.
+        name: String,
+    },
+    /// No node of the model where one is needed.
+    #[error("the model has no node on {what}")]
+    NoNodeAt {
+        /// Where, and what for.
+        what: &'static str,
+    },
+    /// The model has no material (its cells index none).
+    #[error("the model has no material")]
+    NoMaterial,
+    /// A material's 6 × 6 stiffness has no inverse, so its compliance (which sizes the
+    /// perturbation force) does not exist.
+    #[error(
+        "material {index}: the stiffness matrix is singular, so the perturbation force cannot \
+         be sized from it (give loads.perturbation_n)"
+    )]
+    SingularMaterial {
+        /// 0-based index among the model's materials.
+        index: usize,
+    },
+    /// A matrix or value came out infinite or NaN.
+    #[error("{what} is not finite")]
+    NotFinite {
+        /// What, in words.
+        what: String,
+    },
+    /// A level of the sweep failed; says which and at what strain (or load).
+    #[error("level {index} ({quantity} {value}): {source}")]
+    Level {
+        /// 0-based level index.
+        index: usize,
+        /// `strain` or `load`.
+        quantity: &'static str,
+        /// The level's strain (or load, N), as the scene gives it.
+        value: f64,
+        /// Why it failed.
+        source: Box<Error>,
+    },
+    /// The sublaminate was pushed into the base: without contact (thesis §2.7) that branch is
+    /// not physical, so the run stops rather than report it.
+    #[error(
+        "level {index} (strain {strain}): the sublaminate buckled into the base (largest \
+         crack-face separation {separation_mm:.4} mm); without contact this branch is not \
+         physical — raise loads.perturbation_n or lower analysis.max_increment"
+    )]
+    BuckledIntoBase {
+        /// 0-based level index.
+        index: usize,
+        /// The level's strain.
+        strain: f64,
+        /// The largest crack-face separation w(upper) − w(lower), mm (negative: overlap).
+        separation_mm: f64,
+    },
     /// A numerical step produced no answer (named).
     #[error("{0}")]
     Numerical(String),

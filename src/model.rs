@@ -1,7 +1,12 @@
 //! The finite element model of a scene: its mesh, front, materials and boundary-condition
-//! family, as [`crate::analysis::build_model`] makes it and the results keep it for output.
+//! family, as [`crate::analysis::build_model`] makes it and the results keep it for output;
+//! and the model's supports and load (thesis §3.2), held here once for both the analysis's
+//! constraints ([`crate::analysis::constraints`]) and the exported deck's `*BOUNDARY` and
+//! `*CLOAD` lines ([`crate::export`]).
 
+use crate::Error;
 use nonlin3d_laminate::Stiffness;
+use nonlin3d_mesh::names::{CENTER_TOP, X0, X1, Y_HOLD, Y0, Y1, Z0};
 use nonlin3d_mesh::{Front, Mesh};
 
 /// Which boundary conditions a model gets (thesis §3.2).
@@ -36,4 +41,156 @@ pub struct Model {
     /// min(a, b) embedded and edge, the radius for the plate, the half-length a through the
     /// width.
     pub a_min: f64,
+}
+
+/// A displacement component of a node.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Axis {
+    /// u, along x (the loading direction).
+    X,
+    /// v, along y.
+    Y,
+    /// w, along z (through the thickness).
+    Z,
+}
+
+impl Axis {
+    /// The component's offset in a node's DOFs: 0, 1, 2 (the global DOF is 3·node + offset);
+    /// a deck numbers it one higher.
+    pub fn offset(self) -> usize {
+        match self {
+            Self::X => 0,
+            Self::Y => 1,
+            Self::Z => 2,
+        }
+    }
+}
+
+/// The nodes a support acts on.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Nodes {
+    /// Every node of the mesh's node set of this name (one of [`nonlin3d_mesh::names`]).
+    Set(&'static str),
+    /// One node (0-based mesh index) the model picks, named `set` where a deck needs a set.
+    Node {
+        /// The set name in an exported deck.
+        set: &'static str,
+        /// The node.
+        node: usize,
+    },
+}
+
+/// What a support prescribes on its component.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Value {
+    /// Held at zero throughout.
+    Zero,
+    /// The end displacement u = length·ε, ε the applied strain (load factor × the scene's
+    /// largest strain): the loaded end of §3.2, length = W the box's extent in x, m.
+    Strain {
+        /// The lever of the strain, m.
+        length: f64,
+    },
+}
+
+/// One support of a model: a component of some nodes held at zero or prescribed.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Support {
+    /// Which nodes.
+    pub nodes: Nodes,
+    /// Which component.
+    pub axis: Axis,
+    /// Its value.
+    pub value: Value,
+}
+
+/// The plate's applied load (§4.1): a fraction of the scene's transverse load P in +z, split
+/// equally over the nodes of a set (the quarter model carries P/4 at its centre).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CentralLoad {
+    /// The node set that carries it.
+    pub set: &'static str,
+    /// The model's share of P (1/4 on the quarter model).
+    pub fraction: f64,
+}
+
+impl Model {
+    /// The supports of the model (thesis §3.2), in the order they are applied: u = 0 on x = 0,
+    /// w = 0 on z = 0 (the mid-plane), then by [`ModelKind`]:
+    /// - embedded, plate: v = 0 on y = 0;
+    /// - edge: y = 0 free; v = 0 on the one node of x = W, z = 0 with the largest y (far from
+    ///   the delamination), against the rigid motion in y;
+    /// - through-width: v = 0 on y = 0 and on y = W (plane strain);
+    ///
+    /// and last, except on the plate, u = x_end·ε on x = W.
+    pub fn supports(&self) -> Result<Vec<Support>, Error> {
+        let set = |name, axis| Support {
+            nodes: Nodes::Set(name),
+            axis,
+            value: Value::Zero,
+        };
+        let mut s = vec![set(X0, Axis::X), set(Z0, Axis::Z)];
+        match self.kind {
+            ModelKind::Edge => s.push(Support {
+                nodes: Nodes::Node {
+                    set: Y_HOLD,
+                    node: self.y_hold()?,
+                },
+                axis: Axis::Y,
+                value: Value::Zero,
+            }),
+            ModelKind::ThroughWidth => s.extend([set(Y0, Axis::Y), set(Y1, Axis::Y)]),
+            ModelKind::Embedded | ModelKind::Plate => s.push(set(Y0, Axis::Y)),
+        }
+        if self.kind != ModelKind::Plate {
+            s.push(Support {
+                nodes: Nodes::Set(X1),
+                axis: Axis::X,
+                value: Value::Strain { length: self.x_end },
+            });
+        }
+        Ok(s)
+    }
+
+    /// The applied load besides prescribed displacements: the plate's P/4 on `center_top`;
+    /// none for the strain-driven models.
+    pub fn central_load(&self) -> Option<CentralLoad> {
+        (self.kind == ModelKind::Plate).then_some(CentralLoad {
+            set: CENTER_TOP,
+            fraction: 0.25,
+        })
+    }
+
+    /// The nodes of the node set `name`.
+    pub fn node_set(&self, name: &str) -> Result<&[usize], Error> {
+        self.mesh
+            .node_sets
+            .get(name)
+            .map(Vec::as_slice)
+            .ok_or_else(|| Error::MissingSet {
+                kind: "node",
+                name: name.into(),
+            })
+    }
+
+    /// The nodes a support acts on.
+    pub fn nodes_of<'a>(&'a self, nodes: &'a Nodes) -> Result<&'a [usize], Error> {
+        match nodes {
+            Nodes::Set(name) => self.node_set(name),
+            Nodes::Node { node, .. } => Ok(std::slice::from_ref(node)),
+        }
+    }
+
+    /// The edge model's y-holder: the node of x = W on z = 0 with the largest y.
+    fn y_hold(&self) -> Result<usize, Error> {
+        let x = &self.mesh.nodes;
+        self.node_set(X1)?
+            .iter()
+            .copied()
+            .filter(|&n| x[n][2] == 0.0)
+            .max_by(|&a, &b| x[a][1].total_cmp(&x[b][1]))
+            .ok_or(Error::NoNodeAt {
+                what: "x = W, z = 0 to hold the edge model in y",
+            })
+    }
 }
