@@ -5,17 +5,13 @@
 //! [`front_table`]; [`run`] (or [`Analysis::run`]) strings them together and times them.
 
 use crate::model::Value;
-pub use crate::model::{Model, ModelKind};
-use crate::scene::{ForceKinematics, Geometry, MapName, NewtonName, Scene, Shape, SolverName};
+pub use crate::model::{Model, ModelKind, build_model};
+use crate::scene::{ForceKinematics, Geometry, NewtonName, Scene, SolverName};
 use crate::{Error, results::*};
 use nonlin3d_assembly::{Assembler, Constraints};
 use nonlin3d_element::Kinematics;
 use nonlin3d_laminate::ShearCoupling;
 use nonlin3d_mesh::names::{CENTER_TOP, CRACK_LOWER, CRACK_UPPER};
-use nonlin3d_mesh::{
-    EllipticMap, EmbeddedParams, Imperfection, PlyLayout, ThroughWidthParams,
-    embedded_delamination_with_front, through_width_delamination,
-};
 use nonlin3d_newton::{
     IncrementReport, NewtonSettings, PathSolver, Stepping, StructuralProblem, follow_path_with,
     perturbed_step,
@@ -23,149 +19,6 @@ use nonlin3d_newton::{
 use nonlin3d_solver::SolverKind;
 use nonlin3d_vcct::{FrontRelease, cells_above, release_rates};
 use std::time::Instant;
-
-/// Builds the mesh and front of a scene (with its imperfection, if any).
-pub fn build_model(scene: &Scene) -> Result<Model, Error> {
-    scene.validate()?;
-    // Nodes and cells estimated from the scene before anything is allocated.
-    crate::budget::check_mesh(scene, &crate::budget::limit())?;
-    let mm = 1e-3;
-    let c = &scene.mesh;
-    let kind = c
-        .element
-        .map_or(nonlin3d_element::ElementKind::Hex20, |e| e.kind());
-    let materials = scene.stiffnesses()?;
-    let embedded = |shape: Shape, a: f64, b: f64, h: f64, base: f64, w: f64| {
-        let d = EmbeddedParams::thesis_reference();
-        let plies = scene.layup.as_ref().map(|l| PlyLayout {
-            ply_thickness: l.ply_mm * mm,
-            sublaminate: l.sublaminate.clone(),
-            base_below: l.base_below.clone(),
-        });
-        EmbeddedParams {
-            kind,
-            a: a * mm,
-            b: b * mm,
-            h: h * mm,
-            base: base * mm,
-            w: w * mm,
-            slices: c.slices.unwrap_or(d.slices),
-            radial_inside: c
-                .inside
-                .unwrap_or_else(|| EmbeddedParams::radial_inside_for(a, b)),
-            radial_outside: c.outside.unwrap_or(d.radial_outside),
-            front_grading: c.front_grading.unwrap_or(d.front_grading),
-            sub_layers: c.sub_layers.unwrap_or(d.sub_layers),
-            base_layers: c.base_layers.unwrap_or(d.base_layers),
-            map: match shape {
-                Shape::Ellipse => match c.elliptic_map {
-                    Some(MapName::Conformal) => EllipticMap::Conformal,
-                    Some(MapName::Modified) | None => EllipticMap::modified_for(a * mm, b * mm),
-                },
-                Shape::Rectangle => EllipticMap::Rectangle,
-            },
-            plies,
-            ..d
-        }
-    };
-    let (mut mesh, front, model_kind, x_end, h, a_min) = match &scene.geometry {
-        Geometry::Embedded {
-            shape,
-            a_mm,
-            b_mm,
-            h_mm,
-            base_mm,
-            w_mm,
-        }
-        | Geometry::Edge {
-            shape,
-            a_mm,
-            b_mm,
-            h_mm,
-            base_mm,
-            w_mm,
-        } => {
-            let p = embedded(*shape, *a_mm, *b_mm, *h_mm, *base_mm, *w_mm);
-            let (m, f) = embedded_delamination_with_front(&p)?;
-            let k = if matches!(scene.geometry, Geometry::Edge { .. }) {
-                ModelKind::Edge
-            } else {
-                ModelKind::Embedded
-            };
-            (m, f, k, p.w, p.h, p.a.min(p.b))
-        }
-        Geometry::Plate {
-            a_mm,
-            h_mm,
-            base_mm,
-            w_mm,
-        } => {
-            let p = embedded(Shape::Ellipse, *a_mm, *a_mm, *h_mm, *base_mm, *w_mm);
-            let (m, f) = embedded_delamination_with_front(&p)?;
-            (m, f, ModelKind::Plate, p.w, p.h, p.a)
-        }
-        Geometry::ThroughWidth {
-            a_mm,
-            length_mm,
-            width_mm,
-            h_mm,
-            base_mm,
-        } => {
-            if scene.layup.is_some() {
-                return Err(Error::Scene(
-                    "layup: ply-level layers are available for embedded, edge and plate \
-                     models only"
-                        .into(),
-                ));
-            }
-            let d = ThroughWidthParams::example();
-            let p = ThroughWidthParams {
-                kind,
-                a: a_mm * mm,
-                length: length_mm * mm,
-                width: width_mm * mm,
-                h: h_mm * mm,
-                base: base_mm * mm,
-                inside: c.inside.unwrap_or(d.inside),
-                outside: c.outside.unwrap_or(d.outside),
-                front_grading: c.front_grading.unwrap_or(d.front_grading),
-                across: c.across.unwrap_or(d.across),
-                sub_layers: c.sub_layers.unwrap_or(d.sub_layers),
-                base_layers: c.base_layers.unwrap_or(d.base_layers),
-                base_grading: d.base_grading,
-            };
-            let (m, f) = through_width_delamination(&p)?;
-            (m, f, ModelKind::ThroughWidth, p.length, p.h, p.a)
-        }
-    };
-    let amp = scene.loads.imperfection_mm * mm;
-    if amp != 0.0 {
-        let base = scene.geometry.base_mm() * mm;
-        let shape = match &scene.geometry {
-            Geometry::Embedded { a_mm, b_mm, .. } | Geometry::Edge { a_mm, b_mm, .. } => {
-                Imperfection::Cosine {
-                    a: a_mm * mm,
-                    b: b_mm * mm,
-                }
-            }
-            Geometry::ThroughWidth { a_mm, .. } => Imperfection::Strip { a: a_mm * mm },
-            Geometry::Plate { a_mm, .. } => Imperfection::Cosine {
-                a: a_mm * mm,
-                b: a_mm * mm,
-            },
-        };
-        mesh.apply_imperfection(base, CRACK_LOWER, shape, amp)?;
-    }
-    Ok(Model {
-        mesh,
-        front,
-        materials,
-        kind: model_kind,
-        x_end,
-        h,
-        a_min,
-    })
-}
 
 /// The load factors of the levels: strains (or loads) divided by the largest in magnitude,
 /// and that reference value.

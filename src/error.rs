@@ -108,7 +108,66 @@ pub enum Error {
         /// The largest crack-face separation w(upper) − w(lower), mm (negative: overlap).
         separation_mm: f64,
     },
-    /// A numerical step produced no answer (named).
-    #[error("{0}")]
-    Numerical(String),
+    /// A step of a deck did not finish: which step (1-based), its `*STEP` line, and why.
+    #[error("step {step} (line {line}): {reason}")]
+    Step {
+        /// 1-based step number.
+        step: usize,
+        /// The `*STEP` line in the deck.
+        line: usize,
+        /// Why: the increment, step time and what did not converge.
+        reason: String,
+    },
+    /// A DOF given two `*CLOAD`s in one step with different amplitudes (CalculiX refuses it
+    /// too).
+    #[error(
+        "line {line}, *CLOAD: node {node} DOF {dof} is loaded twice in the step with different \
+         amplitudes (CalculiX refuses this too)"
+    )]
+    LoadedTwice {
+        /// The second `*CLOAD` line.
+        line: usize,
+        /// The node's number in the deck.
+        node: usize,
+        /// The DOF, 1–3.
+        dof: u8,
+    },
+    /// An initial increment (`solve --initial-increment`) outside (0, 1].
+    #[error("initial increment {value}: expected a fraction of the step period in (0, 1]")]
+    InitialIncrement {
+        /// The value given.
+        value: f64,
+    },
+    /// Results that could not be written as JSON.
+    #[error("writing JSON: {0}")]
+    Json(#[from] serde_json::Error),
+    /// The output writer's state was left inconsistent by a panic in another thread.
+    #[error("the output writer's lock was poisoned by a panic in another thread")]
+    OutputLock,
+    /// A plot that could not be drawn or written.
+    #[error("plotting {}: {reason}", path.display())]
+    Plot {
+        /// The SVG file.
+        path: std::path::PathBuf,
+        /// What the plotting library said.
+        reason: String,
+    },
+    /// The SIGINT/SIGTERM handlers could not be installed.
+    #[error("installing the signal handler: {0}")]
+    Signal(std::io::Error),
+    /// A run that stopped part-way: why, and where what converged before was kept.
+    #[error(
+        "{source}\n(the {kept} converged before are in {}, {summary} \"complete\": false)",
+        folder.display()
+    )]
+    Partial {
+        /// Why it stopped.
+        source: Box<Error>,
+        /// The output folder.
+        folder: std::path::PathBuf,
+        /// `levels` (a scene) or `increments` (a deck).
+        kept: &'static str,
+        /// The file that says the run is incomplete: `results.json` or `summary.json`.
+        summary: &'static str,
+    },
 }

@@ -1,13 +1,17 @@
 //! The finite element model of a scene: its mesh, front, materials and boundary-condition
-//! family, as [`crate::analysis::build_model`] makes it and the results keep it for output;
+//! family, as [`build_model`] makes it and the results keep it for output;
 //! and the model's supports and load (thesis §3.2), held here once for both the analysis's
 //! constraints ([`crate::analysis::constraints`]) and the exported deck's `*BOUNDARY` and
 //! `*CLOAD` lines ([`crate::export`]).
 
 use crate::Error;
+use crate::scene::{Geometry, MapName, Scene, Shape};
 use nonlin3d_laminate::Stiffness;
-use nonlin3d_mesh::names::{CENTER_TOP, X0, X1, Y_HOLD, Y0, Y1, Z0};
-use nonlin3d_mesh::{Front, Mesh};
+use nonlin3d_mesh::names::{CENTER_TOP, CRACK_LOWER, X0, X1, Y_HOLD, Y0, Y1, Z0};
+use nonlin3d_mesh::{
+    EllipticMap, EmbeddedParams, Front, Imperfection, Mesh, PlyLayout, ThroughWidthParams,
+    embedded_delamination_with_front, through_width_delamination,
+};
 
 /// Which boundary conditions a model gets (thesis §3.2).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -41,6 +45,193 @@ pub struct Model {
     /// min(a, b) embedded and edge, the radius for the plate, the half-length a through the
     /// width.
     pub a_min: f64,
+}
+
+/// Builds the mesh and front of a scene (with its imperfection, if any): the embedded
+/// generator for embedded, edge and plate models (thesis §3.1), the strip for through-width.
+pub fn build_model(scene: &Scene) -> Result<Model, Error> {
+    scene.validate()?;
+    // Nodes and cells estimated from the scene before anything is allocated.
+    crate::budget::check_mesh(scene, &crate::budget::limit())?;
+    let materials = scene.stiffnesses()?;
+    let (mut mesh, front, model_kind, x_end, h, a_min) = match &scene.geometry {
+        Geometry::Embedded {
+            shape,
+            a_mm,
+            b_mm,
+            h_mm,
+            base_mm,
+            w_mm,
+        }
+        | Geometry::Edge {
+            shape,
+            a_mm,
+            b_mm,
+            h_mm,
+            base_mm,
+            w_mm,
+        } => {
+            let p = embedded_params(scene, *shape, *a_mm, *b_mm, *h_mm, *base_mm, *w_mm);
+            let (m, f) = embedded_delamination_with_front(&p)?;
+            let k = if matches!(scene.geometry, Geometry::Edge { .. }) {
+                ModelKind::Edge
+            } else {
+                ModelKind::Embedded
+            };
+            (m, f, k, p.w, p.h, p.a.min(p.b))
+        }
+        Geometry::Plate {
+            a_mm,
+            h_mm,
+            base_mm,
+            w_mm,
+        } => {
+            let p = embedded_params(scene, Shape::Ellipse, *a_mm, *a_mm, *h_mm, *base_mm, *w_mm);
+            let (m, f) = embedded_delamination_with_front(&p)?;
+            (m, f, ModelKind::Plate, p.w, p.h, p.a)
+        }
+        Geometry::ThroughWidth {
+            a_mm,
+            length_mm,
+            width_mm,
+            h_mm,
+            base_mm,
+        } => {
+            let p = through_width_params(scene, *a_mm, *length_mm, *width_mm, *h_mm, *base_mm)?;
+            let (m, f) = through_width_delamination(&p)?;
+            (m, f, ModelKind::ThroughWidth, p.length, p.h, p.a)
+        }
+    };
+    if let Some((shape, amp)) = imperfection(scene) {
+        let base = scene.geometry.base_mm() * MM;
+        mesh.apply_imperfection(base, CRACK_LOWER, shape, amp)?;
+    }
+    Ok(Model {
+        mesh,
+        front,
+        materials,
+        kind: model_kind,
+        x_end,
+        h,
+        a_min,
+    })
+}
+
+/// A millimetre in metres (scenes are in mm, models in SI).
+const MM: f64 = 1e-3;
+
+/// The scene's element kind (Hex20 unless it names one).
+fn element_kind(scene: &Scene) -> nonlin3d_element::ElementKind {
+    scene
+        .mesh
+        .element
+        .map_or(nonlin3d_element::ElementKind::Hex20, |e| e.kind())
+}
+
+/// The embedded generator's parameters for a planform `shape` with semi-axes a, b, the
+/// sublaminate h on the base H, in a quarter model of size W (all in mm): the scene's mesh
+/// controls over the thesis's reference mesh; eq. 3.1.2's modified map for an ellipse unless
+/// the scene asks for the conformal map of eq. 3.1.1.
+fn embedded_params(
+    scene: &Scene,
+    shape: Shape,
+    a: f64,
+    b: f64,
+    h: f64,
+    base: f64,
+    w: f64,
+) -> EmbeddedParams {
+    let (c, mm) = (&scene.mesh, MM);
+    let d = EmbeddedParams::thesis_reference();
+    let plies = scene.layup.as_ref().map(|l| PlyLayout {
+        ply_thickness: l.ply_mm * mm,
+        sublaminate: l.sublaminate.clone(),
+        base_below: l.base_below.clone(),
+    });
+    EmbeddedParams {
+        kind: element_kind(scene),
+        a: a * mm,
+        b: b * mm,
+        h: h * mm,
+        base: base * mm,
+        w: w * mm,
+        slices: c.slices.unwrap_or(d.slices),
+        radial_inside: c
+            .inside
+            .unwrap_or_else(|| EmbeddedParams::radial_inside_for(a, b)),
+        radial_outside: c.outside.unwrap_or(d.radial_outside),
+        front_grading: c.front_grading.unwrap_or(d.front_grading),
+        sub_layers: c.sub_layers.unwrap_or(d.sub_layers),
+        base_layers: c.base_layers.unwrap_or(d.base_layers),
+        map: match shape {
+            Shape::Ellipse => match c.elliptic_map {
+                Some(MapName::Conformal) => EllipticMap::Conformal,
+                Some(MapName::Modified) | None => EllipticMap::modified_for(a * mm, b * mm),
+            },
+            Shape::Rectangle => EllipticMap::Rectangle,
+        },
+        plies,
+        ..d
+    }
+}
+
+/// The through-width generator's parameters for a delamination of half-length a in a strip of
+/// length L and width W, the sublaminate h on the base H (all in mm): the scene's mesh
+/// controls over the generator's example mesh. No ply-level layers (refused, naming the field).
+fn through_width_params(
+    scene: &Scene,
+    a_mm: f64,
+    length_mm: f64,
+    width_mm: f64,
+    h_mm: f64,
+    base_mm: f64,
+) -> Result<ThroughWidthParams, Error> {
+    if scene.layup.is_some() {
+        return Err(Error::Scene(
+            "layup: ply-level layers are available for embedded, edge and plate models only".into(),
+        ));
+    }
+    let (c, mm) = (&scene.mesh, MM);
+    let d = ThroughWidthParams::example();
+    Ok(ThroughWidthParams {
+        kind: element_kind(scene),
+        a: a_mm * mm,
+        length: length_mm * mm,
+        width: width_mm * mm,
+        h: h_mm * mm,
+        base: base_mm * mm,
+        inside: c.inside.unwrap_or(d.inside),
+        outside: c.outside.unwrap_or(d.outside),
+        front_grading: c.front_grading.unwrap_or(d.front_grading),
+        across: c.across.unwrap_or(d.across),
+        sub_layers: c.sub_layers.unwrap_or(d.sub_layers),
+        base_layers: c.base_layers.unwrap_or(d.base_layers),
+        base_grading: d.base_grading,
+    })
+}
+
+/// The scene's initial imperfection of the crack's lower face, if any: its shape over the
+/// delamination and its amplitude, m.
+fn imperfection(scene: &Scene) -> Option<(Imperfection, f64)> {
+    let amp = scene.loads.imperfection_mm * MM;
+    if amp == 0.0 {
+        return None;
+    }
+    let mm = MM;
+    let shape = match &scene.geometry {
+        Geometry::Embedded { a_mm, b_mm, .. } | Geometry::Edge { a_mm, b_mm, .. } => {
+            Imperfection::Cosine {
+                a: a_mm * mm,
+                b: b_mm * mm,
+            }
+        }
+        Geometry::ThroughWidth { a_mm, .. } => Imperfection::Strip { a: a_mm * mm },
+        Geometry::Plate { a_mm, .. } => Imperfection::Cosine {
+            a: a_mm * mm,
+            b: a_mm * mm,
+        },
+    };
+    Some((shape, amp))
 }
 
 /// A displacement component of a node.
