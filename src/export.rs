@@ -3,8 +3,10 @@
 //! CalculiX can run the analysis unchanged (§3.2 protocol as deck steps).
 
 use crate::Error;
-use crate::analysis::{Model, build_model, load_factors, perturbation_force, perturbation_loads};
-use crate::model::{Nodes, Support, Value};
+use crate::analysis::load_factors;
+use crate::model::{
+    Model, Nodes, Support, Value, build_model, perturbation_force, perturbation_loads,
+};
 use crate::scene::Scene;
 use nonlin3d_mesh::inp::{
     InpBoundary, InpCload, InpDeck, InpElastic, InpMaterial, InpStep, inp_string,

@@ -1,8 +1,8 @@
 //! The finite element model of a scene: its mesh, front, materials and boundary-condition
 //! family, as [`build_model`] makes it and the results keep it for output;
-//! and the model's supports and load (thesis §3.2), held here once for both the analysis's
-//! constraints ([`crate::analysis::constraints`]) and the exported deck's `*BOUNDARY` and
-//! `*CLOAD` lines ([`crate::export`]).
+//! and the model's supports, load and perturbation force (thesis §3.2), held here once for
+//! both the analysis's constraints ([`crate::analysis::constraints`]) and the exported deck's
+//! `*BOUNDARY` and `*CLOAD` lines ([`crate::export`]).
 
 use crate::error::Error;
 use crate::scene::{Geometry, MapName, Scene, Shape};
@@ -115,57 +115,6 @@ pub fn build_model(scene: &Scene) -> Result<Model, Error> {
         h,
         a_min,
     })
-}
-
-/// The perturbation force on the model (N): the scene's, or one that deflects the sublaminate,
-/// clamped at the front, by w = h/4 in the linear range.
-///
-/// - Embedded, edge: the clamped circular plate under a central load, eq. 4.1.1 inverted,
-///   P = (h/4)·E·h³/(0.217·a²) with E = 1/S11 of the sublaminate material and a the smaller
-///   semi-axis; the quarter model carries P/4.
-/// - Through-width: the clamped–clamped beam of length ℓ = 2a under a central load,
-///   w = P·ℓ³/(192·E·I), I = W·h³/12 over the width W, E = 1/(S11 − S12²/S22) the plane-strain
-///   modulus (ε_y = 0, σ_z = 0); the half model (x ≥ 0) carries P/2, so
-///   P/2 = 96·E·I·(h/4)/ℓ³ = 2·E·W·h⁴/ℓ³.
-pub fn perturbation_force(scene: &Scene, model: &Model) -> Result<f64, Error> {
-    if let Some(p) = scene.loads.perturbation_n {
-        return Ok(p);
-    }
-    let index = model
-        .materials
-        .len()
-        .checked_sub(1)
-        .ok_or(Error::NoMaterial)?;
-    let s = model.materials[index]
-        .matrix()
-        .try_inverse()
-        .ok_or(Error::SingularMaterial { index })?;
-    let h = model.h;
-    if model.kind == ModelKind::ThroughWidth {
-        let e = 1.0 / (s[(0, 0)] - s[(0, 1)] * s[(0, 1)] / s[(1, 1)]);
-        let (lo, hi) = model
-            .mesh
-            .nodes
-            .iter()
-            .fold((f64::MAX, f64::MIN), |(lo, hi), x| {
-                (lo.min(x[1]), hi.max(x[1]))
-            });
-        let (width, span) = (hi - lo, 2.0 * model.a_min);
-        return Ok(2.0 * e * width * h.powi(4) / span.powi(3));
-    }
-    let e = 1.0 / s[(0, 0)];
-    Ok(0.25 * (0.25 * h) * e * h.powi(3) / (0.217 * model.a_min * model.a_min))
-}
-
-/// The perturbation as nodal forces: `force` split equally over the `center_top` nodes, in +z
-/// (out of the base). Empty for a zero force, and then the set is not needed.
-pub fn perturbation_loads(model: &Model, force: f64) -> Result<Vec<(usize, f64)>, Error> {
-    if force == 0.0 {
-        return Ok(Vec::new());
-    }
-    let nodes = model.node_set(CENTER_TOP)?;
-    let share = force / nodes.len() as f64;
-    Ok(nodes.iter().map(|&n| (3 * n + 2, share)).collect())
 }
 
 /// A millimetre in metres (scenes are in mm, models in SI).
@@ -435,4 +384,55 @@ impl Model {
                 what: "x = W, z = 0 to hold the edge model in y",
             })
     }
+}
+
+/// The perturbation force on the model (N): the scene's, or one that deflects the sublaminate,
+/// clamped at the front, by w = h/4 in the linear range.
+///
+/// - Embedded, edge: the clamped circular plate under a central load, eq. 4.1.1 inverted,
+///   P = (h/4)·E·h³/(0.217·a²) with E = 1/S11 of the sublaminate material and a the smaller
+///   semi-axis; the quarter model carries P/4.
+/// - Through-width: the clamped–clamped beam of length ℓ = 2a under a central load,
+///   w = P·ℓ³/(192·E·I), I = W·h³/12 over the width W, E = 1/(S11 − S12²/S22) the plane-strain
+///   modulus (ε_y = 0, σ_z = 0); the half model (x ≥ 0) carries P/2, so
+///   P/2 = 96·E·I·(h/4)/ℓ³ = 2·E·W·h⁴/ℓ³.
+pub fn perturbation_force(scene: &Scene, model: &Model) -> Result<f64, Error> {
+    if let Some(p) = scene.loads.perturbation_n {
+        return Ok(p);
+    }
+    let index = model
+        .materials
+        .len()
+        .checked_sub(1)
+        .ok_or(Error::NoMaterial)?;
+    let s = model.materials[index]
+        .matrix()
+        .try_inverse()
+        .ok_or(Error::SingularMaterial { index })?;
+    let h = model.h;
+    if model.kind == ModelKind::ThroughWidth {
+        let e = 1.0 / (s[(0, 0)] - s[(0, 1)] * s[(0, 1)] / s[(1, 1)]);
+        let (lo, hi) = model
+            .mesh
+            .nodes
+            .iter()
+            .fold((f64::MAX, f64::MIN), |(lo, hi), x| {
+                (lo.min(x[1]), hi.max(x[1]))
+            });
+        let (width, span) = (hi - lo, 2.0 * model.a_min);
+        return Ok(2.0 * e * width * h.powi(4) / span.powi(3));
+    }
+    let e = 1.0 / s[(0, 0)];
+    Ok(0.25 * (0.25 * h) * e * h.powi(3) / (0.217 * model.a_min * model.a_min))
+}
+
+/// The perturbation as nodal forces: `force` split equally over the `center_top` nodes, in +z
+/// (out of the base). Empty for a zero force, and then the set is not needed.
+pub fn perturbation_loads(model: &Model, force: f64) -> Result<Vec<(usize, f64)>, Error> {
+    if force == 0.0 {
+        return Ok(Vec::new());
+    }
+    let nodes = model.node_set(CENTER_TOP)?;
+    let share = force / nodes.len() as f64;
+    Ok(nodes.iter().map(|&n| (3 * n + 2, share)).collect())
 }
