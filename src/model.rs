@@ -436,3 +436,46 @@ pub fn perturbation_loads(model: &Model, force: f64) -> Result<Vec<(usize, f64)>
     let share = force / nodes.len() as f64;
     Ok(nodes.iter().map(|&n| (3 * n + 2, share)).collect())
 }
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)]
+mod tests {
+    use super::*;
+
+    fn edge() -> Model {
+        let text = include_str!("../examples/scenes/fig_5_5_1_edge_semicircle_15mm.toml");
+        build_model(&Scene::from_toml(text).unwrap()).unwrap()
+    }
+
+    /// The edge model's y = 0 is free: v is held on one node only, on x = W and z = 0 at the
+    /// largest y (the corner far from the delamination), and no support names `y0`.
+    #[test]
+    fn edge_model_holds_one_node_in_y() {
+        let model = edge();
+        let supports = model.supports().unwrap();
+        let in_y: Vec<&Support> = supports.iter().filter(|s| s.axis == Axis::Y).collect();
+        assert_eq!(in_y.len(), 1);
+        assert!(
+            matches!(in_y[0].nodes, Nodes::Node { set: Y_HOLD, .. }),
+            "{:?}",
+            in_y[0]
+        );
+        let node = model.nodes_of(&in_y[0].nodes).unwrap()[0];
+        let x = &model.mesh.nodes;
+        let y_max = x.iter().map(|p| p[1]).fold(f64::MIN, f64::max);
+        assert_eq!((x[node][0], x[node][2]), (model.x_end, 0.0));
+        // On the box side y = W: the generator's coordinates there come from W through a few
+        // operations (round-off of a few ulps, ~1e-17 m at W = 50 mm), so 1e-12·W bounds it.
+        assert!((x[node][1] - y_max).abs() <= 1e-12 * y_max, "{:?}", x[node]);
+        assert!(supports.iter().all(|s| s.nodes != Nodes::Set(Y0)));
+    }
+
+    /// A model without the set a support needs says which set, in words.
+    #[test]
+    fn a_missing_set_is_named() {
+        let mut model = edge();
+        model.mesh.node_sets.remove(X1);
+        let e = model.supports().unwrap_err().to_string();
+        assert_eq!(e, "the model has no node set 'x1'");
+    }
+}
