@@ -4,163 +4,18 @@
 //! Each stage is callable alone: [`build_model`], [`build_problem`], [`solve_level`],
 //! [`front_table`]; [`run`] (or [`Analysis::run`]) strings them together and times them.
 
-pub use crate::model::{Model, ModelKind};
-use crate::scene::{ForceKinematics, Geometry, MapName, NewtonName, Scene, Shape, SolverName};
+use crate::model::Value;
+pub use crate::model::{Model, ModelKind, build_model, perturbation_force, perturbation_loads};
+use crate::scene::{ForceKinematics, Geometry, NewtonName, Scene, SolverName};
 use crate::{Error, results::*};
 use nonlin3d_assembly::{Assembler, Constraints};
 use nonlin3d_element::Kinematics;
 use nonlin3d_laminate::ShearCoupling;
-use nonlin3d_mesh::{
-    EllipticMap, EmbeddedParams, Imperfection, Mesh, PlyLayout, ThroughWidthParams,
-    embedded_delamination_with_front, through_width_delamination,
-};
+use nonlin3d_mesh::names::{CENTER_TOP, CRACK_LOWER, CRACK_UPPER};
 use nonlin3d_newton::{IncrementReport, NewtonSettings, PathSolver, Stepping, StructuralProblem};
 use nonlin3d_solver::SolverKind;
 use nonlin3d_vcct::{FrontRelease, cells_above, release_rates};
 use std::time::Instant;
-
-/// Builds the mesh and front of a scene (with its imperfection, if any).
-pub fn build_model(scene: &Scene) -> Result<Model, Error> {
-    scene.validate()?;
-    // Nodes and cells estimated from the scene before anything is allocated.
-    crate::budget::check_mesh(scene, &crate::budget::limit())?;
-    let mm = 1e-3;
-    let c = &scene.mesh;
-    let kind = c
-        .element
-        .map_or(nonlin3d_element::ElementKind::Hex20, |e| e.kind());
-    let materials = scene.stiffnesses()?;
-    let embedded = |shape: Shape, a: f64, b: f64, h: f64, base: f64, w: f64| {
-        let d = EmbeddedParams::thesis_reference();
-        let plies = scene.layup.as_ref().map(|l| PlyLayout {
-            ply_thickness: l.ply_mm * mm,
-            sublaminate: l.sublaminate.clone(),
-            base_below: l.base_below.clone(),
-        });
-        EmbeddedParams {
-            kind,
-            a: a * mm,
-            b: b * mm,
-            h: h * mm,
-            base: base * mm,
-            w: w * mm,
-            slices: c.slices.unwrap_or(d.slices),
-            radial_inside: c
-                .inside
-                .unwrap_or_else(|| EmbeddedParams::radial_inside_for(a, b)),
-            radial_outside: c.outside.unwrap_or(d.radial_outside),
-            front_grading: c.front_grading.unwrap_or(d.front_grading),
-            sub_layers: c.sub_layers.unwrap_or(d.sub_layers),
-            base_layers: c.base_layers.unwrap_or(d.base_layers),
-            map: match shape {
-                Shape::Ellipse => match c.elliptic_map {
-                    Some(MapName::Conformal) => EllipticMap::Conformal,
-                    Some(MapName::Modified) | None => EllipticMap::modified_for(a * mm, b * mm),
-                },
-                Shape::Rectangle => EllipticMap::Rectangle,
-            },
-            plies,
-            ..d
-        }
-    };
-    let (mut mesh, front, model_kind, x_end, h, a_min) = match &scene.geometry {
-        Geometry::Embedded {
-            shape,
-            a_mm,
-            b_mm,
-            h_mm,
-            base_mm,
-            w_mm,
-        }
-        | Geometry::Edge {
-            shape,
-            a_mm,
-            b_mm,
-            h_mm,
-            base_mm,
-            w_mm,
-        } => {
-            let p = embedded(*shape, *a_mm, *b_mm, *h_mm, *base_mm, *w_mm);
-            let (m, f) = embedded_delamination_with_front(&p)?;
-            let k = if matches!(scene.geometry, Geometry::Edge { .. }) {
-                ModelKind::Edge
-            } else {
-                ModelKind::Embedded
-            };
-            (m, f, k, p.w, p.h, p.a.min(p.b))
-        }
-        Geometry::Plate {
-            a_mm,
-            h_mm,
-            base_mm,
-            w_mm,
-        } => {
-            let p = embedded(Shape::Ellipse, *a_mm, *a_mm, *h_mm, *base_mm, *w_mm);
-            let (m, f) = embedded_delamination_with_front(&p)?;
-            (m, f, ModelKind::Plate, p.w, p.h, p.a)
-        }
-        Geometry::ThroughWidth {
-            a_mm,
-            length_mm,
-            width_mm,
-            h_mm,
-            base_mm,
-        } => {
-            if scene.layup.is_some() {
-                return Err(Error::Scene(
-                    "layup: ply-level layers are available for embedded, edge and plate \
-                     models only"
-                        .into(),
-                ));
-            }
-            let d = ThroughWidthParams::example();
-            let p = ThroughWidthParams {
-                kind,
-                a: a_mm * mm,
-                length: length_mm * mm,
-                width: width_mm * mm,
-                h: h_mm * mm,
-                base: base_mm * mm,
-                inside: c.inside.unwrap_or(d.inside),
-                outside: c.outside.unwrap_or(d.outside),
-                front_grading: c.front_grading.unwrap_or(d.front_grading),
-                across: c.across.unwrap_or(d.across),
-                sub_layers: c.sub_layers.unwrap_or(d.sub_layers),
-                base_layers: c.base_layers.unwrap_or(d.base_layers),
-                base_grading: d.base_grading,
-            };
-            let (m, f) = through_width_delamination(&p)?;
-            (m, f, ModelKind::ThroughWidth, p.length, p.h, p.a)
-        }
-    };
-    let amp = scene.loads.imperfection_mm * mm;
-    if amp != 0.0 {
-        let base = scene.geometry.base_mm() * mm;
-        let shape = match &scene.geometry {
-            Geometry::Embedded { a_mm, b_mm, .. } | Geometry::Edge { a_mm, b_mm, .. } => {
-                Imperfection::Cosine {
-                    a: a_mm * mm,
-                    b: b_mm * mm,
-                }
-            }
-            Geometry::ThroughWidth { a_mm, .. } => Imperfection::Strip { a: a_mm * mm },
-            Geometry::Plate { a_mm, .. } => Imperfection::Cosine {
-                a: a_mm * mm,
-                b: a_mm * mm,
-            },
-        };
-        mesh.apply_imperfection(base, "crack_lower", shape, amp)?;
-    }
-    Ok(Model {
-        mesh,
-        front,
-        materials,
-        kind: model_kind,
-        x_end,
-        h,
-        a_min,
-    })
-}
 
 /// The load factors of the levels: strains (or loads) divided by the largest in magnitude,
 /// and that reference value.
@@ -178,15 +33,36 @@ pub fn load_factors(scene: &Scene) -> (Vec<f64>, f64) {
     (values.iter().map(|v| v / reference).collect(), reference)
 }
 
-fn node_set<'m>(mesh: &'m Mesh, name: &str) -> Result<&'m [usize], Error> {
-    mesh.node_sets
-        .get(name)
-        .map(Vec::as_slice)
-        .ok_or_else(|| Error::Numerical(format!("the model has no node set '{name}'")))
+/// The constraints and load of a model (§3.2) from its [`Model::supports`] and
+/// [`Model::central_load`], at load factor λ = 1: held components 0, the end displacement
+/// u = x_end·ε_ref (ε_ref the scene's largest strain), the plate's load P_ref/4 split over the
+/// `center_top` nodes; `reference` is ε_ref (or P_ref, N), as [`load_factors`] gives it.
+pub fn constraints(model: &Model, reference: f64) -> Result<Constraints, Error> {
+    let mut c = Constraints::new(3 * model.mesh.nodes.len());
+    for s in model.supports()? {
+        let nodes = model.nodes_of(&s.nodes)?;
+        match s.value {
+            Value::Zero => c.fix_nodes(nodes, s.axis.offset())?,
+            Value::Strain { length } => {
+                for &n in nodes {
+                    c.prescribe(3 * n + s.axis.offset(), length * reference)?;
+                }
+            }
+        }
+    }
+    if let Some(load) = model.central_load() {
+        let nodes = model.node_set(load.set)?;
+        let share = 1.0 / nodes.len() as f64;
+        for &n in nodes {
+            c.add_load(3 * n + 2, load.fraction * reference * share)?;
+        }
+    }
+    Ok(c)
 }
 
 /// The assembler and constraints of a model (§3.2): supports, the prescribed end
-/// displacement u = x_end·ε_ref·λ (or the plate's load P_ref·λ/4 on the quarter model).
+/// displacement u = x_end·ε_ref·λ (or the plate's load P_ref·λ/4 on the quarter model), as
+/// [`constraints`] gives them.
 pub fn build_problem(scene: &Scene, model: &Model) -> Result<StructuralProblem, Error> {
     let rule = scene.analysis.integration.rule();
     let assembler = Assembler::new(
@@ -197,88 +73,9 @@ pub fn build_problem(scene: &Scene, model: &Model) -> Result<StructuralProblem, 
         rule,
         Kinematics::Nonlinear,
     )?;
-    let mut c = Constraints::new(assembler.n());
-    let mesh = &model.mesh;
-    c.fix_nodes(node_set(mesh, "x0")?, 0)?;
-    c.fix_nodes(node_set(mesh, "z0")?, 2)?;
-    match model.kind {
-        ModelKind::Edge => {
-            // y = 0 is free; one node far from the delamination holds the rigid motion in y.
-            let x1 = node_set(mesh, "x1")?;
-            let corner = x1
-                .iter()
-                .copied()
-                .filter(|&n| mesh.nodes[n][2] == 0.0)
-                .max_by(|&a, &b| mesh.nodes[a][1].total_cmp(&mesh.nodes[b][1]))
-                .ok_or_else(|| Error::Numerical("no node on x = W, z = 0".into()))?;
-            c.fix_nodes(&[corner], 1)?;
-        }
-        ModelKind::ThroughWidth => {
-            c.fix_nodes(node_set(mesh, "y0")?, 1)?;
-            c.fix_nodes(node_set(mesh, "y1")?, 1)?;
-        }
-        ModelKind::Embedded | ModelKind::Plate => c.fix_nodes(node_set(mesh, "y0")?, 1)?,
-    }
     let (_, reference) = load_factors(scene);
-    if model.kind == ModelKind::Plate {
-        let top = node_set(mesh, "center_top")?[0];
-        c.add_load(3 * top + 2, 0.25 * reference)?;
-    } else {
-        for &n in node_set(mesh, "x1")? {
-            c.prescribe(3 * n, model.x_end * reference)?;
-        }
-    }
+    let c = constraints(model, reference)?;
     Ok(StructuralProblem::new(assembler, c)?)
-}
-
-/// The perturbation force on the model (N): the scene's, or one that deflects the sublaminate,
-/// clamped at the front, by w = h/4 in the linear range.
-///
-/// - Embedded, edge: the clamped circular plate under a central load, eq. 4.1.1 inverted,
-///   P = (h/4)·E·h³/(0.217·a²) with E = 1/S11 of the sublaminate material and a the smaller
-///   semi-axis; the quarter model carries P/4.
-/// - Through-width: the clamped–clamped beam of length ℓ = 2a under a central load,
-///   w = P·ℓ³/(192·E·I), I = W·h³/12 over the width W, E = 1/(S11 − S12²/S22) the plane-strain
-///   modulus (ε_y = 0, σ_z = 0); the half model (x ≥ 0) carries P/2, so
-///   P/2 = 96·E·I·(h/4)/ℓ³ = 2·E·W·h⁴/ℓ³.
-pub fn perturbation_force(scene: &Scene, model: &Model) -> Result<f64, Error> {
-    if let Some(p) = scene.loads.perturbation_n {
-        return Ok(p);
-    }
-    let c = model
-        .materials
-        .last()
-        .map(|s| s.matrix())
-        .ok_or_else(|| Error::Numerical("no material".into()))?;
-    let s = c
-        .try_inverse()
-        .ok_or_else(|| Error::Numerical("singular material stiffness".into()))?;
-    let h = model.h;
-    if model.kind == ModelKind::ThroughWidth {
-        let e = 1.0 / (s[(0, 0)] - s[(0, 1)] * s[(0, 1)] / s[(1, 1)]);
-        let (lo, hi) = model
-            .mesh
-            .nodes
-            .iter()
-            .fold((f64::MAX, f64::MIN), |(lo, hi), x| {
-                (lo.min(x[1]), hi.max(x[1]))
-            });
-        let (width, span) = (hi - lo, 2.0 * model.a_min);
-        return Ok(2.0 * e * width * h.powi(4) / span.powi(3));
-    }
-    let e = 1.0 / s[(0, 0)];
-    Ok(0.25 * (0.25 * h) * e * h.powi(3) / (0.217 * model.a_min * model.a_min))
-}
-
-/// The perturbation as nodal forces: `force` split equally over the `center_top` nodes, in +z
-/// (out of the base). Empty for a zero force, and then the set is not needed.
-pub fn perturbation_loads(model: &Model, force: f64) -> Result<Vec<(usize, f64)>, Error> {
-    if force == 0.0 {
-        return Ok(Vec::new());
-    }
-    let nodes = node_set(&model.mesh, "center_top")?;
-    let share = force / nodes.len() as f64;
-    Ok(nodes.iter().map(|&n| (3 * n + 2, share)).collect())
 }
 
 /// Newton and stepping settings of a scene. Convergence: the relative residual criterion of
@@ -381,14 +178,14 @@ pub fn deflections(model: &Model, u: &[f64]) -> (f64, f64) {
     let mesh = &model.mesh;
     let centre = mesh
         .node_sets
-        .get("center_top")
+        .get(CENTER_TOP)
         .filter(|s| !s.is_empty())
         .map_or(0.0, |s| {
             s.iter().map(|&n| u[3 * n + 2]).sum::<f64>() / s.len() as f64
         });
     let (up, low) = (
-        mesh.node_sets.get("crack_upper"),
-        mesh.node_sets.get("crack_lower"),
+        mesh.node_sets.get(CRACK_UPPER),
+        mesh.node_sets.get(CRACK_LOWER),
     );
     let peak = match (up, low) {
         (Some(up), Some(low)) => up
@@ -427,6 +224,10 @@ pub enum Progress<'a> {
 /// Runs a scene end to end; `progress` is told after the model is built and after each level
 /// (to show progress, or to write each level's output as it converges: [`crate::output`]); an
 /// error it returns stops the run.
+///
+/// Stages: the budget check, [`build_model`], [`build_problem`], the sweep over the levels
+/// (each solved by [`solve_level`], its front by [`front_table`]), the scene's criterion on
+/// every front point and the critical strain, the [`Results`].
 pub fn run(
     scene: &Scene,
     progress: &mut dyn FnMut(Progress) -> Result<(), Error>,
@@ -439,6 +240,72 @@ pub fn run(
     let t1 = Instant::now();
     let mut problem = build_problem(scene, &model)?;
     let t_setup = t1.elapsed().as_secs_f64();
+    let dofs = problem.assembler().n();
+    progress(Progress::Built {
+        model: &model,
+        dofs,
+        levels: load_factors(scene).0.len(),
+    })?;
+    let mut sweep = sweep(scene, &model, &mut problem, dofs, progress)?;
+    let critical = criterion(scene, model.kind, &mut sweep.levels)?;
+    let mut results = Results {
+        title: scene.title.clone(),
+        complete: true,
+        stopped: None,
+        quantity: if model.kind == ModelKind::Plate {
+            "load_n"
+        } else {
+            "strain"
+        }
+        .into(),
+        model: ModelSummary {
+            nodes: model.mesh.nodes.len(),
+            cells: model.mesh.cells.len(),
+            dofs,
+            front_points: sweep.levels.first().map_or(0, |l| l.front.len()),
+            perturbation_n: (sweep.force != 0.0).then_some(sweep.force),
+            perturbed_at: sweep.perturbed_at,
+        },
+        levels: sweep.levels,
+        critical,
+        timings: Timings {
+            mesh_s: t_mesh,
+            setup_s: t_setup,
+            solve_s: sweep.solve_s,
+            vcct_s: sweep.vcct_s,
+            output_s: 0.0,
+        },
+        model_data: Some(model),
+        warnings: Vec::new(),
+    };
+    results.warnings = scene.warnings();
+    results.warnings.extend(results.stability_warnings());
+    Ok(results)
+}
+
+/// What the sweep over the levels gives [`run`].
+struct Sweep {
+    /// One record per level, in order.
+    levels: Vec<LevelResult>,
+    /// The perturbation force, N (0: none).
+    force: f64,
+    /// The level value at which the perturbation was applied, if it was.
+    perturbed_at: Option<f64>,
+    /// Seconds in the solves and in VCCT.
+    solve_s: f64,
+    vcct_s: f64,
+}
+
+/// The levels solved in order from the unloaded state, each from the previous converged
+/// state, with the perturbation offered until one level takes it (§3.2); `progress` is told
+/// after each level.
+fn sweep(
+    scene: &Scene,
+    model: &Model,
+    problem: &mut StructuralProblem,
+    dofs: usize,
+    progress: &mut dyn FnMut(Progress) -> Result<(), Error>,
+) -> Result<Sweep, Error> {
     let plate = model.kind == ModelKind::Plate;
     let (factors, reference) = load_factors(scene);
     // Levels are reported with the scene's own values (λ·reference may differ in the last bit).
@@ -447,105 +314,68 @@ pub fn run(
     } else {
         &scene.loads.strains
     };
-    progress(Progress::Built {
-        model: &model,
-        dofs: problem.assembler().n(),
-        levels: factors.len(),
-    })?;
     let (newton, stepping) = settings(scene);
     // The force is looked up (and its node set needed) only when one is wanted.
     let force = if plate {
         0.0
     } else {
-        perturbation_force(scene, &model)?
+        perturbation_force(scene, model)?
     };
-    let perturbation = perturbation_loads(&model, force)?;
-    let mut u = vec![0.0; problem.assembler().n()];
+    let perturbation = perturbation_loads(model, force)?;
+    let mut u = vec![0.0; dofs];
     // One solver for every level: analysed once; with BFGS each level starts from the
     // factorisation its predecessor's stability test left.
-    let mut session = PathSolver::new(&problem, newton.solver)?;
-    let mut levels = Vec::with_capacity(factors.len());
-    let (mut t_solve, mut t_vcct) = (0.0, 0.0);
+    let mut session = PathSolver::new(problem, newton.solver)?;
+    let mut out = Sweep {
+        levels: Vec::with_capacity(factors.len()),
+        force,
+        perturbed_at: None,
+        solve_s: 0.0,
+        vcct_s: 0.0,
+    };
     let mut from = 0.0;
-    let mut perturbed_at = None;
     for (k, (&lambda, &value)) in factors.iter().zip(values).enumerate() {
         let t = Instant::now();
-        let pert: &[(usize, f64)] = if perturbed_at.is_none() {
+        let pert: &[(usize, f64)] = if out.perturbed_at.is_none() {
             &perturbation
         } else {
             &[]
         };
-        let start = u.clone();
-        let level_error = |e: Error| {
-            Error::Numerical(format!(
-                "level {k} ({} {}): {e}",
-                if plate { "load" } else { "strain" },
-                value
-            ))
+        let level_error = |e: Error| Error::Level {
+            index: k,
+            quantity: if plate { "load" } else { "strain" },
+            value,
+            source: Box::new(e),
         };
-        let first = solve_level(
-            &mut problem,
+        let solved = solve_or_redo(
+            model,
+            problem,
             &mut u,
-            from,
-            lambda,
+            (from, lambda),
             pert,
-            &newton,
-            &stepping,
+            (&newton, &stepping),
             &mut session,
-        );
-        // BFGS's early directions come from an older tangent and can carry the sublaminate
-        // across to the branch buckled into the base (seen on the reference scene at −0.003);
-        // full Newton follows the outward branch, so the level is redone with it — also when
-        // BFGS does not converge at all.
-        let inward = |u: &[f64]| !plate && deflections(&model, u).1 < -0.01 * model.h;
-        let redo = newton.keep_tangent && first.as_ref().map_or(true, |_| inward(&u));
-        let (mut attempts, mut perturbed, mut pivots) = match first {
-            Err(_) if redo => (Vec::new(), false, None),
-            r => r.map_err(level_error)?,
-        };
-        let mut fallback = false;
-        if redo {
-            u = start;
-            let full = NewtonSettings {
-                solver: newton.solver,
-                force_tolerance: newton.force_tolerance,
-                ..NewtonSettings::default()
-            };
-            let (more, p, piv) = solve_level(
-                &mut problem,
-                &mut u,
-                from,
-                lambda,
-                pert,
-                &full,
-                &stepping,
-                &mut session,
-            )
-            .map_err(level_error)?;
-            attempts.extend(more);
-            (perturbed, pivots, fallback) = (p, piv, true);
+        )
+        .map_err(level_error)?;
+        if solved.perturbed {
+            out.perturbed_at = Some(value);
         }
-        if perturbed {
-            perturbed_at = Some(value);
-        }
-        t_solve += t.elapsed().as_secs_f64();
+        out.solve_s += t.elapsed().as_secs_f64();
         let t = Instant::now();
-        let front = front_table(scene, &model, &problem, &u)?;
-        t_vcct += t.elapsed().as_secs_f64();
-        let (centre, peak) = deflections(&model, &u);
+        let front = front_table(scene, model, problem, &u)?;
+        out.vcct_s += t.elapsed().as_secs_f64();
+        let (centre, peak) = deflections(model, &u);
         if !plate && peak < -0.01 * model.h {
-            return Err(Error::Numerical(format!(
-                "level {k} (strain {}): the sublaminate buckled into the base (largest crack-face \
-                 separation {:.4} mm); without contact this branch is not physical — raise \
-                 loads.perturbation_n or lower analysis.max_increment",
-                value,
-                peak * 1e3
-            )));
+            return Err(Error::BuckledIntoBase {
+                index: k,
+                strain: value,
+                separation_mm: peak * 1e3,
+            });
         }
-        let mut level = LevelResult::new(value, centre, peak, &attempts, &front, u.clone());
-        level.set_negative_pivots(pivots);
-        level.convergence.full_newton_fallback = fallback;
-        level.convergence.bifurcation = attempts.iter().find_map(|a| {
+        let mut level = LevelResult::new(value, centre, peak, &solved.attempts, &front, u.clone());
+        level.set_negative_pivots(solved.pivots);
+        level.convergence.full_newton_fallback = solved.fallback;
+        level.convergence.bifurcation = solved.attempts.iter().find_map(|a| {
             a.bifurcation.map(|b| Crossing {
                 from: b.from * reference,
                 to: a.lambda * reference,
@@ -558,60 +388,98 @@ pub fn run(
             value,
             result: &level,
         })?;
-        levels.push(level);
+        out.levels.push(level);
         from = lambda;
     }
-    if let Some(c) = &scene.criterion {
-        let criterion = c.criterion();
-        for l in &mut levels {
-            for row in &mut l.front {
-                // Not physical where the faces overlap (no contact): no index there.
-                row.failure_index = row.is_open().then(|| criterion.index(&row.release()));
-            }
+    Ok(out)
+}
+
+/// One level as [`solve_level`] left it.
+struct Solved {
+    /// Every increment tried.
+    attempts: Vec<IncrementReport>,
+    /// Whether the perturbation was applied.
+    perturbed: bool,
+    /// Negative pivots of the tangent at the converged state.
+    pivots: Option<usize>,
+    /// Whether full Newton redid the level after BFGS.
+    fallback: bool,
+}
+
+/// One level from `from` to `to` by [`solve_level`]; with a kept tangent (BFGS) redone by full
+/// Newton from the same start if BFGS fails or lands on the branch buckled into the base.
+fn solve_or_redo(
+    model: &Model,
+    problem: &mut StructuralProblem,
+    u: &mut Vec<f64>,
+    (from, lambda): (f64, f64),
+    pert: &[(usize, f64)],
+    (newton, stepping): (&NewtonSettings, &Stepping),
+    session: &mut PathSolver,
+) -> Result<Solved, Error> {
+    let plate = model.kind == ModelKind::Plate;
+    let start = u.clone();
+    let first = solve_level(problem, u, from, lambda, pert, newton, stepping, session);
+    // BFGS's early directions come from an older tangent and can carry the sublaminate
+    // across to the branch buckled into the base (seen on the reference scene at −0.003);
+    // full Newton follows the outward branch, so the level is redone with it — also when
+    // BFGS does not converge at all.
+    let inward = |u: &[f64]| !plate && deflections(model, u).1 < -0.01 * model.h;
+    let redo = newton.keep_tangent && first.as_ref().map_or(true, |_| inward(u));
+    let (mut attempts, mut perturbed, mut pivots) = match first {
+        Err(_) if redo => (Vec::new(), false, None),
+        r => r?,
+    };
+    if redo {
+        *u = start;
+        let full = NewtonSettings {
+            solver: newton.solver,
+            force_tolerance: newton.force_tolerance,
+            ..NewtonSettings::default()
+        };
+        let (more, p, piv) = solve_level(problem, u, from, lambda, pert, &full, stepping, session)?;
+        attempts.extend(more);
+        (perturbed, pivots) = (p, piv);
+    }
+    Ok(Solved {
+        attempts,
+        perturbed,
+        pivots,
+        fallback: redo,
+    })
+}
+
+/// The scene's mixed-mode criterion, if any, on every open front point of every level (no
+/// index where the faces overlap: not physical without contact), and the critical strain of
+/// the sweep (none for the plate).
+fn criterion(
+    scene: &Scene,
+    kind: ModelKind,
+    levels: &mut [LevelResult],
+) -> Result<Option<Critical>, Error> {
+    let Some(c) = &scene.criterion else {
+        return Ok(None);
+    };
+    let criterion = c.criterion();
+    for l in levels.iter_mut() {
+        for row in &mut l.front {
+            row.failure_index = row.is_open().then(|| criterion.index(&row.release()));
         }
     }
-    let critical = match &scene.criterion {
-        Some(c) if !plate => {
-            let sweep: Vec<(f64, Vec<FrontRelease>)> = levels
-                .iter()
-                .map(|l| (l.value, l.front.iter().map(FrontRow::release).collect()))
-                .collect();
-            nonlin3d_vcct::critical_strain(&c.criterion(), &sweep)?.map(|c| Critical {
-                strain: c.strain,
-                after: c.after,
-                s_mm: c.s * 1e3,
-            })
-        }
-        _ => None,
-    };
-    let mut results = Results {
-        title: scene.title.clone(),
-        complete: true,
-        stopped: None,
-        quantity: if plate { "load_n" } else { "strain" }.into(),
-        model: ModelSummary {
-            nodes: model.mesh.nodes.len(),
-            cells: model.mesh.cells.len(),
-            dofs: problem.assembler().n(),
-            front_points: levels.first().map_or(0, |l| l.front.len()),
-            perturbation_n: (force != 0.0).then_some(force),
-            perturbed_at,
-        },
-        levels,
-        critical,
-        timings: Timings {
-            mesh_s: t_mesh,
-            setup_s: t_setup,
-            solve_s: t_solve,
-            vcct_s: t_vcct,
-            output_s: 0.0,
-        },
-        model_data: Some(model),
-        warnings: Vec::new(),
-    };
-    results.warnings = scene.warnings();
-    results.warnings.extend(results.stability_warnings());
-    Ok(results)
+    if kind == ModelKind::Plate {
+        return Ok(None);
+    }
+    let sweep: Vec<(f64, Vec<FrontRelease>)> = levels
+        .iter()
+        .map(|l| (l.value, l.front.iter().map(FrontRow::release).collect()))
+        .collect();
+    Ok(
+        nonlin3d_vcct::critical_strain(&criterion, &sweep)?.map(|c| Critical {
+            strain: c.strain,
+            after: c.after,
+            s_mm: c.s * 1e3,
+        }),
+    )
 }
 
 /// A scene ready to run, stage by stage or all at once: `Analysis::new(scene)?.run()`.

@@ -71,6 +71,20 @@ pub fn quasi_isotropic() -> Result<Stiffness, Error> {
     )
 }
 
+/// An element kind and rule in words: "Hex20, 2×2×2 Gauss rule".
+fn case(kind: ElementKind, rule: IntegrationRule) -> String {
+    let kind = match kind {
+        ElementKind::Hex8 => "Hex8",
+        ElementKind::Hex20 => "Hex20",
+    };
+    let rule = match rule {
+        IntegrationRule::Gauss2 => "2×2×2 Gauss rule",
+        IntegrationRule::Gauss3 => "3×3×3 Gauss rule",
+        IntegrationRule::SelectiveReduced => "selective-reduced rule",
+    };
+    format!("{kind}, {rule}")
+}
+
 /// Runs the check for Hex20 (2×2×2, 3×3×3) and Hex8 (2×2×2, selective-reduced).
 pub fn run() -> Result<Vec<EigenRow>, Error> {
     let c = quasi_isotropic()?;
@@ -86,14 +100,17 @@ pub fn run() -> Result<Vec<EigenRow>, Error> {
         let x = distorted_element(kind);
         let n = kind.dofs();
         let k = linear_stiffness(&table, &x, &c)?;
-        let r = eigen_analysis(&k, n, ZERO_MODE_THRESHOLD)
-            .ok_or_else(|| Error::Numerical(format!("{kind:?} {rule:?}: stiffness not finite")))?;
+        let not_finite = |matrix: &str| Error::NotFinite {
+            what: format!("the {matrix} of the {} element", case(kind, rule)),
+        };
+        let r =
+            eigen_analysis(&k, n, ZERO_MODE_THRESHOLD).ok_or_else(|| not_finite("stiffness"))?;
         let max = r.eigenvalues.last().copied().unwrap_or(0.0).abs();
         let first_nonzero = r.eigenvalues.get(r.zero_modes).map_or(0.0, |l| l / max);
         let u: Vec<[f64; 3]> = x.iter().map(|p| [-0.01 * p[0], 0.0, 0.0]).collect();
         let kt = estif3d(&table, &x, &u, &c)?;
         let rt = eigen_analysis(&kt, n, ZERO_MODE_THRESHOLD)
-            .ok_or_else(|| Error::Numerical(format!("{kind:?} {rule:?}: tangent not finite")))?;
+            .ok_or_else(|| not_finite("tangent at ε = −1 %"))?;
         rows.push(EigenRow {
             kind,
             rule,

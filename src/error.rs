@@ -48,7 +48,126 @@ pub enum Error {
         /// What is wrong with it.
         reason: String,
     },
-    /// A numerical step produced no answer (named).
-    #[error("{0}")]
-    Numerical(String),
+    /// The model lacks a node or cell set that its supports, load or output need.
+    #[error("the model has no {kind} set '{name}'")]
+    MissingSet {
+        /// `node` or `cell`.
+        kind: &'static str,
+        /// The set's name.
+        name: String,
+    },
+    /// No node of the model where one is needed.
+    #[error("the model has no node on {what}")]
+    NoNodeAt {
+        /// Where, and what for.
+        what: &'static str,
+    },
+    /// The model has no material (its cells index none).
+    #[error("the model has no material")]
+    NoMaterial,
+    /// A material's 6 × 6 stiffness has no inverse, so its compliance (which sizes the
+    /// perturbation force) does not exist.
+    #[error(
+        "material {index}: the stiffness matrix is singular, so the perturbation force cannot \
+         be sized from it (give loads.perturbation_n)"
+    )]
+    SingularMaterial {
+        /// 0-based index among the model's materials.
+        index: usize,
+    },
+    /// A matrix or value came out infinite or NaN.
+    #[error("{what} is not finite")]
+    NotFinite {
+        /// What, in words.
+        what: String,
+    },
+    /// A level of the sweep failed; says which and at what strain (or load).
+    #[error("level {index} ({quantity} {value}): {source}")]
+    Level {
+        /// 0-based level index.
+        index: usize,
+        /// `strain` or `load`.
+        quantity: &'static str,
+        /// The level's strain (or load, N), as the scene gives it.
+        value: f64,
+        /// Why it failed.
+        source: Box<Error>,
+    },
+    /// The sublaminate was pushed into the base: without contact (thesis §2.7) that branch is
+    /// not physical, so the run stops rather than report it.
+    #[error(
+        "level {index} (strain {strain}): the sublaminate buckled into the base (largest \
+         crack-face separation {separation_mm:.4} mm); without contact this branch is not \
+         physical — raise loads.perturbation_n or lower analysis.max_increment"
+    )]
+    BuckledIntoBase {
+        /// 0-based level index.
+        index: usize,
+        /// The level's strain.
+        strain: f64,
+        /// The largest crack-face separation w(upper) − w(lower), mm (negative: overlap).
+        separation_mm: f64,
+    },
+    /// A step of a deck did not finish: which step (1-based), its `*STEP` line, and why.
+    #[error("step {step} (line {line}): {reason}")]
+    Step {
+        /// 1-based step number.
+        step: usize,
+        /// The `*STEP` line in the deck.
+        line: usize,
+        /// Why: the increment, step time and what did not converge.
+        reason: String,
+    },
+    /// A DOF given two `*CLOAD`s in one step with different amplitudes (CalculiX refuses it
+    /// too).
+    #[error(
+        "line {line}, *CLOAD: node {node} DOF {dof} is loaded twice in the step with different \
+         amplitudes (CalculiX refuses this too)"
+    )]
+    LoadedTwice {
+        /// The second `*CLOAD` line.
+        line: usize,
+        /// The node's number in the deck.
+        node: usize,
+        /// The DOF, 1–3.
+        dof: u8,
+    },
+    /// An initial increment (`solve --initial-increment`) outside (0, 1].
+    #[error("initial increment {value}: expected a fraction of the step period in (0, 1]")]
+    InitialIncrement {
+        /// The value given.
+        value: f64,
+    },
+    /// Results that could not be written as JSON.
+    #[error("writing JSON: {0}")]
+    Json(#[from] serde_json::Error),
+    /// The output writer's state was left inconsistent by a panic in another thread.
+    #[error("the output writer's lock was poisoned by a panic in another thread")]
+    OutputLock,
+    /// A plot that could not be drawn or written.
+    #[error("plotting {}: {reason}", path.display())]
+    Plot {
+        /// The SVG file.
+        path: std::path::PathBuf,
+        /// What the plotting library said.
+        reason: String,
+    },
+    /// The SIGINT/SIGTERM handlers could not be installed.
+    #[error("installing the signal handler: {0}")]
+    Signal(std::io::Error),
+    /// A run that stopped part-way: why, and where what converged before was kept.
+    #[error(
+        "{source}\n(the {kept} converged before are in {}, {summary} \"complete\": false)",
+        folder.display()
+    )]
+    Partial {
+        /// Why it stopped.
+        source: Box<Error>,
+        /// The output folder.
+        folder: std::path::PathBuf,
+        /// `levels` (a scene) or `increments` (a deck).
+        kept: &'static str,
+        /// The file that says the run is incomplete: `results.json` or `summary.json`.
+        summary: &'static str,
+    },
 }

@@ -3,20 +3,29 @@
 //! CalculiX can run the analysis unchanged (§3.2 protocol as deck steps).
 
 use crate::Error;
-use crate::analysis::{
-    Model, ModelKind, build_model, load_factors, perturbation_force, perturbation_loads,
+use crate::analysis::load_factors;
+use crate::model::{
+    Model, Nodes, Support, Value, build_model, perturbation_force, perturbation_loads,
 };
 use crate::scene::Scene;
 use nonlin3d_mesh::inp::{
     InpBoundary, InpCload, InpDeck, InpElastic, InpMaterial, InpStep, inp_string,
 };
 
-fn boundary(nset: &str, dof: u8, value: f64) -> InpBoundary {
+/// A support as a `*BOUNDARY` line at load factor `f` of the largest strain `reference`: the
+/// set, the component numbered from 1, the value.
+fn boundary(support: &Support, f: f64, reference: f64) -> InpBoundary {
+    let dof = support.axis.offset() as u8 + 1;
     InpBoundary {
-        nset: nset.into(),
+        nset: match support.nodes {
+            Nodes::Set(name) | Nodes::Node { set: name, .. } => name.into(),
+        },
         first: dof,
         last: dof,
-        value,
+        value: match support.value {
+            Value::Zero => 0.0,
+            Value::Strain { length } => length * f * reference,
+        },
     }
 }
 
@@ -47,25 +56,21 @@ pub fn deck_of(scene: &Scene, model: &Model) -> Result<String, Error> {
             elastic: InpElastic::Anisotropic(Box::new(*s)),
         })
         .collect();
-    let mut supports = vec![boundary("x0", 1, 0.0), boundary("z0", 3, 0.0)];
-    match model.kind {
-        ModelKind::Edge => {
-            let x1 = mesh.node_sets.get("x1").cloned().unwrap_or_default();
-            let corner = x1
-                .iter()
-                .copied()
-                .filter(|&n| mesh.nodes[n][2] == 0.0)
-                .max_by(|&a, &b| mesh.nodes[a][1].total_cmp(&mesh.nodes[b][1]))
-                .ok_or_else(|| Error::Numerical("no node on x = W, z = 0".into()))?;
-            mesh.node_sets.insert("vfix".into(), vec![corner]);
-            supports.push(boundary("vfix", 2, 0.0));
+    // The supports of `Model::supports`: the held ones in the first step (they stay), the
+    // prescribed end displacement in every step; a single node becomes a set of its own.
+    let supports = model.supports()?;
+    for s in &supports {
+        match s.nodes {
+            Nodes::Set(name) => {
+                model.node_set(name)?;
+            }
+            Nodes::Node { set, node } => {
+                mesh.node_sets.insert(set.into(), vec![node]);
+            }
         }
-        ModelKind::ThroughWidth => {
-            supports.push(boundary("y0", 2, 0.0));
-            supports.push(boundary("y1", 2, 0.0));
-        }
-        ModelKind::Embedded | ModelKind::Plate => supports.push(boundary("y0", 2, 0.0)),
     }
+    let (held, driven): (Vec<&Support>, Vec<&Support>) =
+        supports.iter().partition(|s| s.value == Value::Zero);
     let (factors, reference) = load_factors(scene);
     let inc = scene.analysis.max_increment.min(1.0);
     let step = |boundaries: Vec<InpBoundary>, cloads: Vec<InpCload>| InpStep {
@@ -87,19 +92,30 @@ pub fn deck_of(scene: &Scene, model: &Model) -> Result<String, Error> {
             .collect()
     };
     let mut steps = Vec::new();
-    if model.kind == ModelKind::Plate {
-        // The whole plate's load P, a quarter of it on the quarter model's centre node.
-        let centre = perturbation_loads(model, 1.0)?;
+    let first = |k: usize| -> Vec<InpBoundary> {
+        match k {
+            0 => held.iter().map(|s| boundary(s, 0.0, 0.0)).collect(),
+            _ => Vec::new(),
+        }
+    };
+    if let Some(load) = model.central_load() {
+        // The whole plate's load P, its share (a quarter on the quarter model) split over the
+        // set's nodes (one: the centre).
+        let nodes = model.node_set(load.set)?;
+        let share = 1.0 / nodes.len() as f64;
+        let centre: Vec<(usize, f64)> = nodes.iter().map(|&n| (3 * n + 2, share)).collect();
         for (k, f) in factors.iter().enumerate() {
-            let b = if k == 0 { supports.clone() } else { Vec::new() };
-            steps.push(step(b, cloads(&centre, 0.25 * f * reference)));
+            steps.push(step(
+                first(k),
+                cloads(&centre, load.fraction * f * reference),
+            ));
         }
     } else {
         // The perturbation split over the `center_top` nodes; none (and no set needed) for 0.
         let p = perturbation_loads(model, perturbation_force(scene, model)?)?;
         for (k, f) in factors.iter().enumerate() {
-            let mut b = if k == 0 { supports.clone() } else { Vec::new() };
-            b.push(boundary("x1", 1, model.x_end * f * reference));
+            let mut b = first(k);
+            b.extend(driven.iter().map(|s| boundary(s, *f, reference)));
             steps.push(step(b, cloads(&p, 1.0)));
             if !p.is_empty() {
                 steps.push(step(Vec::new(), cloads(&p, 0.0)));
@@ -116,4 +132,108 @@ pub fn deck_of(scene: &Scene, model: &Model) -> Result<String, Error> {
         crate::scene::RuleName::Gauss2 => text.replace("TYPE=C3D20,", "TYPE=C3D20R,"),
         _ => text,
     })
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)]
+mod tests {
+    use super::*;
+    use crate::analysis::constraints;
+    use nonlin3d_mesh::{InpModel, NodeRef, read_inp};
+    use std::collections::BTreeMap;
+
+    /// The nodes a deck line names, as 0-based indices of the deck's mesh.
+    fn nodes(deck: &InpModel, target: &NodeRef) -> Vec<usize> {
+        match target {
+            NodeRef::Node(n) => vec![*n],
+            NodeRef::Set(name) => deck.mesh.node_sets[name].clone(),
+        }
+    }
+
+    /// The exported deck and the analysis's constraints of one scene agree: in the step of the
+    /// largest strain (load factor 1, the constraints' λ = 1) the DOFs the deck holds or
+    /// prescribes, with the `*BOUNDARY` lines of every step up to it in force, are the DOFs the
+    /// constraints hold or prescribe, with the same values bit for bit (u = x_end·1·ε_ref both
+    /// ways); its `*CLOAD`s are the plate's P/4, or the perturbation force.
+    fn deck_matches_constraints(toml: &str) {
+        let scene = Scene::from_toml(toml).unwrap();
+        let model = build_model(&scene).unwrap();
+        let (factors, reference) = load_factors(&scene);
+        let c = constraints(&model, reference).unwrap();
+        let deck = read_inp(&deck_of(&scene, &model).unwrap()).unwrap();
+        assert_eq!(deck.mesh.nodes.len(), model.mesh.nodes.len());
+        assert!(deck.node_ids.iter().enumerate().all(|(i, &id)| id == i + 1));
+        let last = factors.iter().position(|&f| f == 1.0).unwrap();
+        // The strain models write two steps per level (perturbation on, then off).
+        let per_level = deck.steps.len() / factors.len();
+        let upto = per_level * last;
+        let mut held = BTreeMap::new();
+        let steps = &deck.steps[..=upto];
+        let lines = deck
+            .initial_boundaries
+            .iter()
+            .chain(steps.iter().flat_map(|s| &s.boundaries));
+        for b in lines {
+            for n in nodes(&deck, &b.target) {
+                for dof in b.first..=b.last {
+                    held.insert(3 * n + dof as usize - 1, b.value);
+                }
+            }
+        }
+        let expected: BTreeMap<usize, f64> = c.prescribed().collect();
+        assert!(!expected.is_empty());
+        assert_eq!(held, expected, "{}", scene.title);
+        let mut loads = BTreeMap::new();
+        for l in &deck.steps[upto].cloads {
+            for n in nodes(&deck, &l.target) {
+                loads.insert(3 * n + l.dof as usize - 1, l.value);
+            }
+        }
+        let expected: BTreeMap<usize, f64> = if model.central_load().is_some() {
+            let mut f = vec![0.0; c.n()];
+            c.external(1.0, &mut f);
+            f.iter()
+                .enumerate()
+                .filter(|&(_, &v)| v != 0.0)
+                .map(|(d, &v)| (d, v))
+                .collect()
+        } else {
+            let force = perturbation_force(&scene, &model).unwrap();
+            perturbation_loads(&model, force)
+                .unwrap()
+                .into_iter()
+                .collect()
+        };
+        assert!(!expected.is_empty());
+        assert_eq!(loads, expected, "{}", scene.title);
+    }
+
+    /// Embedded (the reference scene on 4 slices, three strains: the largest last).
+    #[test]
+    fn embedded_deck_matches_constraints() {
+        let text = crate::scene::DEFAULT_SCENE.replace("slices = 8", "slices = 4");
+        deck_matches_constraints(&text);
+    }
+
+    /// Edge: y = 0 free, the one node that holds it in y written as a set of its own.
+    #[test]
+    fn edge_deck_matches_constraints() {
+        deck_matches_constraints(include_str!(
+            "../examples/scenes/fig_5_5_1_edge_semicircle_15mm.toml"
+        ));
+    }
+
+    /// Through-width: v = 0 on both sides.
+    #[test]
+    fn through_width_deck_matches_constraints() {
+        deck_matches_constraints(include_str!(
+            "../examples/scenes/fig_3_2_3_through_width.toml"
+        ));
+    }
+
+    /// Plate: no prescribed end, the central load instead.
+    #[test]
+    fn plate_deck_matches_constraints() {
+        deck_matches_constraints(include_str!("../examples/scenes/fig_4_1_1_plate.toml"));
+    }
 }

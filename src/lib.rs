@@ -13,7 +13,7 @@
 //! | [`solver`] | `nonlin3d-solver` | sparse patterns and matrices, RCM/AMD, profile LDLᵀ, faer Cholesky, inertia (§2.4) |
 //! | [`vcct`] | `nonlin3d-vcct` | G_I, G_II, G_III along the front by virtual crack closure, mixed-mode criteria (§2.8) |
 //! | [`scene`] | this crate | `Scene`: the serde/TOML description of an analysis (docs/SCENES.md) |
-//! | [`model`] | this crate | the finite element model of a scene (mesh, front, materials, boundary-condition family) |
+//! | [`model`] | this crate | the finite element model of a scene (mesh, front, materials, boundary-condition family), built from it; its supports, load and perturbation force, held once for the constraints and the exported deck (§3.2) |
 //! | [`analysis`] | this crate | the pipeline scene → mesh → constraints → Newton (perturbation, strain sweep) → VCCT (§3.2, ch. 5) |
 //! | [`results`], [`report`], [`plot`], [`output`] | this crate | `results.json`, front CSVs, VTU/PVD series, SVG plots; the output folder written level by level, atomically |
 //! | [`export`] | this crate | a scene as a CalculiX deck: the `nonlin3d export` command |

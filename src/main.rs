@@ -132,11 +132,12 @@ fn solve(
         Err(e) => {
             // Keep what converged, say why it stopped; the write error (if any) is secondary.
             let _ = output.failed(&e);
-            return Err(Failure::Run(nonlin3d::Error::Numerical(format!(
-                "{e}\n(the increments converged before are in {}, summary.json \"complete\": \
-                 false)",
-                out.display()
-            ))));
+            return Err(Failure::Run(nonlin3d::Error::Partial {
+                source: Box::new(e),
+                folder: out.to_path_buf(),
+                kept: "increments",
+                summary: "summary.json",
+            }));
         }
     };
     output.finish(&results).map_err(Failure::Run)?;
@@ -190,7 +191,7 @@ fn stop_on_signals(handle: nonlin3d::output::InterruptHandle) -> Result<(), nonl
     use signal_hook::consts::{SIGINT, SIGTERM};
     use std::sync::Arc;
     use std::sync::atomic::AtomicBool;
-    let err = |e: std::io::Error| nonlin3d::Error::Numerical(format!("signal handler: {e}"));
+    let err = nonlin3d::Error::Signal;
     let armed = Arc::new(AtomicBool::new(false));
     for (sig, code) in [(SIGINT, 130), (SIGTERM, 143)] {
         // The shutdown goes first: it fires only once the flag is set by an earlier signal.
@@ -291,10 +292,12 @@ fn run(
             return Err(if input {
                 Failure::Input(e)
             } else {
-                Failure::Run(nonlin3d::Error::Numerical(format!(
-                    "{e}\n(the levels converged before are in {}, results.json \"complete\": false)",
-                    out.display()
-                )))
+                Failure::Run(nonlin3d::Error::Partial {
+                    source: Box::new(e),
+                    folder: out.to_path_buf(),
+                    kept: "levels",
+                    summary: "results.json",
+                })
             });
         }
     };

@@ -193,17 +193,13 @@ impl RunOutput {
 
     /// Writes the snapshot's `results.json` and prepares its interrupted form.
     fn write_json(&self) -> Result<(), Error> {
-        let json_err = |e: serde_json::Error| Error::Numerical(e.to_string());
-        let mut value = serde_json::to_value(&self.snapshot).map_err(json_err)?;
-        let now = serde_json::to_string_pretty(&value).map_err(json_err)?;
+        let mut value = serde_json::to_value(&self.snapshot)?;
+        let now = serde_json::to_string_pretty(&value)?;
         if self.snapshot.stopped.is_none() {
             value["stopped"] = "interrupted".into();
         }
-        let stopped = serde_json::to_string_pretty(&value).map_err(json_err)?;
-        let mut pending = self
-            .pending
-            .lock()
-            .map_err(|_| Error::Numerical("output lock poisoned".into()))?;
+        let stopped = serde_json::to_string_pretty(&value)?;
+        let mut pending = self.pending.lock().map_err(|_| Error::OutputLock)?;
         write_atomic(&pending.path, now.as_bytes())?;
         pending.stopped_json = Some(stopped);
         Ok(())
@@ -237,10 +233,7 @@ impl InterruptHandle {
         now: &str,
         stopped: Option<String>,
     ) -> Result<(), Error> {
-        let mut pending = self
-            .pending
-            .lock()
-            .map_err(|_| Error::Numerical("output lock poisoned".into()))?;
+        let mut pending = self.pending.lock().map_err(|_| Error::OutputLock)?;
         write()?;
         write_atomic(&pending.path, now.as_bytes())?;
         pending.stopped_json = stopped;

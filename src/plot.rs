@@ -9,7 +9,10 @@ use plotters::prelude::*;
 use std::path::Path;
 
 fn plot_err(path: &Path, e: impl std::fmt::Display) -> Error {
-    Error::Numerical(format!("plotting {}: {e}", path.display()))
+    Error::Plot {
+        path: path.to_path_buf(),
+        reason: e.to_string(),
+    }
 }
 
 /// Range of `values` with a margin, never empty.

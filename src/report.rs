@@ -135,8 +135,7 @@ pub fn write_all(results: &mut Results, dir: &Path) -> Result<(), Error> {
         crate::plot::deflection_plot(results, tmp)
     })?;
     results.timings.output_s = t.elapsed().as_secs_f64();
-    let json =
-        serde_json::to_string_pretty(results).map_err(|e| Error::Numerical(e.to_string()))?;
+    let json = serde_json::to_string_pretty(results)?;
     write_atomic(&dir.join("results.json"), json.as_bytes())
 }
 

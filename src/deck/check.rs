@@ -41,9 +41,7 @@ pub(crate) fn prepare(model: &InpModel, options: &StepOptions) -> Result<Prepare
     if let Some(f) = options.initial_increment
         && !(f > 0.0 && f <= 1.0)
     {
-        return Err(Error::Numerical(format!(
-            "initial increment {f}: expected a fraction of the step period in (0, 1]"
-        )));
+        return Err(Error::InitialIncrement { value: f });
     }
     let rule = hex20_rule(model)?;
     jacobians(model, rule)?;

@@ -104,8 +104,11 @@ pub(crate) fn run_step(
     let mut easy_before = false;
     let mut cutbacks = 0;
     let mut previous: Option<(Vec<f64>, f64)> = None;
-    let fail =
-        |what: String| Error::Numerical(format!("step {} (line {}): {what}", k + 1, step.line));
+    let fail = |reason: String| Error::Step {
+        step: k + 1,
+        line: step.line,
+        reason,
+    };
     while period - t > eps {
         let size = if period - t - dt < eps {
             period - t

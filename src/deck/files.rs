@@ -92,7 +92,7 @@ fn displacements_csv(model: &InpModel, u: &[[f64; 3]]) -> String {
 /// The summary entry of a step: its record, its output files with the increments they hold,
 /// and its displacements file once it is complete.
 fn step_json(r: &StepResult) -> Result<serde_json::Value, Error> {
-    let mut v = serde_json::to_value(r).map_err(|e| Error::Numerical(e.to_string()))?;
+    let mut v = serde_json::to_value(r)?;
     v["outputs"] = r
         .outputs
         .iter()
@@ -230,7 +230,6 @@ impl<'a> DeckOutput<'a> {
     /// Runs `write`, then writes `summary.json` as it stands and prepares its interrupted form
     /// (none once complete), under the signal handler's lock.
     fn publish(&self, write: impl FnOnce() -> Result<(), Error>) -> Result<(), Error> {
-        let json_err = |e: serde_json::Error| Error::Numerical(e.to_string());
         let not_used: Vec<serde_json::Value> = self
             .model
             .not_used
@@ -243,14 +242,14 @@ impl<'a> DeckOutput<'a> {
             "steps": self.steps,
             "not_used": not_used,
         });
-        let now = serde_json::to_string_pretty(&value).map_err(json_err)?;
+        let now = serde_json::to_string_pretty(&value)?;
         let stopped = if self.complete {
             None
         } else {
             if self.stopped.is_none() {
                 value["stopped"] = "interrupted".into();
             }
-            Some(serde_json::to_string_pretty(&value).map_err(json_err)?)
+            Some(serde_json::to_string_pretty(&value)?)
         };
         self.handle.publish(write, &now, stopped)
     }

@@ -86,11 +86,11 @@ impl History {
             });
             if e.defined {
                 if e.amplitude != c.amplitude {
-                    return Err(Error::Numerical(format!(
-                        "line {}, *CLOAD: node {} DOF {} is loaded twice in the step with \
-                         different amplitudes (CalculiX refuses this too)",
-                        c.line, model.node_ids[node], c.dof
-                    )));
+                    return Err(Error::LoadedTwice {
+                        line: c.line,
+                        node: model.node_ids[node],
+                        dof: c.dof,
+                    });
                 }
                 e.value += c.value;
             } else {

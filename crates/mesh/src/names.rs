@@ -34,6 +34,9 @@ pub const BONDED: &str = "bonded";
 pub const BASE: &str = "base";
 /// Cells of the sublaminate above the delamination.
 pub const SUBLAMINATE: &str = "sublaminate";
+/// The one node that holds an edge model in y (on x = W, z = 0, at the largest y), as a set of
+/// an exported deck: the generators make no such set.
+pub const Y_HOLD: &str = "vfix";
 
 /// The set names of the box ends along axis `axis` (0 = x, 1 = y, 2 = z): (low end, high end).
 pub const fn box_ends(axis: usize) -> (&'static str, &'static str) {
