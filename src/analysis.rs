@@ -121,6 +121,7 @@ pub fn settings(scene: &Scene) -> (NewtonSettings, Stepping) {
     let stepping = Stepping {
         initial: a.max_increment,
         max: a.max_increment,
+        max_attempts: a.max_attempts,
         ..Stepping::default()
     };
     (newton, stepping)

@@ -14,6 +14,8 @@ pub const MAX_COUNT: usize = 10_000;
 
 /// Solver threads above this are refused (machines this runs on have far fewer cores).
 pub const MAX_THREADS: usize = 1024;
+/// Most increment attempts a scene may allow for one level (`analysis.max_attempts`).
+pub const MAX_ATTEMPTS: usize = 100_000;
 
 fn bad<T>(message: String) -> Result<T, Error> {
     Err(Error::Scene(message))
@@ -78,6 +80,12 @@ pub(crate) fn scene(s: &Scene) -> Result<(), Error> {
             "analysis.threads = {}: at most {MAX_THREADS} (0: all cores, 1: sequential and \
              bitwise reproducible)",
             a.threads
+        ));
+    }
+    if !(1..=MAX_ATTEMPTS).contains(&a.max_attempts) {
+        return bad(format!(
+            "analysis.max_attempts = {}: must lie between 1 and {MAX_ATTEMPTS}",
+            a.max_attempts
         ));
     }
     if a.refactor_every == 0 {

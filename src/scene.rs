@@ -416,6 +416,10 @@ pub struct AnalysisOptions {
     /// Largest load increment as a fraction of the largest strain (or load).
     #[serde(default = "default_max_increment")]
     pub max_increment: f64,
+    /// Most increment attempts (converged or cut back) towards one level before the run stops
+    /// with an error naming the level: bounds the time a hopeless level can take.
+    #[serde(default = "default_max_attempts")]
+    pub max_attempts: usize,
     /// Linear solver.
     #[serde(default)]
     pub solver: SolverName,
@@ -446,6 +450,9 @@ fn default_refactor() -> usize {
 fn default_max_increment() -> f64 {
     0.25
 }
+fn default_max_attempts() -> usize {
+    100
+}
 
 impl Default for AnalysisOptions {
     fn default() -> Self {
@@ -456,6 +463,7 @@ impl Default for AnalysisOptions {
             refactor_every: default_refactor(),
             vcct_forces: ForceKinematics::Nonlinear,
             max_increment: default_max_increment(),
+            max_attempts: default_max_attempts(),
             solver: SolverName::Faer,
             threads: default_threads(),
         }

@@ -605,3 +605,38 @@ fn displacement_criterion_adds_iterations_never_removes_them() {
     let umax = ub.iter().fold(0.0f64, |m, v| m.max(v.abs()));
     assert!(last.increment <= 1e-12 * umax);
 }
+
+/// `Stepping::max_attempts` bounds the attempts towards one target: a cantilever path that
+/// needs 4 increments of Δλ = 0.25 is stopped after 2 with `NewtonError::Attempts` naming the
+/// λ reached (0.5), and goes through with a limit of 4 (each converged increment is one
+/// attempt here: the load is small enough that none is cut back).
+#[test]
+fn the_attempt_limit_stops_a_path_and_names_where() {
+    use nonlin3d::newton::NewtonError;
+    let stepping = |max_attempts| Stepping {
+        initial: 0.25,
+        max: 0.25,
+        max_attempts,
+        ..Stepping::default()
+    };
+    let (_, mut problem) = cantilever(-300.0);
+    let mut u = vec![0.0; problem.assembler().n()];
+    let settings = NewtonSettings::default();
+    match follow_path(&mut problem, &mut u, &[1.0], &settings, &stepping(2)) {
+        Err(e @ NewtonError::Attempts { .. }) => {
+            let NewtonError::Attempts {
+                reached, attempts, ..
+            } = e
+            else {
+                unreachable!()
+            };
+            assert_eq!((reached, attempts), (0.5, 2));
+            assert!(e.to_string().contains("after 2 increment attempts"), "{e}");
+        }
+        other => panic!("expected the attempt limit, got {other:?}"),
+    }
+    let (_, mut problem) = cantilever(-300.0);
+    let mut u = vec![0.0; problem.assembler().n()];
+    let path = follow_path(&mut problem, &mut u, &[1.0], &settings, &stepping(4)).unwrap();
+    assert_eq!(path.attempts.len(), 4);
+}

@@ -28,6 +28,26 @@ pub enum NewtonError {
         /// Why the last attempt failed.
         reason: String,
     },
+    /// The attempts allowed towards one target ([`crate::Stepping::max_attempts`]) were used up:
+    /// a path that needs more is not progressing at a useful rate (CalculiX and Abaqus bound
+    /// the increments of a step the same way, 100 by default).
+    #[error(
+        "no convergence towards λ = {}: stopped at λ = {} after {attempts} increment attempts, \
+         the limit for one target (last attempt Δλ = {}: {reason})",
+        sig6(*.target), sig6(*.reached), sig6(*.last_step)
+    )]
+    Attempts {
+        /// Target load factor.
+        target: f64,
+        /// Last converged load factor.
+        reached: f64,
+        /// Attempts made towards the target (converged and cut back).
+        attempts: usize,
+        /// The last step tried.
+        last_step: f64,
+        /// How the last attempt ended.
+        reason: String,
+    },
     /// Removing the perturbation load at the end of a perturbed step failed even in the
     /// smallest part ([`crate::perturbed_step`]).
     #[error(

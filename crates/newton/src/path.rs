@@ -42,6 +42,11 @@ pub struct Stepping {
     /// earlier increment's). The counts are those of each increment's last factorisation, so
     /// with a kept tangent (BFGS) only increments that refactor are judged.
     pub inertia_guard: f64,
+    /// Most attempts (converged increments and cut-back tries together) towards one target;
+    /// 0 = no limit. A path that would need more stops with [`NewtonError::Attempts`] instead
+    /// of grinding on at the smallest increments (the thesis's scenes need at most about 10 a
+    /// level).
+    pub max_attempts: usize,
 }
 
 impl Default for Stepping {
@@ -56,6 +61,7 @@ impl Default for Stepping {
             secant_predictor: true,
             tangent_predictor: true,
             inertia_guard: 0.25,
+            max_attempts: 0,
         }
     }
 }
@@ -164,6 +170,7 @@ pub fn follow_path_with(
     // `settings.keep_tangent`; a failed attempt clears it, so its retry starts afresh.
     let mut guard = InertiaGuard::new(stepping.inertia_guard, session.pivots_at(u));
     for &target in targets {
+        let mut attempts = 0;
         while (target - lambda).abs() > 1e-12 * target.abs().max(1.0) {
             let dir = (target - lambda).signum();
             let delta = step.min((target - lambda).abs());
@@ -218,12 +225,25 @@ pub fn follow_path_with(
             let reason = attempt.termination.to_string();
             let pivots = attempt.negative_pivots();
             report.attempts.push(attempt);
+            attempts += 1;
             if converged {
                 session.accept(&trial, pivots);
                 previous = Some((std::mem::replace(u, trial), dir * delta));
                 lambda = to;
                 if iterations <= stepping.easy && !guard.pending() {
                     step = (step * stepping.grow).min(stepping.max);
+                }
+                if stepping.max_attempts > 0
+                    && attempts >= stepping.max_attempts
+                    && (target - lambda).abs() > 1e-12 * target.abs().max(1.0)
+                {
+                    return Err(NewtonError::Attempts {
+                        target,
+                        reached: lambda,
+                        attempts,
+                        last_step: delta,
+                        reason,
+                    });
                 }
             } else {
                 cutbacks += 1;
@@ -233,6 +253,15 @@ pub fn follow_path_with(
                         target,
                         reached: lambda,
                         cutbacks,
+                        last_step: delta,
+                        reason,
+                    });
+                }
+                if stepping.max_attempts > 0 && attempts >= stepping.max_attempts {
+                    return Err(NewtonError::Attempts {
+                        target,
+                        reached: lambda,
+                        attempts,
                         last_step: delta,
                         reason,
                     });
