@@ -238,6 +238,11 @@ fn mutated_scenes_and_decks_end_in_results_or_messages() {
         let n = done.fetch_add(1, Ordering::Relaxed) + 1;
         if r.outcome.class.is_failure() && known(r).is_none() {
             failed.fetch_add(1, Ordering::Relaxed);
+            // Said at once, so a long run's failures can be looked at while it goes on.
+            eprintln!(
+                "fuzz: case {} ({}): {:?} in stage {}: {}",
+                r.index, r.input, r.outcome.class, r.outcome.stage, r.outcome.message
+            );
         }
         if n.is_multiple_of(1000) {
             eprintln!(

@@ -62,7 +62,7 @@ fn solve_linear(
     )
     .unwrap();
     assert!(report.converged(), "{:?}", report.termination);
-    (problem.into_parts().0, u)
+    (problem.into_parts().unwrap().0, u)
 }
 
 fn rates(mesh: &Mesh, front: &Front, asm: &Assembler, u: &[f64]) -> Vec<FrontRelease> {

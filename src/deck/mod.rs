@@ -220,7 +220,7 @@ pub fn solve_deck_with(
         current.displacements = nodal(&u);
         observer(Progress::Step(&current))?;
         results.push(current);
-        assemblers.insert(step.nlgeom, problem.into_parts().0);
+        assemblers.insert(step.nlgeom, problem.into_parts()?.0);
         start += frame.period;
     }
     Ok(results)

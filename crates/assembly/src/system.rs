@@ -213,6 +213,13 @@ impl System {
         &mut self.constraints
     }
 
+    /// The contributions (in summation order) and the constraints, taken apart (a contribution
+    /// is recovered by type with `Box<dyn Any>`'s `downcast`, e.g. an
+    /// [`Assembler`](crate::Assembler) to build another system with other constraints).
+    pub fn into_parts(self) -> (Vec<Box<dyn Contribution>>, Constraints) {
+        (self.contributions, self.constraints)
+    }
+
     /// The contributions, in summation order.
     pub fn contributions(&self) -> impl Iterator<Item = &dyn Contribution> + '_ {
         self.contributions.iter().map(|c| &**c)

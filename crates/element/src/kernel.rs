@@ -12,6 +12,9 @@ use crate::syrk::syrk_lower;
 use crate::{ElementError, ElementKind, ShapeTable};
 use nonlin3d_laminate::Stiffness;
 
+mod point;
+use point::{Fixed, PointMaterial, Turning};
+
 /// Strain–displacement relations.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub enum Kinematics {
@@ -350,87 +353,6 @@ fn kernel_avx2<const NS: usize, P: PointMaterial>(
     out: OutView<'_>,
 ) -> Result<(), ElementError> {
     kernel::<NS, true, P>(job, points, x, u, ws, out)
-}
-
-/// The stiffness at each station: the same one everywhere ([`Fixed`], the uniform path), or
-/// the local one turned to the axes at the station's position ([`Turning`]).
-trait PointMaterial {
-    /// The stiffness at station `g`, whose shape values are `n`; `xs` are the element's
-    /// coordinates as three runs over the nodes.
-    fn at<const NS: usize, const FMA: bool>(
-        &mut self,
-        g: usize,
-        n: &[f64],
-        xs: &[[f64; NS]; 3],
-    ) -> Result<&Stiffness, ElementError>;
-}
-
-/// A uniform material: the stiffness, untouched, at every station.
-struct Fixed<'a>(&'a Stiffness);
-
-impl PointMaterial for Fixed<'_> {
-    #[inline(always)]
-    fn at<const NS: usize, const FMA: bool>(
-        &mut self,
-        _: usize,
-        _: &[f64],
-        _: &[[f64; NS]; 3],
-    ) -> Result<&Stiffness, ElementError> {
-        Ok(self.0)
-    }
-}
-
-/// A material in varying axes: at each station x = Σ_m N^m x^m, R = the axes at x, then
-/// C = R·C_local (tensor rotation) and its Cholesky factor, as the kernel needs Q (eq. 2.3.4).
-struct Turning<'a> {
-    local: &'a Stiffness,
-    axes: &'a CylindricalAxes,
-    index: usize,
-    /// The selective-reduced rule: each station's C must not couple the transverse shears.
-    selective: bool,
-    here: Stiffness,
-}
-
-impl PointMaterial for Turning<'_> {
-    #[inline(always)]
-    fn at<const NS: usize, const FMA: bool>(
-        &mut self,
-        g: usize,
-        n: &[f64],
-        xs: &[[f64; NS]; 3],
-    ) -> Result<&Stiffness, ElementError> {
-        let Some(n) = n.first_chunk::<NS>() else {
-            return Err(ElementError::LengthMismatch {
-                what: "shape values",
-                expected: NS,
-                got: n.len(),
-            });
-        };
-        let x = [
-            dot::<NS, FMA>(n, &xs[0]),
-            dot::<NS, FMA>(n, &xs[1]),
-            dot::<NS, FMA>(n, &xs[2]),
-        ];
-        self.here = Stiffness::new(crate::material::turn(self.local.c(), &self.axes.axes_at(x)))
-            .map_err(|e| ElementError::MaterialAtPoint {
-                element: None,
-                material: self.index,
-                point: g,
-                x,
-                reason: e.to_string(),
-            })?;
-        if self.selective {
-            let coupling = self.here.transverse_shear_coupling();
-            if coupling > 1e-12 {
-                return Err(ElementError::CoupledTransverseShear {
-                    element: None,
-                    material: self.index,
-                    coupling,
-                });
-            }
-        }
-        Ok(&self.here)
-    }
 }
 
 /// Green–Lagrange strains from H = ∂u/∂x (eq. 2.1.4), or ε = sym H when `nonlinear` is false:

@@ -1,8 +1,9 @@
 //! The problem interface and the finite element implementation of it.
 
 use crate::{DeadLoads, NewtonError};
-use nonlin3d_assembly::{Assembler, Constraints};
+use nonlin3d_assembly::{Assembler, Constraints, Contribution, System, SystemBuilder};
 use nonlin3d_solver::{SymmetricMatrix, SymmetricPattern};
+use std::any::Any;
 use std::sync::Arc;
 
 /// A discrete nonlinear problem r(u, λ) = 0 with symmetric tangent ∂r/∂u (thesis §2.1,
@@ -51,47 +52,79 @@ pub trait NonlinearProblem {
 /// The finite element model as a [`NonlinearProblem`]: r(u, λ) = f_int(u) − λ·f_ref − f_dead
 /// with supports, prescribed values and ties applied (thesis §2.1, eq. 2.1.3).
 ///
-/// Its parts are private: the assembler and the constraints are read through
-/// [`assembler`](Self::assembler) and [`constraints`](Self::constraints), loads and constraints
+/// A small adapter over a [`System`]: the solid ([`Assembler`]) is its first contribution, and
+/// more can be added ([`with_contributions`](Self::with_contributions): a superelement, a
+/// spring); the constraints are the system's, applied once after the contributions are summed.
+/// Its parts are private: read through [`assembler`](Self::assembler),
+/// [`constraints`](Self::constraints) and [`system`](Self::system); loads and constraints
 /// changed through [`add_load`](Self::add_load), [`prescribe_value`](Self::prescribe_value),
-/// [`set_dead_load`](DeadLoads::set_dead_load) and [`set_constraints`](Self::set_constraints),
-/// and the reactions of the last evaluation read through [`reactions`](Self::reactions).
+/// [`set_dead_load`](DeadLoads::set_dead_load), [`set_constraints`](Self::set_constraints) and
+/// [`system_mut`](Self::system_mut) (replaceable tie groups, released DOFs); the reactions of
+/// the last evaluation read through [`reactions`](Self::reactions).
 pub struct StructuralProblem {
-    /// The assembler (mesh, materials, kernels).
-    assembler: Assembler,
-    /// Supports, prescribed displacements, loads.
-    constraints: Constraints,
+    /// The solid and any other contributions, the constraints, the union pattern.
+    system: System,
     /// Reactions of the last evaluation (f_int − f_ext at constrained DOFs).
     reactions: Vec<f64>,
 }
 
 impl StructuralProblem {
-    /// A problem from an assembler and constraints of the same size.
-    /// With ties in `constraints`, the assembler's pattern is extended for them
-    /// ([`Assembler::tie`]); ties whose couplings the pattern lacks, set later
-    /// ([`set_constraints`](Self::set_constraints)), are refused at the first evaluation.
-    pub fn new(mut assembler: Assembler, constraints: Constraints) -> Result<Self, NewtonError> {
-        check_size(&assembler, &constraints)?;
-        if !constraints.ties().is_empty() {
-            assembler.tie(&constraints)?;
-        }
+    /// A problem from an assembler and constraints of the same size; the pattern is the
+    /// assembler's cells with the couplings the ties in `constraints` need. Ties whose
+    /// couplings the pattern lacks, set later ([`set_constraints`](Self::set_constraints)),
+    /// are refused at the first evaluation; reserve them with
+    /// [`with_contributions`](Self::with_contributions).
+    pub fn new(assembler: Assembler, constraints: Constraints) -> Result<Self, NewtonError> {
+        Self::with_contributions(assembler, Vec::new(), constraints, |b| b)
+    }
+
+    /// A problem of the solid `assembler` plus `more` contributions (summed after it, in
+    /// order), under `constraints`; `reserve` may add couplings to the pattern up front
+    /// ([`SystemBuilder::reserve`], [`SystemBuilder::reserve_ties`]: e.g. every candidate
+    /// contact pair, so that changing the active set costs no new pattern).
+    pub fn with_contributions(
+        assembler: Assembler,
+        more: Vec<Box<dyn Contribution>>,
+        constraints: Constraints,
+        reserve: impl FnOnce(SystemBuilder) -> SystemBuilder,
+    ) -> Result<Self, NewtonError> {
+        check_size(assembler.n(), &constraints)?;
         let n = assembler.n();
+        let mut builder = System::builder(constraints).contribution(assembler);
+        for c in more {
+            builder = builder.boxed(c);
+        }
+        let system = reserve(builder).build()?;
         Ok(Self {
-            assembler,
-            constraints,
+            system,
             reactions: vec![0.0; n],
         })
     }
 
-    /// The assembler: mesh, materials, kernels, pattern (for partial internal forces, stresses,
-    /// a bare assembly).
+    /// The solid: mesh, materials, kernels (for partial internal forces, stresses, a bare
+    /// assembly).
+    #[allow(clippy::expect_used)]
     pub fn assembler(&self) -> &Assembler {
-        &self.assembler
+        // Built with the assembler as the first contribution, and the system cannot lose it.
+        self.system
+            .find::<Assembler>()
+            .expect("the solid is the system's first contribution")
+    }
+
+    /// The constrained system: contributions, constraints, pattern.
+    pub fn system(&self) -> &System {
+        &self.system
+    }
+
+    /// The constrained system, to change: tie groups replaced
+    /// ([`System::replace_tie_group`]), prescribed DOFs released ([`System::release`]).
+    pub fn system_mut(&mut self) -> &mut System {
+        &mut self.system
     }
 
     /// Supports, prescribed values, ties and loads.
     pub fn constraints(&self) -> &Constraints {
-        &self.constraints
+        self.system.constraints()
     }
 
     /// Reactions of the last evaluation: f_int − f_ext at the constrained DOFs (a tie's force
@@ -103,35 +136,43 @@ impl StructuralProblem {
     /// Adds the reference force `value` (N) at DOF `dof`: it acts as λ·`value`
     /// ([`Constraints::add_load`]).
     pub fn add_load(&mut self, dof: usize, value: f64) -> Result<(), NewtonError> {
-        Ok(self.constraints.add_load(dof, value)?)
+        Ok(self.system.constraints_mut().add_load(dof, value)?)
     }
 
     /// Prescribes DOF `dof`: u = λ·`value` (m) ([`Constraints::prescribe`]).
     pub fn prescribe_value(&mut self, dof: usize, value: f64) -> Result<(), NewtonError> {
-        Ok(self.constraints.prescribe(dof, value)?)
+        Ok(self.system.constraints_mut().prescribe(dof, value)?)
     }
 
     /// Replaces the constraints and loads as a whole (a new load step's). Refused when their
     /// size is not the model's; ties whose couplings the pattern lacks (not those given to
     /// [`new`](Self::new)) are refused at the next evaluation.
     pub fn set_constraints(&mut self, constraints: Constraints) -> Result<(), NewtonError> {
-        check_size(&self.assembler, &constraints)?;
-        self.constraints = constraints;
+        check_size(self.system.n(), &constraints)?;
+        *self.system.constraints_mut() = constraints;
         Ok(())
     }
 
-    /// The assembler and the constraints, taken apart.
-    pub fn into_parts(self) -> (Assembler, Constraints) {
-        (self.assembler, self.constraints)
+    /// The assembler and the constraints, taken apart (other contributions are dropped).
+    pub fn into_parts(self) -> Result<(Assembler, Constraints), NewtonError> {
+        let (contributions, constraints) = self.system.into_parts();
+        let solid = contributions
+            .into_iter()
+            .find_map(|c| (c as Box<dyn Any>).downcast::<Assembler>().ok())
+            .ok_or(NewtonError::Setting {
+                name: "problem",
+                reason: "the system holds no solid".into(),
+            })?;
+        Ok((*solid, constraints))
     }
 }
 
-/// Refuses constraints of another size than the assembler's.
-fn check_size(assembler: &Assembler, constraints: &Constraints) -> Result<(), NewtonError> {
-    if assembler.n() != constraints.n() {
+/// Refuses constraints of another size than the model's `n` DOFs.
+fn check_size(n: usize, constraints: &Constraints) -> Result<(), NewtonError> {
+    if n != constraints.n() {
         return Err(NewtonError::Setting {
             name: "constraints",
-            reason: format!("{} DOFs for a model of {}", constraints.n(), assembler.n()),
+            reason: format!("{} DOFs for a model of {n}", constraints.n()),
         });
     }
     Ok(())
@@ -141,31 +182,31 @@ fn check_size(assembler: &Assembler, constraints: &Constraints) -> Result<(), Ne
 /// f_dead of the external force.
 impl DeadLoads for StructuralProblem {
     fn set_dead_load(&mut self, dof: usize, value: f64) -> Result<(), NewtonError> {
-        Ok(self.constraints.set_dead_load(dof, value)?)
+        Ok(self.system.constraints_mut().set_dead_load(dof, value)?)
     }
 }
 
 impl NonlinearProblem for StructuralProblem {
     fn n(&self) -> usize {
-        self.assembler.n()
+        self.system.n()
     }
 
     fn pattern(&self) -> Arc<SymmetricPattern> {
-        self.assembler.pattern().clone()
+        self.system.pattern().clone()
     }
 
     fn prescribe(&self, u: &mut [f64], lambda: f64) {
-        self.constraints.apply(u, lambda);
+        self.system.prescribe(u, lambda);
     }
 
     fn expand(&self, du: &mut [f64]) {
-        self.constraints.expand_increment(du);
+        self.system.expand_increment(du);
     }
 
-    /// K(u)·v from the cells that hold a changed prescribed value
-    /// ([`Assembler::tangent_product`]), v = Δu_c including the tied slaves that follow
-    /// prescribed masters or carry an offset; then folded onto the masters (Tᵀ) and zeroed at
-    /// constrained rows like the residual.
+    /// K(u)·v summed over the contributions ([`System::tangent_product`]), v = Δu_c including
+    /// the tied slaves that follow prescribed masters or carry an offset, minus the change of
+    /// the external force; then folded onto the masters (Tᵀ) and zeroed at constrained rows
+    /// like the residual ([`System::fold`]).
     fn coupling_force(
         &mut self,
         u: &[f64],
@@ -174,29 +215,18 @@ impl NonlinearProblem for StructuralProblem {
         out: &mut [f64],
     ) -> Result<bool, NewtonError> {
         let (mut at_to, mut at_from) = (u.to_vec(), u.to_vec());
-        self.constraints.apply(&mut at_to, to);
-        self.constraints.apply(&mut at_from, from);
+        self.system.prescribe(&mut at_to, to);
+        self.system.prescribe(&mut at_from, from);
         let v: Vec<f64> = at_to.iter().zip(&at_from).map(|(a, b)| a - b).collect();
         if v.iter().all(|&x| x == 0.0) {
             return Ok(false);
         }
-        let kv = self.assembler.tangent_product(u, &v)?;
-        let (mut f_to, mut f_from) = (vec![0.0; u.len()], vec![0.0; u.len()]);
-        self.constraints.external(to, &mut f_to);
-        self.constraints.external(from, &mut f_from);
+        let kv = self.system.tangent_product(u, &v)?;
+        let (f_to, f_from) = (self.system.external(to), self.system.external(from));
         for (((o, k), a), b) in out.iter_mut().zip(&kv).zip(&f_to).zip(&f_from) {
             *o = k - (a - b);
         }
-        for t in self.constraints.ties() {
-            let s = out[t.slave];
-            for &(m, c) in &t.masters {
-                out[m] += c * s;
-            }
-            out[t.slave] = 0.0;
-        }
-        for (d, _) in self.constraints.prescribed() {
-            out[d] = 0.0;
-        }
+        self.system.fold(out)?;
         Ok(true)
     }
 
@@ -207,17 +237,14 @@ impl NonlinearProblem for StructuralProblem {
         r: &mut [f64],
         tangent: Option<&mut SymmetricMatrix>,
     ) -> Result<f64, NewtonError> {
-        let (res, reactions, _) = self
-            .assembler
-            .residual(u, lambda, &self.constraints, tangent)?;
-        r.copy_from_slice(&res);
-        let mut f = vec![0.0; u.len()];
-        self.constraints.external(lambda, &mut f);
+        let e = self.system.evaluate(u, lambda, tangent)?;
+        r.copy_from_slice(&e.residual);
+        let f = self.system.external(lambda);
         let scale = f
             .iter()
-            .chain(&reactions)
+            .chain(&e.reactions)
             .fold(0.0f64, |a, v| a.max(v.abs()));
-        self.reactions = reactions;
+        self.reactions = e.reactions;
         Ok(scale)
     }
 }
@@ -307,7 +334,7 @@ mod tests {
         );
         assert_eq!(problem.constraints(), &before);
         problem.set_constraints(Constraints::new(n)).unwrap();
-        let (assembler, constraints) = problem.into_parts();
+        let (assembler, constraints) = problem.into_parts().unwrap();
         assert_eq!((assembler.n(), constraints.prescribed().count()), (n, 0));
     }
 }
