@@ -12,6 +12,7 @@ use nonlin3d::laminate::{ShearCoupling, materials};
 use nonlin3d::mesh::inp::{
     InpBoundary, InpCload, InpDeck, InpElastic, InpMaterial, InpStep, inp_string,
 };
+use nonlin3d::mesh::names;
 use nonlin3d::mesh::{EmbeddedParams, Mesh, embedded_delamination};
 use nonlin3d::newton::{NewtonSettings, Stepping, StructuralProblem, follow_path};
 use nonlin3d::solver::SolverKind;
@@ -51,10 +52,10 @@ fn plate(p: &EmbeddedParams) -> (Mesh, StructuralProblem) {
         c.fix_nodes(&mesh.node_sets[set], r)
             .unwrap_or_else(|e| panic!("{e}"))
     };
-    fix(&mut c, "x0", 0);
-    fix(&mut c, "y0", 1);
-    fix(&mut c, "z0", 2);
-    let top = mesh.node_sets["center_top"][0];
+    fix(&mut c, names::X0, 0);
+    fix(&mut c, names::Y0, 1);
+    fix(&mut c, names::Z0, 2);
+    let top = mesh.node_sets[names::CENTER_TOP][0];
     c.add_load(3 * top + 2, 0.25 * 150.0)
         .unwrap_or_else(|e| panic!("{e}"));
     (
@@ -233,26 +234,26 @@ fn main() {
                         nu: steel.nu12,
                     },
                 }];
-                let top = mesh.node_sets["center_top"][0];
+                let top = mesh.node_sets[names::CENTER_TOP][0];
                 let step = InpStep {
                     nlgeom: true,
                     increment: 0.25,
                     period: 1.0,
                     boundaries: vec![
                         InpBoundary {
-                            nset: "x0".into(),
+                            nset: names::X0.into(),
                             first: 1,
                             last: 1,
                             value: 0.0,
                         },
                         InpBoundary {
-                            nset: "y0".into(),
+                            nset: names::Y0.into(),
                             first: 2,
                             last: 2,
                             value: 0.0,
                         },
                         InpBoundary {
-                            nset: "z0".into(),
+                            nset: names::Z0.into(),
                             first: 3,
                             last: 3,
                             value: 0.0,

@@ -8,6 +8,7 @@
 use nonlin3d_assembly::{Assembler, Constraints};
 use nonlin3d_element::{IntegrationRule, Kinematics};
 use nonlin3d_laminate::{ShearCoupling, materials};
+use nonlin3d_mesh::names;
 use nonlin3d_mesh::{Imperfection, ThroughWidthParams, through_width_delamination};
 use nonlin3d_newton::{NewtonSettings, Stepping, StructuralProblem, follow_path};
 use nonlin3d_vcct::{cells_above, release_rates};
@@ -19,7 +20,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     // A strip imperfection of 5 % of h selects the outward branch (eq. 5.3.1 in one direction).
     mesh.apply_imperfection(
         p.base,
-        "crack_lower",
+        names::CRACK_LOWER,
         Imperfection::Strip { a: p.a },
         0.05 * p.h,
     )?;
@@ -37,11 +38,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     // Supports of §3.2 with plane strain (v = 0 on both sides); u = L·ε_max at λ = 1.
     let eps_max = -0.003;
     let mut c = Constraints::new(assembler.n());
-    c.fix_nodes(&mesh.node_sets["x0"], 0)?;
-    c.fix_nodes(&mesh.node_sets["y0"], 1)?;
-    c.fix_nodes(&mesh.node_sets["y1"], 1)?;
-    c.fix_nodes(&mesh.node_sets["z0"], 2)?;
-    for &n in &mesh.node_sets["x1"] {
+    c.fix_nodes(&mesh.node_sets[names::X0], 0)?;
+    c.fix_nodes(&mesh.node_sets[names::Y0], 1)?;
+    c.fix_nodes(&mesh.node_sets[names::Y1], 1)?;
+    c.fix_nodes(&mesh.node_sets[names::Z0], 2)?;
+    for &n in &mesh.node_sets[names::X1] {
         c.prescribe(3 * n, p.length * eps_max)?;
     }
     let mut problem = StructuralProblem::new(assembler, c)?;
@@ -67,8 +68,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let above = cells_above(&front);
     // The sublaminate's lift at x = 0 (upper crack face minus lower).
     let (up, low) = (
-        &mesh.node_sets["crack_upper"],
-        &mesh.node_sets["crack_lower"],
+        &mesh.node_sets[names::CRACK_UPPER],
+        &mesh.node_sets[names::CRACK_LOWER],
     );
     let centre = (0..up.len())
         .min_by(|&i, &j| mesh.nodes[up[i]][0].total_cmp(&mesh.nodes[up[j]][0]))

@@ -2,6 +2,7 @@
 //! docs/MESH.md) and writes the reference mesh as VTU to the directory given (default
 //! `target/mesh-example`).
 
+use nonlin3d::mesh::names;
 use nonlin3d::mesh::vtu::write_vtu;
 use nonlin3d::mesh::{EllipticMap, EmbeddedParams, embedded_delamination, quality};
 use std::path::PathBuf;
@@ -59,7 +60,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     "| 30 mm circle, thesis centre (1e-9 m arc) | {slices} | {} | {} | {} | {min:.3} | {aspect:.1e} |",
                     m.nodes.len(),
                     m.cells.len(),
-                    m.node_sets["crack_upper"].len()
+                    m.node_sets[names::CRACK_UPPER].len()
                 );
             }
             Err(e) => {
@@ -88,7 +89,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 "| {name} | {slices} | {} | {} | {} | {min:.3} | {aspect:.1} |",
                 m.nodes.len(),
                 m.cells.len(),
-                m.node_sets["crack_upper"].len()
+                m.node_sets[names::CRACK_UPPER].len()
             );
             if slices == 8 && name.starts_with("30 × 60 mm ellipse, eq. 3.1.1") {
                 write_vtu(&dir.join("ellipse_30x60.vtu"), &m, &[], &[])?;

@@ -12,6 +12,7 @@ use nonlin3d_assembly::{Assembler, Constraints};
 use nonlin3d_element::Kinematics;
 use nonlin3d_laminate::ShearCoupling;
 use nonlin3d_mesh::names::{CENTER_TOP, CRACK_LOWER, CRACK_UPPER};
+pub use nonlin3d_newton::solve_level;
 use nonlin3d_newton::{IncrementReport, NewtonSettings, PathSolver, Stepping, StructuralProblem};
 use nonlin3d_solver::SolverKind;
 use nonlin3d_vcct::{FrontRelease, cells_above, release_rates};
@@ -125,34 +126,6 @@ pub fn settings(scene: &Scene) -> (NewtonSettings, Stepping) {
         ..Stepping::default()
     };
     (newton, stepping)
-}
-
-/// Solves one level: from the converged state `u` at load factor `from` to `to`, and past a
-/// bifurcation onto the buckled branch by the §3.2 perturbation (`perturbation`: (DOF, force)
-/// pairs, empty for none) — [`nonlin3d_newton::solve_level`]. Returns the attempts, whether
-/// the perturbation was applied, and the negative pivots of the tangent at the final state.
-#[allow(clippy::too_many_arguments)]
-pub fn solve_level(
-    problem: &mut StructuralProblem,
-    u: &mut Vec<f64>,
-    from: f64,
-    to: f64,
-    perturbation: &[(usize, f64)],
-    newton: &NewtonSettings,
-    stepping: &Stepping,
-    session: &mut PathSolver,
-) -> Result<(Vec<IncrementReport>, bool, Option<usize>), Error> {
-    let level = nonlin3d_newton::solve_level(
-        problem,
-        u,
-        from,
-        to,
-        perturbation,
-        newton,
-        stepping,
-        session,
-    )?;
-    Ok((level.attempts, level.perturbed, level.negative_pivots))
 }
 
 /// G along the front at state `u`.
@@ -420,7 +393,8 @@ fn solve_or_redo(
 ) -> Result<Solved, Error> {
     let plate = model.kind == ModelKind::Plate;
     let start = u.clone();
-    let first = solve_level(problem, u, from, lambda, pert, newton, stepping, session);
+    let first = solve_level(problem, u, from, lambda, pert, newton, stepping, session)
+        .map(|l| (l.attempts, l.perturbed, l.negative_pivots));
     // BFGS's early directions come from an older tangent and can carry the sublaminate
     // across to the branch buckled into the base (seen on the reference scene at −0.003);
     // full Newton follows the outward branch, so the level is redone with it — also when
@@ -438,9 +412,9 @@ fn solve_or_redo(
             force_tolerance: newton.force_tolerance,
             ..NewtonSettings::default()
         };
-        let (more, p, piv) = solve_level(problem, u, from, lambda, pert, &full, stepping, session)?;
-        attempts.extend(more);
-        (perturbed, pivots) = (p, piv);
+        let level = solve_level(problem, u, from, lambda, pert, &full, stepping, session)?;
+        attempts.extend(level.attempts);
+        (perturbed, pivots) = (level.perturbed, level.negative_pivots);
     }
     Ok(Solved {
         attempts,

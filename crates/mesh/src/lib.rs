@@ -28,7 +28,6 @@
 mod error;
 mod front;
 mod generators;
-mod inp_read;
 mod io;
 mod model;
 pub mod names;
@@ -41,7 +40,7 @@ pub use generators::{
     edge_delamination, embedded_delamination, embedded_delamination_with_front, graded_coordinates,
     graded_from_first, structured_box, thin_film, through_width_delamination,
 };
-pub use inp_read::{
+pub use io::inp_read::{
     Amplitude, Controls, InpModel, NodeRef, NotUsed, OutputKind, OutputRequest, OutputVariable,
     ReadBoundary, ReadCload, ReadStep, StaticData, Totals, read_inp, read_inp_file,
 };

@@ -93,20 +93,18 @@ impl Block {
 mod tests {
     use super::*;
 
-    const HEX8: [[f64; 3]; 8] = [
-        [-1.0, -1.0, -1.0],
-        [1.0, -1.0, -1.0],
-        [1.0, 1.0, -1.0],
-        [-1.0, 1.0, -1.0],
-        [-1.0, -1.0, 1.0],
-        [1.0, -1.0, 1.0],
-        [1.0, 1.0, 1.0],
-        [-1.0, 1.0, 1.0],
-    ];
+    /// The eight corners, ξ fastest then η then ζ, in the counter-clockwise order of a Hex8.
+    fn hex8() -> Vec<[f64; 3]> {
+        let ring = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)];
+        [-1.0, 1.0]
+            .iter()
+            .flat_map(|&z| ring.iter().map(move |&(x, y)| [x, y, z]))
+            .collect()
+    }
 
     #[test]
     fn a_block_of_hex8_has_the_node_count_of_its_grid() {
-        let b = Block::new(&HEX8, [3, 2, 1], [1.0, 0.5, 0.25]);
+        let b = Block::new(&hex8(), [3, 2, 1], [1.0, 0.5, 0.25]);
         assert_eq!(b.coords.len(), 4 * 3 * 2);
         assert_eq!(b.cells.len(), 6);
         assert_eq!(b.nodes_at_zero(0).len(), 3 * 2);

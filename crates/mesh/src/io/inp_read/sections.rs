@@ -205,7 +205,7 @@ impl Reader {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::inp_read::lexer::logical_lines;
+    use crate::io::inp_read::lexer::logical_lines;
 
     fn axes(text: &str) -> [[f64; 3]; 3] {
         let lines = logical_lines(text, None).unwrap();
