@@ -8,11 +8,11 @@
 use crate::material::{AsMaterial, CylindricalAxes};
 use crate::prefetch::Prefetch;
 use crate::simd::{acc3, comb3, dot};
-use crate::syrk::syrk_lower;
 use crate::{ElementError, ElementKind, ShapeTable};
 use nonlin3d_laminate::Stiffness;
 
 mod point;
+mod tangent;
 use point::{Fixed, PointMaterial, Turning};
 
 /// Strain–displacement relations.
@@ -443,7 +443,6 @@ fn kernel<const NS: usize, const FMA: bool, P: PointMaterial>(
         tangent: want_tangent,
         ..
     } = job;
-    let nd = 3 * NS;
     let p = table.t_stride();
     let mut xs = [[0.0; NS]; 3];
     let mut us = [[0.0; NS]; 3];
@@ -544,48 +543,11 @@ fn kernel<const NS: usize, const FMA: bool, P: PointMaterial>(
         // (0, F_r2, 0), β_2r = (0, 0, F_r3), β_3r = (F_r2, F_r1, 0), β_4r = (0, F_r3, F_r2),
         // β_5r = (F_r3, 0, F_r1). So T row s, direction r = Σ_k c_srk ∇_k N with
         // c_srk = √w Σ_{i ≥ s} Q_is β_irk: three AXPYs along the nodes.
-        let sw = w.sqrt();
         let t = &mut ws.t[row0 * p..(row0 + hi - lo) * p];
-        for (sc, trow) in (lo..hi).zip(t.chunks_exact_mut(p)) {
-            let mut runs_r = [[0.0; NS]; 3];
-            for (r, run) in runs_r.iter_mut().enumerate() {
-                let fr_ = &f[r];
-                let beta = [
-                    [fr_[0], 0.0, 0.0],
-                    [0.0, fr_[1], 0.0],
-                    [0.0, 0.0, fr_[2]],
-                    [fr_[1], fr_[0], 0.0],
-                    [0.0, fr_[2], fr_[1]],
-                    [fr_[2], 0.0, fr_[0]],
-                ];
-                let mut cf = [0.0; 3];
-                for i in sc..hi {
-                    for k in 0..3 {
-                        cf[k] += q[i][sc] * beta[i][k];
-                    }
-                }
-                comb3::<NS, FMA>(run, [sw * cf[0], sw * cf[1], sw * cf[2]], &gr);
-            }
-            // Interleave the three direction runs into node-major DOF order 3m + r.
-            for (m, dst) in trow.chunks_exact_mut(3).take(NS).enumerate() {
-                dst[0] = runs_r[0][m];
-                dst[1] = runs_r[1][m];
-                dst[2] = runs_r[2][m];
-            }
-        }
+        tangent::t_rows::<NS, FMA>(t, p, (lo, hi), q, &f, w.sqrt(), &gr);
         row0 += hi - lo;
         if nonlinear {
-            // Geometric stiffness k^{mn} = Σ_i a_i^{mn} σ̂_i = (∇N^m)ᵀ σ̂ ∇N^n (eq. 2.2.5, 2.4.2.6),
-            // whole rows along n; only n ≤ m is used (so K stays exactly symmetric).
-            for m in 0..NS {
-                let gm = [gr[0][m], gr[1][m], gr[2][m]];
-                let hm = [
-                    sh[0][0] * gm[0] + sh[0][1] * gm[1] + sh[0][2] * gm[2],
-                    sh[1][0] * gm[0] + sh[1][1] * gm[1] + sh[1][2] * gm[2],
-                    sh[2][0] * gm[0] + sh[2][1] * gm[1] + sh[2][2] * gm[2],
-                ];
-                acc3::<NS, FMA>(&mut kg[m], hm, &gr);
-            }
+            tangent::geometric_rows::<NS, FMA>(&mut kg, &sh, &gr);
         }
     }
     for m in 0..NS {
@@ -594,26 +556,14 @@ fn kernel<const NS: usize, const FMA: bool, P: PointMaterial>(
         }
     }
     if want_tangent {
-        let k = out.tangent;
-        syrk_lower::<FMA>(&ws.t, row0, p, nd, job.prefetch, |a, b, v| {
-            k[a * nd + b] = v;
-            k[b * nd + a] = v;
-        });
-        if nonlinear {
-            // k^{mn} on the diagonal of each 3×3 node block (eq. 2.4.2.7), mirrored.
-            for m in 0..NS {
-                for n in 0..m {
-                    let kmn = kg[m][n];
-                    for r in 0..3 {
-                        k[(3 * m + r) * nd + 3 * n + r] += kmn;
-                        k[(3 * n + r) * nd + 3 * m + r] += kmn;
-                    }
-                }
-                for r in 0..3 {
-                    k[(3 * m + r) * nd + 3 * m + r] += kg[m][m];
-                }
-            }
-        }
+        tangent::finish::<NS, FMA>(
+            out.tangent,
+            &ws.t,
+            row0,
+            p,
+            job.prefetch,
+            nonlinear.then_some(&kg),
+        );
     }
     Ok(())
 }
