@@ -50,6 +50,8 @@ pub struct Evaluation {
     pub reactions: Vec<f64>,
     /// Σ_c E_c(u).
     pub energy: f64,
+    /// ‖f_ext(λ)‖∞, the largest external force (a force scale for convergence tests).
+    pub external_max: f64,
 }
 
 impl SystemBuilder {
@@ -347,6 +349,7 @@ impl System {
             residual: r,
             reactions,
             energy,
+            external_max: f.iter().fold(0.0f64, |a, v| a.max(v.abs())),
         })
     }
 

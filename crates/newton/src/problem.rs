@@ -239,11 +239,10 @@ impl NonlinearProblem for StructuralProblem {
     ) -> Result<f64, NewtonError> {
         let e = self.system.evaluate(u, lambda, tangent)?;
         r.copy_from_slice(&e.residual);
-        let f = self.system.external(lambda);
-        let scale = f
+        let scale = e
+            .reactions
             .iter()
-            .chain(&e.reactions)
-            .fold(0.0f64, |a, v| a.max(v.abs()));
+            .fold(e.external_max, |a, v| a.max(v.abs()));
         self.reactions = e.reactions;
         Ok(scale)
     }
