@@ -153,8 +153,14 @@ fn read_scene(path: Option<&Path>) -> Result<nonlin3d::Scene, nonlin3d::Error> {
                 path: p.to_path_buf(),
                 source,
             })?;
-            nonlin3d::Scene::from_toml(&text)
-                .map_err(|e| nonlin3d::Error::Scene(format!("{}: {e}", p.display())))
+            // "scene: FILE: what", not "scene: FILE: scene: what".
+            nonlin3d::Scene::from_toml(&text).map_err(|e| {
+                let what = match e {
+                    nonlin3d::Error::Scene(m) => m,
+                    other => other.to_string(),
+                };
+                nonlin3d::Error::Scene(format!("{}: {what}", p.display()))
+            })
         }
     }
 }

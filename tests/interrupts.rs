@@ -169,9 +169,13 @@ fn a_complete_run_says_so_and_cleans_what_an_earlier_run_left() {
 #[test]
 fn bad_input_exits_2_before_anything_runs() {
     let dir = tmp("bad-input");
-    let mut child = start(&dir, &scene_with("[]"));
-    let status = child.wait().unwrap();
-    assert_eq!(status.code(), Some(2));
+    let child = start(&dir, &scene_with("[]"));
+    let o = child.wait_with_output().unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    // The message names the file once and says "scene:" once.
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(err.matches("scene:").count(), 1, "{err}");
+    assert!(err.contains("scene.toml: loads.strains"), "{err}");
     // An output folder that cannot be made (a path below a regular file) is bad input too,
     // found before the analysis.
     std::fs::write(dir.join("file"), "").unwrap();
