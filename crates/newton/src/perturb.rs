@@ -4,7 +4,7 @@
 
 use crate::{
     IncrementReport, NewtonError, NewtonSettings, NonlinearProblem, PathReport, Stepping,
-    follow_path, follow_path_from, solve_increment,
+    follow_path_from, solve_increment,
 };
 
 /// A problem whose external force has a λ-independent part: r(u, λ) = f_int(u) − λ·f_ref −
@@ -27,12 +27,12 @@ fn set_scaled<P: DeadLoads>(
         .try_for_each(|&(dof, f)| problem.set_dead_load(dof, scale * f))
 }
 
-/// The thesis's way onto the postbuckled branch (§3.2): the transverse `perturbation` loads
-/// (DOF, force) act as dead loads while the path is followed to the first target; then they are
-/// removed all at once and the same load level is solved again without them; the path then
-/// continues through the remaining targets. Removing them fails like any increment would (a
-/// located [`NewtonError::Cutback`] naming the level) if the structure does not stay on the
-/// buckled branch at that level.
+/// The thesis's way onto the postbuckled branch (§3.2) over a whole path: the transverse
+/// `perturbation` loads (DOF, force) act as dead loads while the path is followed from λ = 0 to
+/// the first target; then they are removed at that λ by [`perturbed_step`] (all at once, and in
+/// parts with cutback if that fails); the path then continues through the remaining targets.
+/// A removal that fails even in the smallest part is a located
+/// [`NewtonError::Perturbation`] naming the level and the share of the load still on.
 pub fn perturbed_path<P: NonlinearProblem + DeadLoads>(
     problem: &mut P,
     u: &mut Vec<f64>,
@@ -44,41 +44,11 @@ pub fn perturbed_path<P: NonlinearProblem + DeadLoads>(
     let Some((&first, rest)) = targets.split_first() else {
         return Ok(PathReport::default());
     };
-    for &(dof, f) in perturbation {
-        problem.set_dead_load(dof, f)?;
-    }
-    let mut report = follow_path(problem, u, &[first], settings, stepping)?;
-    for &(dof, _) in perturbation {
-        problem.set_dead_load(dof, 0.0)?;
-    }
-    let mut solver = settings.solver.build();
-    solver.analyze(&problem.pattern())?;
-    let mut k = nonlin3d_solver::SymmetricMatrix::zeros(problem.pattern());
-    let mut trial = u.clone();
-    let removed = solve_increment(
-        problem,
-        &mut trial,
-        first,
-        settings,
-        solver.as_mut(),
-        &mut k,
-    )?;
-    let ok = removed.converged();
-    let reason = removed.termination.to_string();
-    report.attempts.push(removed);
-    if !ok {
-        return Err(NewtonError::Cutback {
-            target: first,
-            reached: first,
-            cutbacks: 0,
-            last_step: 0.0,
-            reason: format!("removing the perturbation load: {reason}"),
-        });
-    }
-    *u = trial;
-    if let Some(state) = report.states.last_mut() {
-        state.1 = u.clone();
-    }
+    let attempts = perturbed_step(problem, u, 0.0, first, perturbation, settings, stepping)?;
+    let mut report = PathReport {
+        attempts,
+        states: vec![(first, u.clone())],
+    };
     let more = follow_path_from(problem, u, first, rest, settings, stepping)?;
     report.attempts.extend(more.attempts);
     report.states.extend(more.states);
