@@ -75,6 +75,17 @@ impl NonlinearRegion {
 /// [`Partition::Thesis`]) no `front` node set; a front corner node lies off `front` (the shape
 /// does not describe this mesh); ℓ negative, not finite, or so large that no sublaminate cell
 /// lies ℓ inside the front (the error gives the largest ℓ that leaves cells).
+///
+/// ```
+/// use nonlin3d_mesh::{EmbeddedParams, Partition, embedded_delamination, nonlinear_region};
+/// let p = EmbeddedParams::thesis_reference();
+/// let mesh = embedded_delamination(&p).unwrap();
+/// let thesis = Partition::Thesis { offset_m: p.h };
+/// let region = nonlinear_region(&mesh, &p.front_shape(), thesis).unwrap();
+/// let (shortest, _) = region.realised_offset_m.unwrap();
+/// assert!(shortest >= p.h);
+/// assert_eq!(region.cells.len() + region.linear_cells(&mesh).len(), mesh.cells.len());
+/// ```
 pub fn nonlinear_region(
     mesh: &Mesh,
     front: &FrontShape,
