@@ -80,6 +80,35 @@ pub enum MeshError {
         /// Why.
         reason: String,
     },
+    /// A mesh lacks a set that an operation needs.
+    #[error("the mesh has no {kind} set `{name}`: {purpose}")]
+    MissingSet {
+        /// `"node"` or `"cell"`.
+        kind: &'static str,
+        /// The set's name.
+        name: &'static str,
+        /// What it is needed for.
+        purpose: &'static str,
+    },
+    /// The offset ℓ of the thesis's substructure partition (§3.2, Fig. 3.2.2) is out of range.
+    #[error("substructure offset ℓ = {offset_mm} mm: {reason}")]
+    Offset {
+        /// ℓ, mm.
+        offset_mm: f64,
+        /// Why, with the largest ℓ that works when there is one.
+        reason: String,
+    },
+    /// A front node of the mesh lies off the front shape given for it.
+    #[error(
+        "front node {node} lies {distance_mm:.4} mm from the given front shape: the shape was \
+         made from other parameters than the mesh"
+    )]
+    FrontMismatch {
+        /// The node.
+        node: usize,
+        /// Its inside distance from the shape, mm.
+        distance_mm: f64,
+    },
     /// Writing a file failed.
     #[error("writing {path}: {source}")]
     Io {

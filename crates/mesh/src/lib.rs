@@ -7,6 +7,7 @@
 //! | [`EmbeddedParams`], [`embedded_delamination`] | the embedded delamination model (ellipse, eq. 3.1.1–3.1.2, or rectangle, Fig. 3.1.3), Fig. 3.1.1 / 3.2.1, with optional ply-level layers ([`PlyLayout`], chapter 7) |
 //! | [`edge_delamination`], [`thin_film`] | the edge (§5.5) and thin-film (§5.3) variants |
 //! | [`ThroughWidthParams`], [`through_width_delamination`] | the through-width (plane strain) delamination model, Fig. 3.2.3 |
+//! | [`Partition`], [`nonlinear_region`], [`FrontShape`] | the nonlinear and linear substructures of §2.6 / Fig. 3.2.2: the sublaminate ℓ inside the front, or the whole sublaminate |
 //! | [`Front`], [`FrontPoint`] | delamination-front descriptor for VCCT (§2.8, Fig. 2.8.1): c, a/a′, b/b′, d, cells, Δa, θ, S |
 //! | [`quality`], [`CellQuality`] | minimum scaled Jacobian and aspect ratio per cell |
 //! | [`inp`], [`read_inp`] | Abaqus/CalculiX `.inp` deck writer, and reader of a documented subset |
@@ -36,9 +37,10 @@ mod quality;
 pub use error::MeshError;
 pub use front::{Front, FrontPoint};
 pub use generators::{
-    BoxParams, Centre, EllipticMap, EmbeddedParams, PlyLayout, ThroughWidthParams,
-    edge_delamination, embedded_delamination, embedded_delamination_with_front, graded_coordinates,
-    graded_from_first, structured_box, thin_film, through_width_delamination,
+    BoxParams, Centre, EllipticMap, EmbeddedParams, FrontShape, NonlinearRegion, Partition,
+    PlyLayout, ThroughWidthParams, edge_delamination, ellipse_distance, embedded_delamination,
+    embedded_delamination_with_front, graded_coordinates, graded_from_first, nonlinear_region,
+    structured_box, thin_film, through_width_delamination,
 };
 pub use io::inp_read::{
     Amplitude, Controls, InpModel, NodeRef, NotUsed, OutputKind, OutputRequest, OutputVariable,
