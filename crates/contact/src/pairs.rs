@@ -309,7 +309,7 @@ fn unit(n: [f64; 3]) -> Option<[f64; 3]> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use approx::assert_relative_eq;
     use nonlin3d_element::ElementKind;
@@ -317,7 +317,7 @@ mod tests {
 
     /// Two unit Hex8 cubes, one on the other, with separate nodes on z = 1: the lower cube's top
     /// is the lower face, the upper cube's bottom the upper face, paired by position.
-    fn stacked() -> (Mesh, Vec<usize>, Vec<usize>) {
+    pub(crate) fn stacked() -> (Mesh, Vec<usize>, Vec<usize>) {
         let mut nodes = Vec::new();
         for z in [0.0, 1.0, 1.0, 2.0] {
             for (x, y) in [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)] {
