@@ -196,3 +196,36 @@ impl std::fmt::Debug for PathSolver {
             .finish()
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::perturb::tests::compressed;
+    use crate::{NewtonSettings, NonlinearProblem, PathSolver, solve_increment};
+
+    /// A Newton solve at a fixed level through the session gives what a fresh solver gives
+    /// (the same iterations on the same tangents: bitwise), records the state as accepted,
+    /// and analyses nothing more; a session fitted to another pattern counts a second analysis.
+    #[test]
+    fn a_solve_at_a_level_reuses_the_analysis() {
+        let settings = NewtonSettings::default();
+        let (mut problem, _, _) = compressed();
+        let mut session = PathSolver::new(&problem, settings.solver).unwrap();
+        let mut u = vec![0.0; problem.n()];
+        let report = session.solve_at(&mut problem, &mut u, 0.3, &settings).unwrap();
+        assert!(report.converged());
+        assert_eq!(session.analyses(), 1);
+        assert_eq!(session.pivots_at(&u), report.negative_pivots());
+        let mut fresh = vec![0.0; problem.n()];
+        let mut solver = settings.solver.build();
+        solver.analyze(&problem.pattern()).unwrap();
+        let mut k = nonlin3d_solver::SymmetricMatrix::zeros(problem.pattern());
+        let plain =
+            solve_increment(&mut problem, &mut fresh, 0.3, &settings, &mut *solver, &mut k)
+                .unwrap();
+        assert!(fresh == u && plain.iterations == report.iterations);
+        // Another pattern: the session is made anew, and counts it.
+        let other = crate::problem::tests::bar_problem();
+        session.fit(&other, settings.solver).unwrap();
+        assert_eq!(session.analyses(), 2);
+    }
+}
