@@ -211,7 +211,9 @@ mod tests {
         let (mut problem, _, _) = compressed();
         let mut session = PathSolver::new(&problem, settings.solver).unwrap();
         let mut u = vec![0.0; problem.n()];
-        let report = session.solve_at(&mut problem, &mut u, 0.3, &settings).unwrap();
+        let report = session
+            .solve_at(&mut problem, &mut u, 0.3, &settings)
+            .unwrap();
         assert!(report.converged());
         assert_eq!(session.analyses(), 1);
         assert_eq!(session.pivots_at(&u), report.negative_pivots());
@@ -219,9 +221,15 @@ mod tests {
         let mut solver = settings.solver.build();
         solver.analyze(&problem.pattern()).unwrap();
         let mut k = nonlin3d_solver::SymmetricMatrix::zeros(problem.pattern());
-        let plain =
-            solve_increment(&mut problem, &mut fresh, 0.3, &settings, &mut *solver, &mut k)
-                .unwrap();
+        let plain = solve_increment(
+            &mut problem,
+            &mut fresh,
+            0.3,
+            &settings,
+            &mut *solver,
+            &mut k,
+        )
+        .unwrap();
         assert!(fresh == u && plain.iterations == report.iterations);
         // Another pattern: the session is made anew, and counts it.
         let other = crate::problem::tests::bar_problem();
