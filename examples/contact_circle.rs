@@ -3,8 +3,9 @@
 //! `nonlin3d_contact::Contact::solve_level` instead of the facade's own loop, G along the front
 //! by the facade's VCCT table with `vcct::respect_contact` (G_I = 0 at closed points). Prints per
 //! level: passes, pairs closed and opened, Newton iterations, closed pairs, the largest overlap,
-//! time; and at the last level G_I, G_II and the face state along the front, with contact and
-//! without (the same sweep with the contact loop left out).
+//! time; and at the last level G_I, G_II and the face state along the front without contact
+//! (the same sweep with the contact loop left out), with two-body contact, and with the thesis's
+//! external-force approximation (Fig. 2.7.1c).
 //!
 //! Run: `cargo run --release --example contact_circle [strains…]` (default −0.001 … −0.005).
 
@@ -13,7 +14,7 @@ use nonlin3d::model::{build_model, perturbation_force, perturbation_loads};
 use nonlin3d::newton::{NonlinearProblem, PathSolver, StructuralProblem, solve_level};
 use nonlin3d::vcct::{FaceState, FrontRelease, respect_contact};
 use nonlin3d::{Scene, mesh::names};
-use nonlin3d_contact::{Contact, ContactSettings};
+use nonlin3d_contact::{Contact, ContactSettings, Mode};
 use std::time::Instant;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -42,9 +43,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         model.front.points.len()
     );
     let mut last: Vec<(Vec<FrontRelease>, Vec<FaceState>)> = Vec::new();
-    for with_contact in [false, true] {
+    for mode in [None, Some(Mode::TwoBody), Some(Mode::External)] {
+        let with_contact = mode.is_some();
         let (assembler, constraints) = build_problem(&scene, &model)?.into_parts()?;
-        let mut contact = Contact::new(&model.mesh, ContactSettings::default())?;
+        let settings = ContactSettings {
+            mode: mode.unwrap_or_default(),
+            ..ContactSettings::default()
+        };
+        let mut contact = Contact::new(&model.mesh, settings)?;
         let mut problem =
             StructuralProblem::with_contributions(assembler, Vec::new(), constraints, |b| {
                 contact.reserve(b)
@@ -53,7 +59,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let mut u = vec![0.0; problem.n()];
         let (mut from, mut perturbed) = (0.0, false);
         let t_all = Instant::now();
-        println!("\ncontact {}:", if with_contact { "on" } else { "off" });
+        println!(
+            "\ncontact {}:",
+            match mode {
+                None => "off",
+                Some(Mode::TwoBody) => "on, two-body",
+                Some(Mode::External) => "on, the thesis's external force",
+            }
+        );
         for (&lambda, strain) in factors.iter().zip(&scene.loads.strains) {
             let t = Instant::now();
             let pert: &[(usize, f64)] = if perturbed { &[] } else { &perturbation };
@@ -124,18 +137,21 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
         println!("sweep {:.2} s", t_all.elapsed().as_secs_f64());
     }
-    if let [(off, s_off), (on, s_on)] = &last[..] {
-        println!("\nlast level, along the front: S mm | off: G_I G_II state | on: G_I G_II state");
-        for (((a, sa), b), sb) in off.iter().zip(s_off).zip(on).zip(s_on) {
+    if let [(off, s_off), (on, s_on), (ext, s_ext)] = &last[..] {
+        println!(
+            "\nlast level, along the front: S mm | off: G_I G_II state | two-body: G_I G_II state \
+             | external force: G_I G_II state"
+        );
+        for i in 0..off.len() {
+            let row = |r: &FrontRelease, s: &FaceState| {
+                format!("{:8.2} {:8.2} {:7}", r.g_i, r.g_ii, s.to_string())
+            };
             println!(
-                "{:6.2} | {:8.2} {:8.2} {:7} | {:8.2} {:8.2} {:7}",
-                a.s * 1e3,
-                a.g_i,
-                a.g_ii,
-                sa.to_string(),
-                b.g_i,
-                b.g_ii,
-                sb.to_string()
+                "{:6.2} | {} | {} | {}",
+                off[i].s * 1e3,
+                row(&off[i], &s_off[i]),
+                row(&on[i], &s_on[i]),
+                row(&ext[i], &s_ext[i])
             );
         }
     }
