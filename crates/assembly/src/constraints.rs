@@ -2,7 +2,7 @@
 //! factor λ. How they are applied to an assembled system is `constrain.rs`.
 
 use crate::AssemblyError;
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 
 /// Constraints and loads of a model with `n` DOFs (3 per node, node-major).
 ///
@@ -20,6 +20,8 @@ pub struct Constraints {
     ties: Vec<Tie>,
     /// The group of each tie (parallel to `ties`).
     groups: Vec<TieGroup>,
+    /// Groups whose offsets are held at full value whatever λ ([`Constraints::hold_offsets`]).
+    held: BTreeSet<TieGroup>,
 }
 
 /// A set of ties replaced or removed as a whole ([`Constraints::replace_tie_group`]), e.g. the
@@ -48,7 +50,8 @@ pub struct Tie {
     pub slave: usize,
     /// (master DOF, coefficient).
     pub masters: Vec<(usize, f64)>,
-    /// Constant part at λ = 1 (scaled by λ like a prescribed value).
+    /// Constant part at λ = 1 (scaled by λ like a prescribed value, unless its group's offsets
+    /// are held: [`Constraints::hold_offsets`]).
     pub offset: f64,
 }
 
@@ -62,7 +65,25 @@ impl Constraints {
             dead: vec![0.0; n],
             ties: Vec::new(),
             groups: Vec::new(),
+            held: BTreeSet::new(),
         }
+    }
+
+    /// Holds the offsets of the ties of `group` at their full value whatever λ (`held`), or
+    /// scales them by λ again (the default): u_s = Σ c·u_m + b instead of + λ·b, e.g. a contact
+    /// pair's initial gap, a geometric fact that does not grow with the load. Applies to the
+    /// group's present and future ties.
+    pub fn hold_offsets(&mut self, group: TieGroup, held: bool) {
+        if held {
+            self.held.insert(group);
+        } else {
+            self.held.remove(&group);
+        }
+    }
+
+    /// Whether the offsets of `group` are held ([`hold_offsets`](Self::hold_offsets)).
+    pub fn offsets_held(&self, group: TieGroup) -> bool {
+        self.held.contains(&group)
     }
 
     /// Ties DOF `slave` to `masters`: u_slave = Σ c·u_master + λ·`offset`, in
@@ -290,21 +311,22 @@ impl Constraints {
     }
 
     /// Sets the constrained entries of `u` to their values at load factor λ: prescribed DOFs,
-    /// then tied slaves from their masters.
+    /// then tied slaves from their masters (offsets × λ, or × 1 in held groups).
     pub fn apply(&self, u: &mut [f64], lambda: f64) {
         for (&d, &(b, v)) in &self.prescribed {
             if let Some(x) = u.get_mut(d) {
                 *x = b + lambda * v;
             }
         }
-        for t in &self.ties {
+        for (t, g) in self.ties.iter().zip(&self.groups) {
+            let scale = if self.held.contains(g) { 1.0 } else { lambda };
             let v: f64 = t
                 .masters
                 .iter()
                 .map(|&(m, c)| c * u.get(m).copied().unwrap_or(0.0))
                 .sum();
             if let Some(x) = u.get_mut(t.slave) {
-                *x = v + lambda * t.offset;
+                *x = v + scale * t.offset;
             }
         }
     }
@@ -358,6 +380,35 @@ mod tests {
         c.replace_tie_group(TieGroup(2), &[]).unwrap();
         assert_eq!(c.tie_group(TieGroup(2)).count(), 0);
         assert_eq!(c.ties().len(), 2);
+    }
+
+    /// A held group's offset is the same at every λ; another group's grows with λ; releasing
+    /// the hold scales it again.
+    #[test]
+    fn held_offsets_do_not_scale_with_the_load_factor() {
+        let mut c = Constraints::new(6);
+        let held = TieGroup(3);
+        c.tie(0, &[(1, 1.0)], 0.5).unwrap();
+        c.replace_tie_group(
+            held,
+            &[Tie {
+                slave: 2,
+                masters: vec![(3, 2.0)],
+                offset: -0.25,
+            }],
+        )
+        .unwrap();
+        c.hold_offsets(held, true);
+        assert!(c.offsets_held(held) && !c.offsets_held(TieGroup::DEFAULT));
+        let mut u = vec![1.0; 6];
+        for lambda in [0.0, 0.4, 1.0] {
+            c.apply(&mut u, lambda);
+            assert_eq!(u[0], 1.0 + lambda * 0.5);
+            assert_eq!(u[2], 2.0 - 0.25);
+        }
+        c.hold_offsets(held, false);
+        c.apply(&mut u, 0.4);
+        assert_eq!(u[2], 2.0 - 0.4 * 0.25);
     }
 
     /// A released DOF is free: not constrained, its value left alone by `apply`, and it may

@@ -249,7 +249,7 @@ impl NonlinearProblem for StructuralProblem {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::{NewtonSettings, Stepping, follow_path};
     use nonlin3d_element::{ElementKind, IntegrationRule, Kinematics};
@@ -312,6 +312,11 @@ mod tests {
             "{reaction} N"
         );
         assert!(u[x1[0]] > 0.0);
+    }
+
+    /// The bar's problem alone (another pattern than the other tests' models).
+    pub(crate) fn bar_problem() -> StructuralProblem {
+        bar().0
     }
 
     /// Constraints of another size are refused by name, and the problem keeps its own.

@@ -35,6 +35,9 @@ pub struct PathSolver {
     /// Negative pivots at `state` (from the last factorisation of the increment that reached
     /// it, or one made there).
     pub(crate) pivots: Option<usize>,
+    /// Symbolic analyses made over the session's life (1 from [`PathSolver::new`], one more
+    /// each time [`fit`](Self::fit) had to make it anew).
+    analyses: usize,
 }
 
 impl PathSolver {
@@ -50,7 +53,45 @@ impl PathSolver {
             cache: TangentCache::new(),
             state: Vec::new(),
             pivots: None,
+            analyses: 1,
         })
+    }
+
+    /// Symbolic analyses this session made (1 unless the pattern or the solver kind changed
+    /// under it): a change of constraints within the pattern (a replaced tie group, a
+    /// released DOF) costs none.
+    pub fn analyses(&self) -> usize {
+        self.analyses
+    }
+
+    /// Newton at the fixed load factor λ from `u` (updated in place, also when not
+    /// converged) with this session's solver and tangent: no new analysis. For a re-solve
+    /// after the constraints changed at a converged state (a contact active set); the kept
+    /// factorisation is forgotten first, since it was made under the old constraints.
+    pub fn solve_at(
+        &mut self,
+        problem: &mut dyn NonlinearProblem,
+        u: &mut [f64],
+        lambda: f64,
+        settings: &crate::NewtonSettings,
+    ) -> Result<crate::IncrementReport, NewtonError> {
+        self.fit(problem, settings.solver)?;
+        self.cache.invalidate();
+        let report = crate::solve_increment_with(
+            problem,
+            u,
+            lambda,
+            settings,
+            &mut *self.solver,
+            &mut self.k,
+            &mut self.cache,
+        )?;
+        if report.converged() {
+            self.accept(u, report.negative_pivots());
+        } else {
+            self.cache.invalidate();
+        }
+        Ok(report)
     }
 
     /// The solver kind.
@@ -69,7 +110,9 @@ impl PathSolver {
         if kind != self.kind
             || !(Arc::ptr_eq(self.k.pattern(), &pattern) || **self.k.pattern() == *pattern)
         {
+            let analyses = self.analyses;
             *self = Self::new(problem, kind)?;
+            self.analyses = analyses + 1;
         }
         Ok(())
     }
@@ -151,5 +194,46 @@ impl std::fmt::Debug for PathSolver {
             .field("n", &self.k.pattern().n())
             .field("factored", &self.cache.is_factored())
             .finish()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::perturb::tests::compressed;
+    use crate::{NewtonSettings, NonlinearProblem, PathSolver, solve_increment};
+
+    /// A Newton solve at a fixed level through the session gives what a fresh solver gives
+    /// (the same iterations on the same tangents: bitwise), records the state as accepted,
+    /// and analyses nothing more; a session fitted to another pattern counts a second analysis.
+    #[test]
+    fn a_solve_at_a_level_reuses_the_analysis() {
+        let settings = NewtonSettings::default();
+        let (mut problem, _, _) = compressed();
+        let mut session = PathSolver::new(&problem, settings.solver).unwrap();
+        let mut u = vec![0.0; problem.n()];
+        let report = session
+            .solve_at(&mut problem, &mut u, 0.3, &settings)
+            .unwrap();
+        assert!(report.converged());
+        assert_eq!(session.analyses(), 1);
+        assert_eq!(session.pivots_at(&u), report.negative_pivots());
+        let mut fresh = vec![0.0; problem.n()];
+        let mut solver = settings.solver.build();
+        solver.analyze(&problem.pattern()).unwrap();
+        let mut k = nonlin3d_solver::SymmetricMatrix::zeros(problem.pattern());
+        let plain = solve_increment(
+            &mut problem,
+            &mut fresh,
+            0.3,
+            &settings,
+            &mut *solver,
+            &mut k,
+        )
+        .unwrap();
+        assert!(fresh == u && plain.iterations == report.iterations);
+        // Another pattern: the session is made anew, and counts it.
+        let other = crate::problem::tests::bar_problem();
+        session.fit(&other, settings.solver).unwrap();
+        assert_eq!(session.analyses(), 2);
     }
 }

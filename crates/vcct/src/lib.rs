@@ -7,6 +7,7 @@
 //! | [`release_rates`] | G per mode at the front corners: eq. 2.8.1 weighting, eq. 2.8.2 local frame | §2.8 |
 //! | [`cells_above`] | the cells whose internal forces give the forces at c and d | §2.8 |
 //! | [`closure_energy`] | Σ G_T·area, the VCCT estimate of −ΔU | — |
+//! | [`respect_contact`], [`FaceState`] | G_I = 0 where contact holds the faces behind a point; open/closed/overlap per point | §5.4 |
 //! | [`MixedMode`] | power law and Benzeggagh–Kenane failure indices | — |
 //! | [`critical_strain`] | onset strain of a strain sweep by interpolation | — |
 //!
@@ -26,10 +27,12 @@
     warn(clippy::unwrap_used, clippy::expect_used, clippy::panic)
 )]
 
+mod contact;
 mod criteria;
 mod error;
 mod release;
 
+pub use contact::{FaceState, respect_contact};
 pub use criteria::{CriticalStrain, MixedMode, critical_strain};
 pub use error::VcctError;
 pub use release::{FrontRelease, OPEN_ALLOWANCE, cells_above, closure_energy, release_rates};

@@ -23,7 +23,9 @@ pub struct FrontRelease {
     pub area: f64,
     /// Mode I (opening, z′) release rate, J/m². Physical only where the faces behind the point
     /// are apart ([`FrontRelease::open`]); where they overlap the state penetrates (no contact
-    /// is modelled) and G_I — of either sign there — and the mode split mean nothing.
+    /// is modelled) and G_I — of either sign there — and the mode split mean nothing. With
+    /// contact, [`respect_contact`](crate::respect_contact) sets it to 0 where the faces behind
+    /// are held together.
     pub g_i: f64,
     /// Mode II (sliding normal to the front, y′), J/m².
     pub g_ii: f64,

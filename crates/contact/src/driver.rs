@@ -1,0 +1,504 @@
+//! The contact loop of thesis Fig. 2.7.2 around one load level: solve, update the normals, the
+//! gaps and the active set, re-solve at the same level, until the set does not change.
+//!
+//! Each pass reads the gaps g = n·(x_up − x_low) with the normals of the deformed lower face and
+//! the contact forces p = R_s/n_k of the tied pairs (the slave reactions, `tie`), changes the set
+//! ([`update`]), installs the ties of the new set with the current normals as one replaced tie
+//! group (within couplings reserved once: no new pattern, no new symbolic analysis) and solves
+//! again at the same load factor; a set seen before at the level is a cycle and ends the level
+//! with [`ContactError::Cycle`].
+
+use crate::active::{Change, Tolerances, update};
+use crate::tie::{candidate_tie, contact_force, contact_tie, slave_component};
+use crate::{ContactError, CrackFaces, Pair};
+use nonlin3d_assembly::{SystemBuilder, TieGroup};
+use nonlin3d_mesh::Mesh;
+use nonlin3d_newton::{
+    LevelReport, NewtonSettings, NonlinearProblem, PathSolver, Stepping, StructuralProblem,
+    follow_path_with, solve_level,
+};
+
+/// How an active pair is held.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Mode {
+    /// Two-body contact: the pair is tied, n·(u_up − u_low) = −g₀; the contact force acts on
+    /// both faces (Fig. 2.7.1b).
+    #[default]
+    TwoBody,
+    /// The thesis's approximation (Fig. 2.7.1c): the upper node's w is prescribed to the lower
+    /// node's current height (re-taken at each pass); the force that holds it is external, the
+    /// base does not react it.
+    External,
+}
+
+/// Settings of the contact loop.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ContactSettings {
+    /// Overlap allowed before a pair closes (m). Default 1e-9 m: far above the round-off of
+    /// coordinates of centimetre models (1e-18 m), far below the overlaps that matter.
+    pub gap_tolerance: f64,
+    /// Tension allowed before a pair opens (N); the Newton tolerance of the state
+    /// (relative tolerance × force scale, the accuracy of a reaction) when larger. Default 0.
+    pub force_tolerance: f64,
+    /// Most passes (re-solves) at one level. Default 50.
+    pub max_passes: usize,
+    /// Two-body or the thesis's external force.
+    pub mode: Mode,
+    /// The tie group of the contact ties. Default `TieGroup(0xC0)`.
+    pub group: TieGroup,
+}
+
+impl Default for ContactSettings {
+    fn default() -> Self {
+        Self {
+            gap_tolerance: 1e-9,
+            force_tolerance: 0.0,
+            max_passes: 50,
+            mode: Mode::TwoBody,
+            group: TieGroup(0xC0),
+        }
+    }
+}
+
+/// Gaps, forces and the set at a state: the results of contact.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ContactState {
+    /// Contact normal of each pair (deformed lower face).
+    pub normals: Vec<[f64; 3]>,
+    /// Gap of each pair, m (negative: overlap).
+    pub gaps: Vec<f64>,
+    /// Contact force of each pair, N (compressive positive; 0 at open pairs).
+    pub forces: Vec<f64>,
+    /// Whether each pair is closed (in the active set).
+    pub active: Vec<bool>,
+    /// The force tolerance used (N).
+    pub force_tolerance: f64,
+}
+
+impl ContactState {
+    /// Σ p·n over the closed pairs: the total force the base exerts on the sublaminate (N).
+    pub fn total_force(&self) -> [f64; 3] {
+        let mut t = [0.0; 3];
+        for (p, n) in self.forces.iter().zip(&self.normals) {
+            for k in 0..3 {
+                t[k] += p * n[k];
+            }
+        }
+        t
+    }
+}
+
+/// One pass of the loop: the change made and the re-solve it cost.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PassReport {
+    /// Pairs closed (indices into [`CrackFaces::pairs`]).
+    pub closed: Vec<usize>,
+    /// Pairs opened.
+    pub opened: Vec<usize>,
+    /// Newton iterations of the re-solve.
+    pub iterations: usize,
+    /// Whether the re-solve at the level failed and the level was followed again from its start
+    /// with the new set.
+    pub redone: bool,
+}
+
+/// What one level of [`Contact::solve_level`] did.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ContactLevel {
+    /// The level's load factor.
+    pub lambda: f64,
+    /// The first solve (path following to the level with the set of the previous level).
+    pub first: LevelReport,
+    /// The passes that changed the set, in order.
+    pub passes: Vec<PassReport>,
+    /// Contact results at the converged state.
+    pub state: ContactState,
+}
+
+impl ContactLevel {
+    /// Newton iterations of the level: the first solve's and every re-solve's.
+    pub fn newton_iterations(&self) -> usize {
+        self.first
+            .attempts
+            .iter()
+            .map(|a| a.iterations.len())
+            .sum::<usize>()
+            + self.passes.iter().map(|p| p.iterations).sum::<usize>()
+    }
+
+    /// Pairs closed over the level (counted at each pass).
+    pub fn closed(&self) -> usize {
+        self.passes.iter().map(|p| p.closed.len()).sum()
+    }
+
+    /// Pairs opened over the level (counted at each pass).
+    pub fn opened(&self) -> usize {
+        self.passes.iter().map(|p| p.opened.len()).sum()
+    }
+}
+
+/// The constraint installed for an active pair: the constrained component and the normal.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Held {
+    component: usize,
+    normal: [f64; 3],
+}
+
+/// Crack-face contact of one model: the pairs, the settings, the active set and what holds it.
+#[derive(Debug, Clone)]
+pub struct Contact {
+    faces: CrackFaces,
+    settings: ContactSettings,
+    /// The installed constraint of each pair (None: open).
+    held: Vec<Option<Held>>,
+}
+
+impl Contact {
+    /// Contact of the mesh's paired crack faces ([`CrackFaces::from_mesh`]), all pairs open.
+    pub fn new(mesh: &Mesh, settings: ContactSettings) -> Result<Self, ContactError> {
+        Self::with_faces(CrackFaces::from_mesh(mesh)?, settings)
+    }
+
+    /// Contact of given crack faces, all pairs open.
+    pub fn with_faces(faces: CrackFaces, settings: ContactSettings) -> Result<Self, ContactError> {
+        let bad = |name, reason: String| Err(ContactError::Setting { name, reason });
+        if !(settings.gap_tolerance >= 0.0 && settings.gap_tolerance.is_finite()) {
+            return bad("gap_tolerance", format!("{} m", settings.gap_tolerance));
+        }
+        if !(settings.force_tolerance >= 0.0 && settings.force_tolerance.is_finite()) {
+            return bad("force_tolerance", format!("{} N", settings.force_tolerance));
+        }
+        if settings.max_passes == 0 {
+            return bad("max_passes", "at least one pass".into());
+        }
+        Ok(Self {
+            held: vec![None; faces.len()],
+            faces,
+            settings,
+        })
+    }
+
+    /// Reserves every candidate pair's couplings in the system to be built (both whole nodes of
+    /// each pair): any active set then fits the pattern.
+    pub fn reserve(&self, builder: SystemBuilder) -> SystemBuilder {
+        let ties: Vec<_> = self
+            .faces
+            .pairs()
+            .iter()
+            .map(|&p| candidate_tie(p))
+            .collect();
+        builder.reserve_ties(&ties)
+    }
+
+    /// The crack faces.
+    pub fn faces(&self) -> &CrackFaces {
+        &self.faces
+    }
+
+    /// The settings.
+    pub fn settings(&self) -> &ContactSettings {
+        &self.settings
+    }
+
+    /// Whether each pair is closed.
+    pub fn active(&self) -> Vec<bool> {
+        self.held.iter().map(Option::is_some).collect()
+    }
+
+    /// Makes `active` the set, held with the normals of the state `u` (ties in the contact
+    /// group, or prescribed heights in [`Mode::External`]). Errors: a pair with no free
+    /// component to hold it, or constraints that refuse the ties.
+    pub fn install(
+        &mut self,
+        problem: &mut StructuralProblem,
+        u: &[f64],
+        active: &[bool],
+    ) -> Result<(), ContactError> {
+        if active.len() != self.faces.len() {
+            return Err(ContactError::Length {
+                what: "active set",
+                expected: self.faces.len(),
+                got: active.len(),
+            });
+        }
+        let normals = self.faces.normals(u)?;
+        let g0 = self.faces.initial_gaps(&normals);
+        let group = self.settings.group;
+        let pairs = self.faces.pairs();
+        // Release what contact itself prescribed, so that those DOFs count as free again.
+        for (p, h) in pairs.iter().zip(&self.held) {
+            if let (Mode::External, Some(h)) = (self.settings.mode, h) {
+                problem.system_mut().release(3 * p.upper + h.component);
+            }
+        }
+        let mut held = vec![None; pairs.len()];
+        let mut ties = Vec::new();
+        for (i, &p) in pairs.iter().enumerate().filter(|(i, _)| active[*i]) {
+            let constraints = problem.constraints();
+            let unheld = |node: usize| ContactError::Node {
+                node,
+                reason: "every component of this upper-face node is prescribed: contact \
+                         cannot hold it"
+                    .into(),
+            };
+            match self.settings.mode {
+                Mode::TwoBody => {
+                    let n = normals[i];
+                    let k = slave_component(p, n, |d| !constraints.is_constrained(d))
+                        .ok_or_else(|| unheld(p.upper))?;
+                    ties.push(contact_tie(p, n, g0[i], k));
+                    held[i] = Some(Held {
+                        component: k,
+                        normal: n,
+                    });
+                }
+                Mode::External => {
+                    let d = 3 * p.upper + 2;
+                    if constraints.is_constrained(d) {
+                        return Err(unheld(p.upper));
+                    }
+                    let (xu, xl) = (self.faces.position(p.upper), self.faces.position(p.lower));
+                    let value = xl[2] + u[3 * p.lower + 2] - xu[2];
+                    problem
+                        .system_mut()
+                        .constraints_mut()
+                        .prescribe_ramp(d, value, value)?;
+                    held[i] = Some(Held {
+                        component: 2,
+                        normal: [0.0, 0.0, 1.0],
+                    });
+                }
+            }
+        }
+        let system = problem.system_mut();
+        system.constraints_mut().hold_offsets(group, true);
+        system.replace_tie_group(group, &ties)?;
+        self.held = held;
+        Ok(())
+    }
+
+    /// Gaps, forces and the set at the converged state (u, λ): one evaluation of the problem
+    /// (for the reactions); the force tolerance max(setting, ε_r·F) with ε_r `newton`'s relative
+    /// tolerance and F the state's force scale.
+    pub fn state(
+        &self,
+        problem: &mut StructuralProblem,
+        u: &[f64],
+        lambda: f64,
+        newton: &NewtonSettings,
+    ) -> Result<ContactState, ContactError> {
+        let normals = self.faces.normals(u)?;
+        let gaps = self.faces.gaps(u, &normals);
+        let mut r = vec![0.0; problem.n()];
+        let scale = problem.evaluate(u, lambda, &mut r, None)?;
+        let reactions = problem.reactions();
+        let forces = self
+            .faces
+            .pairs()
+            .iter()
+            .zip(&self.held)
+            .map(|(&p, h)| h.map_or(0.0, |h| contact_force(reactions, p, h.normal, h.component)))
+            .collect();
+        // In External mode the normal of a closed pair is the direction it is held in.
+        let normals = normals
+            .iter()
+            .zip(&self.held)
+            .map(|(&n, h)| match (self.settings.mode, h) {
+                (Mode::External, Some(h)) => h.normal,
+                _ => n,
+            })
+            .collect();
+        Ok(ContactState {
+            normals,
+            gaps,
+            forces,
+            active: self.active(),
+            force_tolerance: self
+                .settings
+                .force_tolerance
+                .max(newton.relative_tolerance * scale),
+        })
+    }
+
+    /// One level with contact (Fig. 2.7.2): path following from the converged state `u` at
+    /// `from` to `to` with the current set ([`solve_level`]: stability test and perturbation as
+    /// there), then passes — the set updated from the gaps and forces, installed with the
+    /// current normals, and the level re-solved at `to` (Newton from the current state; if
+    /// that fails, path following again from the level's start with the new set) — until the
+    /// set does not change. Errors: a set seen before at this level ([`ContactError::Cycle`],
+    /// naming λ and the pairs that flip), more than `max_passes` passes, and what path
+    /// following returns.
+    #[allow(clippy::too_many_arguments)]
+    pub fn solve_level(
+        &mut self,
+        problem: &mut StructuralProblem,
+        u: &mut Vec<f64>,
+        from: f64,
+        to: f64,
+        perturbation: &[(usize, f64)],
+        newton: &NewtonSettings,
+        stepping: &Stepping,
+        session: &mut PathSolver,
+    ) -> Result<ContactLevel, ContactError> {
+        let start = u.clone();
+        let first = solve_level(
+            problem,
+            u,
+            from,
+            to,
+            perturbation,
+            newton,
+            stepping,
+            session,
+        )?;
+        let mut passes = Vec::new();
+        let mut seen = vec![self.active()];
+        loop {
+            let state = self.state(problem, u, to, newton)?;
+            let tol = Tolerances {
+                gap: self.settings.gap_tolerance,
+                force: state.force_tolerance,
+            };
+            let change = update(&state.gaps, &state.forces, &state.active, tol);
+            if change.is_empty() {
+                return Ok(ContactLevel {
+                    lambda: to,
+                    first,
+                    passes,
+                    state,
+                });
+            }
+            let mut next = state.active.clone();
+            change.apply(&mut next);
+            self.check_progress(to, &seen, &next, passes.len(), &change)?;
+            seen.push(next.clone());
+            self.install(problem, u, &next)?;
+            let (iterations, redone) =
+                self.resolve(problem, u, (&start, from, to), newton, stepping, session)?;
+            passes.push(PassReport {
+                closed: change.added,
+                opened: change.released,
+                iterations,
+                redone,
+            });
+        }
+    }
+
+    /// Refuses a set `next` seen before at the level (a cycle: the pairs whose state differs
+    /// among the sets since its first visit flip) and a pass beyond the limit.
+    fn check_progress(
+        &self,
+        lambda: f64,
+        seen: &[Vec<bool>],
+        next: &[bool],
+        passes: usize,
+        change: &Change,
+    ) -> Result<(), ContactError> {
+        if let Some(first) = seen.iter().position(|s| s == next) {
+            let pairs: Vec<Pair> = (0..next.len())
+                .filter(|&i| seen[first..].iter().any(|s| s[i] != next[i]))
+                .map(|i| self.faces.pairs()[i])
+                .collect();
+            return Err(ContactError::Cycle {
+                lambda,
+                passes,
+                pairs,
+            });
+        }
+        if passes >= self.settings.max_passes {
+            return Err(ContactError::Passes {
+                lambda,
+                passes,
+                closed: change.added.len(),
+                opened: change.released.len(),
+            });
+        }
+        Ok(())
+    }
+
+    /// The re-solve of a pass at λ = `to`: Newton from `u` with the session's solver; if it
+    /// does not converge, path following from the level's start (`start` at `from`). Returns
+    /// the Newton iterations and whether the level was followed again.
+    fn resolve(
+        &mut self,
+        problem: &mut StructuralProblem,
+        u: &mut Vec<f64>,
+        (start, from, to): (&[f64], f64, f64),
+        newton: &NewtonSettings,
+        stepping: &Stepping,
+        session: &mut PathSolver,
+    ) -> Result<(usize, bool), ContactError> {
+        let mut trial = u.clone();
+        let report = session.solve_at(problem, &mut trial, to, newton)?;
+        let mut iterations = report.iterations.len();
+        if report.converged() {
+            *u = trial;
+            return Ok((iterations, false));
+        }
+        u.clear();
+        u.extend_from_slice(start);
+        session.invalidate();
+        let path = follow_path_with(problem, u, from, &[to], newton, stepping, session)?;
+        iterations += path
+            .attempts
+            .iter()
+            .map(|a| a.iterations.len())
+            .sum::<usize>();
+        Ok((iterations, true))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::pairs::tests::stacked;
+
+    /// A set seen before at the level is a cycle: the error names the level and the pairs whose
+    /// state differs among the sets since its first visit (here pairs 1 and 2, which flip in
+    /// turn), not the pair that stayed; a new set passes until the pass limit.
+    #[test]
+    fn a_repeated_set_is_a_cycle_naming_the_flipping_pairs() {
+        let (mesh, up, lo) = stacked();
+        let faces = CrackFaces::from_sets(&mesh, &up, &lo).unwrap();
+        let settings = ContactSettings {
+            max_passes: 3,
+            ..ContactSettings::default()
+        };
+        let contact = Contact::with_faces(faces, settings).unwrap();
+        let change = Change::default();
+        let seen = vec![
+            vec![true, false, false, false],
+            vec![true, true, false, false],
+            vec![true, false, true, false],
+        ];
+        let e = contact
+            .check_progress(0.75, &seen, &[true, true, false, false], 2, &change)
+            .unwrap_err();
+        match &e {
+            ContactError::Cycle {
+                lambda,
+                passes,
+                pairs,
+            } => {
+                assert_eq!((*lambda, *passes), (0.75, 2));
+                let (a, b) = (contact.faces().pairs()[1], contact.faces().pairs()[2]);
+                assert_eq!(pairs, &[a, b]);
+            }
+            other => panic!("{other}"),
+        }
+        assert_eq!(
+            e.to_string(),
+            "contact at λ = 0.75: the active set repeats after 2 passes (a cycle); the pairs \
+             that flip: nodes 9/5, nodes 10/6"
+        );
+        assert!(
+            contact
+                .check_progress(0.75, &seen, &[false; 4], 2, &change)
+                .is_ok()
+        );
+        assert!(matches!(
+            contact.check_progress(0.75, &seen, &[false; 4], 3, &change),
+            Err(ContactError::Passes { passes: 3, .. })
+        ));
+    }
+}

@@ -1,0 +1,48 @@
+//! Frictionless crack-face contact by active set for nonlin3d (thesis §2.7, Fig. 2.7.1–2.7.2,
+//! §5.4).
+//!
+//! Where a postbuckled sublaminate closes onto its base, an analysis without constraints lets
+//! the crack faces overlap (thesis §5.1, §5.4) and gives G_I > 0 where the front is closed.
+//! Here the faces are node pairs (the generators' paired sets `crack_upper`/`crack_lower`):
+//!
+//! - gap g = n·(x_up − x_low), x = X + u, with n the normal of the deformed lower face at the
+//!   lower node (the mean of its facets' unit outward normals: postbuckled faces rotate) —
+//!   [`CrackFaces`];
+//! - an active pair is held exactly by a tie n·(u_up − u_low) = −g₀, g₀ = n·(X_up − X_low)
+//!   (the deformed gap is zero with n frozen over a pass), slave the upper node's component
+//!   of largest |n_k|; its contact force is p = R_s/n_k, R_s the slave's reaction (the
+//!   residual f_int − f_ext the fold moves onto the masters: p·n on the upper node, −p·n on
+//!   the lower) — `tie`, [`contact_tie`], [`contact_force`];
+//! - the active set changes by [`update`] (Fig. 2.7.2): inactive pairs with g < −tol_g close,
+//!   active pairs with p < −tol_f open; the set is re-solved at the same load until it does not
+//!   change, a repeated set being a cycle ([`ContactError::Cycle`]) — [`Contact::solve_level`];
+//! - all candidate pairs are reserved in the pattern once ([`Contact::reserve`]) and the ties
+//!   are one replaced tie group, so a change of the set costs no new pattern and no new
+//!   symbolic analysis;
+//! - the thesis's own approximation (Fig. 2.7.1c: an upper node with w < 0 held at the base's
+//!   height by an external force the base does not react) is [`Mode::External`].
+//!
+//! | item | what it is |
+//! |---|---|
+//! | [`Pair`], [`CrackFaces`] | node pairs, deformed normals, gaps |
+//! | [`Tolerances`], [`Change`], [`update`] | the active-set update, a pure function |
+//! | [`contact_tie`], [`contact_force`] | the constraint of a closed pair and its force |
+//! | [`Contact`], [`ContactSettings`], [`Mode`] | the loop around a load level |
+//! | [`ContactLevel`], [`PassReport`], [`ContactState`] | per-level report; gaps and forces as results |
+#![deny(missing_docs)]
+#![cfg_attr(
+    not(test),
+    warn(clippy::unwrap_used, clippy::expect_used, clippy::panic)
+)]
+
+mod active;
+mod driver;
+mod error;
+mod pairs;
+mod tie;
+
+pub use active::{Change, Tolerances, update};
+pub use driver::{Contact, ContactLevel, ContactSettings, ContactState, Mode, PassReport};
+pub use error::ContactError;
+pub use pairs::{CrackFaces, Pair};
+pub use tie::{candidate_tie, contact_force, contact_tie, slave_component};

@@ -1,0 +1,208 @@
+//! Contact on the embedded delamination mesh of the generators (thesis §3.1–3.2: a circular
+//! delamination, quarter model, sublaminate bonded outside the front), coarse Hex8: the set
+//! closes from empty when the sublaminate is pushed into its base, and opens to empty when it
+//! is pulled away.
+
+use nonlin3d_assembly::{Assembler, Constraints};
+use nonlin3d_contact::{Contact, ContactSettings};
+use nonlin3d_element::{ElementKind, IntegrationRule, Kinematics};
+use nonlin3d_laminate::{ShearCoupling, materials};
+use nonlin3d_mesh::names::{CRACK_UPPER, X0, Y0, Z0};
+use nonlin3d_mesh::{EmbeddedParams, Imperfection, Mesh, embedded_delamination};
+use nonlin3d_newton::{NewtonSettings, PathSolver, Stepping, StructuralProblem};
+
+/// A 30 mm circle under a 0.4 mm sublaminate on a 2 mm base, W = 30 mm, Hex8, 2 slices, two
+/// rings inside the front: a few hundred nodes.
+fn mesh() -> Mesh {
+    let p = EmbeddedParams {
+        kind: ElementKind::Hex8,
+        slices: 2,
+        radial_inside: 2,
+        radial_outside: 1,
+        base: 2e-3,
+        w: 30e-3,
+        base_layers: 1,
+        ..EmbeddedParams::thesis_reference()
+    };
+    embedded_delamination(&p).unwrap()
+}
+
+/// Steel; w = 0 on z = 0, symmetry on x = 0 and y = 0; `load` (N, +z up) spread over the
+/// sublaminate's top nodes above the crack (those over a `crack_upper` node).
+fn problem(mesh: &Mesh, contact: &Contact, load: f64) -> StructuralProblem {
+    let steel = materials::steel().stiffness().unwrap();
+    let solid = Assembler::new(
+        mesh,
+        &[steel],
+        ShearCoupling::Exact,
+        IntegrationRule::Gauss2,
+        IntegrationRule::Gauss2,
+        Kinematics::Nonlinear,
+    )
+    .unwrap();
+    let mut c = Constraints::new(solid.n());
+    c.fix_nodes(&mesh.node_sets[Z0], 2).unwrap();
+    c.fix_nodes(&mesh.node_sets[X0], 0).unwrap();
+    c.fix_nodes(&mesh.node_sets[Y0], 1).unwrap();
+    let top_z = mesh.nodes.iter().fold(0.0f64, |m, x| m.max(x[2]));
+    let over: Vec<usize> = mesh.node_sets[CRACK_UPPER]
+        .iter()
+        .filter_map(|&v| {
+            let x = mesh.nodes[v];
+            (0..mesh.nodes.len()).find(|&t| {
+                let y = mesh.nodes[t];
+                (y[2] - top_z).abs() < 1e-12
+                    && (y[0] - x[0]).abs() < 1e-12
+                    && (y[1] - x[1]).abs() < 1e-12
+            })
+        })
+        .collect();
+    assert!(!over.is_empty());
+    for &v in &over {
+        c.add_load(3 * v + 2, load / over.len() as f64).unwrap();
+    }
+    StructuralProblem::with_contributions(solid, Vec::new(), c, |b| contact.reserve(b)).unwrap()
+}
+
+/// Pushing the sublaminate down (no pair closed at first): the first solve overlaps, the
+/// overlapping pairs close, and passes follow until the set is stable: then no overlap beyond
+/// the gap tolerance and every force compressive. One pattern, one symbolic analysis.
+#[test]
+fn a_pushed_sublaminate_closes_onto_its_base() {
+    let mesh = mesh();
+    let mut contact = Contact::new(&mesh, ContactSettings::default()).unwrap();
+    let mut problem = problem(&mesh, &contact, -200.0);
+    let newton = NewtonSettings::default();
+    let mut session = PathSolver::new(&problem, newton.solver).unwrap();
+    let mut u = vec![0.0; problem.system().n()];
+    let level = contact
+        .solve_level(
+            &mut problem,
+            &mut u,
+            0.0,
+            1.0,
+            &[],
+            &newton,
+            &Stepping::default(),
+            &mut session,
+        )
+        .unwrap();
+    let s = &level.state;
+    println!(
+        "{} nodes, {} pairs: passes {}, closed {}, opened {}, Newton iterations {}, active {}, \
+         Σ p n_z {:.3} N, min gap {:e} m",
+        mesh.nodes.len(),
+        s.active.len(),
+        level.passes.len(),
+        level.closed(),
+        level.opened(),
+        level.newton_iterations(),
+        s.active.iter().filter(|&&a| a).count(),
+        s.total_force()[2],
+        s.gaps.iter().fold(f64::INFINITY, |m, &g| m.min(g))
+    );
+    assert!(level.closed() > 0);
+    assert!(s.active.iter().any(|&a| a));
+    let tol = ContactSettings::default().gap_tolerance;
+    assert!(s.gaps.iter().all(|&g| g >= -tol));
+    assert!(s.forces.iter().all(|&p| p >= -s.force_tolerance));
+    assert!(s.total_force()[2] > 0.0 && s.total_force()[2] < 200.0);
+    assert_eq!(problem.system().pattern_builds(), 1);
+    assert_eq!(session.analyses(), 1);
+}
+
+/// Pulling the sublaminate away with every pair closed at first: every force is tensile, all
+/// pairs are released at once, and after the re-solve the faces are apart (every gap > 0): the
+/// set ends empty.
+#[test]
+fn a_pulled_sublaminate_opens_every_pair() {
+    let mesh = mesh();
+    let mut contact = Contact::new(&mesh, ContactSettings::default()).unwrap();
+    let mut problem = problem(&mesh, &contact, 200.0);
+    let newton = NewtonSettings::default();
+    let mut session = PathSolver::new(&problem, newton.solver).unwrap();
+    let mut u = vec![0.0; problem.system().n()];
+    let all = vec![true; contact.faces().len()];
+    contact.install(&mut problem, &u, &all).unwrap();
+    let level = contact
+        .solve_level(
+            &mut problem,
+            &mut u,
+            0.0,
+            1.0,
+            &[],
+            &newton,
+            &Stepping::default(),
+            &mut session,
+        )
+        .unwrap();
+    let s = &level.state;
+    println!(
+        "pulled: passes {}, opened {}, Newton iterations {}",
+        level.passes.len(),
+        level.opened(),
+        level.newton_iterations()
+    );
+    assert_eq!(level.passes.len(), 1);
+    assert_eq!(level.opened(), s.active.len());
+    assert!(s.active.iter().all(|&a| !a));
+    assert!(s.gaps.iter().all(|&g| g > 0.0));
+    assert!(s.forces.iter().all(|&p| p == 0.0));
+}
+
+/// An initial gap (the sublaminate lifted by a 2 µm bubble, as the scenes' imperfection does,
+/// the lower face kept): the pairs that close are held at zero deformed gap at every level
+/// (the tie offset −g₀/n_k is a geometric fact, not scaled by λ: at λ = 0.5 a scaled one would
+/// hold them g₀/2 apart, up to 1 µm), and open pairs do not overlap.
+#[test]
+fn an_initial_gap_is_closed_at_every_level() {
+    let mut mesh = mesh();
+    let shape = Imperfection::Bubble { a: 15e-3, b: 15e-3 };
+    mesh.apply_imperfection(2e-3, nonlin3d_mesh::names::CRACK_LOWER, shape, 2e-6)
+        .unwrap();
+    let mut contact = Contact::new(&mesh, ContactSettings::default()).unwrap();
+    let g0 = contact.faces().initial_gaps(
+        &contact
+            .faces()
+            .normals(&vec![0.0; 3 * mesh.nodes.len()])
+            .unwrap(),
+    );
+    assert!(g0.iter().any(|&g| g > 1e-6));
+    let mut problem = problem(&mesh, &contact, -400.0);
+    let newton = NewtonSettings::default();
+    let mut session = PathSolver::new(&problem, newton.solver).unwrap();
+    let mut u = vec![0.0; problem.system().n()];
+    let tol = ContactSettings::default().gap_tolerance;
+    let mut from = 0.0;
+    for to in [0.5, 1.0] {
+        let level = contact
+            .solve_level(
+                &mut problem,
+                &mut u,
+                from,
+                to,
+                &[],
+                &newton,
+                &Stepping::default(),
+                &mut session,
+            )
+            .unwrap();
+        let s = &level.state;
+        println!(
+            "λ = {to}: passes {}, closed {}, opened {}, active {}, Newton iterations {}",
+            level.passes.len(),
+            level.closed(),
+            level.opened(),
+            s.active.iter().filter(|&&a| a).count(),
+            level.newton_iterations()
+        );
+        assert!(s.active.iter().any(|&a| a));
+        for (g, a) in s.gaps.iter().zip(&s.active) {
+            assert!(*g >= -tol, "λ = {to}: gap {g:e} m");
+            if *a {
+                assert!(g.abs() <= tol, "λ = {to}: a closed pair {g:e} m apart");
+            }
+        }
+        from = to;
+    }
+}
