@@ -99,9 +99,9 @@ pub fn write_all(results: &mut Results, dir: &Path) -> Result<(), Error> {
     }
     if let Some(model) = &results.model_data {
         for (k, l) in results.levels.iter().enumerate() {
-            crate::output::write_level_vtu(dir, model, l, k)?;
+            crate::fields::write_level_vtu(dir, model, l, k)?;
         }
-        crate::output::write_pvds(dir, &results.levels)?;
+        crate::fields::write_pvds(dir, &results.levels)?;
     }
     type Plot = (
         &'static str,

@@ -20,7 +20,8 @@
 use super::check::{Prepared, prepare};
 use super::{Progress, StepOptions, StepResult};
 use crate::Error;
-use crate::output::{InterruptHandle, Units, state_vtu, write_atomic};
+use crate::fields::{Units, state_vtu};
+use crate::output::{InterruptHandle, write_atomic};
 use nonlin3d_assembly::StressRules;
 use nonlin3d_element::{IntegrationRule, Kinematics, Material};
 use nonlin3d_laminate::ShearCoupling;
