@@ -55,7 +55,7 @@ pub struct NodalFields {
 }
 
 /// The extrapolation matrix of a cell kind and rule: row a gives node a's value as
-/// Σ_g E[a][g] v_g over the stations g.
+/// Σ_g E_ag v_g over the stations g.
 pub fn extrapolation(kind: ElementKind, rule: IntegrationRule) -> Vec<Vec<f64>> {
     let stations = rule.stations();
     let m = stations.len();
