@@ -178,9 +178,65 @@ fn solve_writes_fields_and_the_stress_is_e_times_strain() {
     }
 }
 
+/// The uniaxial modulus of a scene's (first) material, MPa: E_x = 1/(C⁻¹)₁₁, C in Pa.
+fn uniaxial_modulus(scene: &str) -> f64 {
+    let c = nonlin3d::Scene::from_toml(scene)
+        .unwrap()
+        .stiffnesses()
+        .unwrap()[0]
+        .c()
+        .to_owned();
+    // Gauss–Jordan on [C | e₁]: the first column of C⁻¹.
+    let mut a: Vec<Vec<f64>> = (0..6)
+        .map(|i| {
+            let mut r = c[i].to_vec();
+            r.push(if i == 0 { 1.0 } else { 0.0 });
+            r
+        })
+        .collect();
+    for col in 0..6 {
+        let p = (col..6)
+            .max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs()))
+            .unwrap();
+        a.swap(col, p);
+        let d = a[col][col];
+        a[col].iter_mut().for_each(|x| *x /= d);
+        for r in 0..6 {
+            if r != col {
+                let f = a[r][col];
+                let pivot = a[col].clone();
+                a[r].iter_mut().zip(&pivot).for_each(|(x, q)| *x -= f * q);
+            }
+        }
+    }
+    1e-6 / a[0][6]
+}
+
+/// The reference scene at ε = −0.001, before the perturbation and buckling: the sublaminate
+/// and base are compressed together, a homogeneous uniaxial stress state of the homogenised
+/// laminate (the end shortened, the other faces on rollers or free, the crack faces carrying
+/// nothing), so at every point E_xx = ε + ε²/2 and S_xx = E_x·E_xx, the other stresses zero.
+/// Newton's 1e-8 relative residual and round-off keep all of it far inside 1e-6.
+fn prebuckling_stress_is_e_times_strain(v: &Vtu, e_x: f64, eps: f64) {
+    let strain = v.array("PointData", "strain_green_lagrange", 6);
+    let pk2 = v.array("PointData", "stress_pk2_MPa", 6);
+    let e_xx = eps + eps * eps / 2.0;
+    let s_xx = e_x * e_xx;
+    for p in 0..v.points {
+        let (s, g) = (&pk2[6 * p..6 * p + 6], &strain[6 * p..6 * p + 6]);
+        assert!((g[0] - e_xx).abs() < 1e-6 * e_xx.abs(), "point {p}: {g:?}");
+        assert!(
+            (s[0] - s_xx).abs() < 1e-6 * s_xx.abs(),
+            "point {p}: {s:?} vs {s_xx}"
+        );
+        assert!(s[1..].iter().all(|c| c.abs() < 1e-6 * s_xx.abs()), "{s:?}");
+    }
+}
+
 /// A coarse reference scene (4 slices, strains −0.001 and −0.003, about 1.5 s): every level's
 /// `model_K.vtu` has the documented fields with their sizes, finite; `front_K.vtu` holds
-/// results.json's G (both files write shortest round-trip decimals); the largest
+/// results.json's G (both files write shortest round-trip decimals); at the first level, before
+/// buckling, S_xx = E_x·E_xx to 1e-6; the largest
 /// crack opening w equals results.json's `max_face_separation_mm`; a second run with one level
 /// leaves no `front_1.vtu` or `model_1.vtu` behind.
 #[test]
@@ -217,8 +273,12 @@ fn run_writes_fields_and_the_front_matches_results() {
         let files: Vec<String> = pvd_files(&out.join(pvd)).into_iter().map(|s| s.1).collect();
         assert_eq!(files, [format!("{stem}_0.vtu"), format!("{stem}_1.vtu")]);
     }
+    let e_x = uniaxial_modulus(&text);
     for (k, level) in levels.iter().enumerate() {
         let v = Vtu::read(&out.join(format!("model_{k}.vtu")));
+        if k == 0 {
+            prebuckling_stress_is_e_times_strain(&v, e_x, -0.001);
+        }
         assert_eq!(v.points, json["model"]["nodes"].as_u64().unwrap() as usize);
         for (name, c) in [
             ("node", 1),
