@@ -40,6 +40,7 @@ mod checks;
 pub mod deck;
 pub mod eigen_check;
 pub mod export;
+pub mod fields;
 pub mod model;
 pub mod output;
 pub mod plot;

@@ -35,6 +35,8 @@ pub struct Model {
     pub front: Front,
     /// Materials as indexed by the cells.
     pub materials: Vec<Stiffness>,
+    /// Integration rule of every cell (the scene's `analysis.integration`).
+    pub rule: nonlin3d_element::IntegrationRule,
     /// Boundary-condition family.
     pub kind: ModelKind,
     /// x of the loaded end (u = x_end·ε there), m.
@@ -110,6 +112,7 @@ pub fn build_model(scene: &Scene) -> Result<Model, Error> {
         mesh,
         front,
         materials,
+        rule: scene.analysis.integration.rule(),
         kind: model_kind,
         x_end,
         h,

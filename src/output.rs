@@ -9,9 +9,9 @@
 
 use crate::Error;
 pub use crate::atomic::{atomically, write_atomic};
+use crate::fields::{write_level_vtu, write_pvds};
 use crate::model::Model;
 use crate::results::{LevelResult, ModelSummary, Results, Timings};
-use nonlin3d_mesh::vtu::{Field, pvd_string, vtu_string};
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 
@@ -35,12 +35,14 @@ fn ours(name: &str) -> bool {
         "results.json"
             | "levels.csv"
             | "model.pvd"
+            | "front.pvd"
             | "g_i.svg"
             | "g_ii.svg"
             | "g_t.svg"
             | "deflection.svg"
     ) || numbered("front_", ".csv")
         || numbered("model_", ".vtu")
+        || numbered("front_", ".vtu")
         || (name.starts_with('.') && name.ends_with(".partial"))
 }
 
@@ -57,7 +59,7 @@ struct Pending {
 pub struct RunOutput {
     dir: PathBuf,
     snapshot: Results,
-    mesh: Option<nonlin3d_mesh::Mesh>,
+    model: Option<Model>,
     pending: Arc<Mutex<Pending>>,
 }
 
@@ -104,7 +106,7 @@ impl RunOutput {
         let out = Self {
             dir: dir.to_path_buf(),
             snapshot,
-            mesh: None,
+            model: None,
             pending: Arc::new(Mutex::new(Pending {
                 path: dir.join("results.json"),
                 stopped_json: None,
@@ -125,7 +127,7 @@ impl RunOutput {
         self.snapshot.model.nodes = model.mesh.nodes.len();
         self.snapshot.model.cells = model.mesh.cells.len();
         self.snapshot.model.dofs = dofs;
-        self.mesh = Some(model.mesh.clone());
+        self.model = Some(model.clone());
         self.write_json()
     }
 
@@ -137,26 +139,9 @@ impl RunOutput {
         self.snapshot.levels.push(level.clone());
         let p = self.dir.join(format!("front_{k}.csv"));
         write_atomic(&p, crate::report::front_csv(&self.snapshot, k).as_bytes())?;
-        if let Some(mesh) = &self.mesh {
-            let p = self.dir.join(format!("model_{k}.vtu"));
-            let text = vtu_string(
-                mesh,
-                &[Field {
-                    name: "displacement",
-                    components: 3,
-                    values: &level.displacements,
-                }],
-                &[],
-            )?;
-            write_atomic(&p, text.as_bytes())?;
-            let steps: Vec<(f64, String)> = self
-                .snapshot
-                .levels
-                .iter()
-                .enumerate()
-                .map(|(k, l)| (l.value.abs(), format!("model_{k}.vtu")))
-                .collect();
-            write_atomic(&self.dir.join("model.pvd"), pvd_string(&steps)?.as_bytes())?;
+        if let Some(model) = &self.model {
+            write_level_vtu(&self.dir, model, level, k)?;
+            write_pvds(&self.dir, &self.snapshot.levels)?;
         }
         let p = self.dir.join("levels.csv");
         write_atomic(&p, crate::report::levels_csv(&self.snapshot).as_bytes())?;
@@ -276,6 +261,8 @@ mod tests {
             "front_0.csv",
             "front_12.csv",
             "model_3.vtu",
+            "front_3.vtu",
+            "front.pvd",
             ".x.partial",
         ] {
             assert!(ours(n), "{n}");

@@ -3,7 +3,6 @@
 
 use crate::Error;
 use crate::results::Results;
-use nonlin3d_mesh::vtu::{Field, pvd_string, vtu_string};
 use std::fmt::Write as _;
 use std::path::Path;
 use std::time::Instant;
@@ -99,22 +98,10 @@ pub fn write_all(results: &mut Results, dir: &Path) -> Result<(), Error> {
         write_atomic(&p, front_csv(results, k).as_bytes())?;
     }
     if let Some(model) = &results.model_data {
-        let mut steps = Vec::new();
         for (k, l) in results.levels.iter().enumerate() {
-            let name = format!("model_{k}.vtu");
-            let text = vtu_string(
-                &model.mesh,
-                &[Field {
-                    name: "displacement",
-                    components: 3,
-                    values: &l.displacements,
-                }],
-                &[],
-            )?;
-            write_atomic(&dir.join(&name), text.as_bytes())?;
-            steps.push((l.value.abs(), name));
+            crate::fields::write_level_vtu(dir, model, l, k)?;
         }
-        write_atomic(&dir.join("model.pvd"), pvd_string(&steps)?.as_bytes())?;
+        crate::fields::write_pvds(dir, &results.levels)?;
     }
     type Plot = (
         &'static str,

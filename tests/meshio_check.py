@@ -1,8 +1,15 @@
-"""Reads the VTU files written by `cargo run --release --example write_vtu -- DIR` with meshio,
-as a user's Python tools would, and checks counts, cell type and field values.
+"""Reads VTU/PVD files with meshio, as a user's Python tools would.
 
-Usage: python3 tests/meshio_check.py DIR
+- DIR: written by `cargo run --release --example write_vtu -- DIR`: counts, cell type, values.
+- RUN_DIR (optional): a `nonlin3d run --out RUN_DIR` folder: every file model.pvd and front.pvd
+  list, every field with its shape, and the front's G against results.json's.
+- SOLVE_DIR (optional): a `nonlin3d solve tests/decks/uniaxial_box.inp --out SOLVE_DIR` folder:
+  every file model.pvd lists, every field with its shape, S_xx = E E_xx to 1e-6.
+
+Usage: python3 tests/meshio_check.py DIR [RUN_DIR SOLVE_DIR]
 """
+import json
+import os
 import sys
 import xml.etree.ElementTree as ET
 
@@ -33,4 +40,70 @@ for step, scale in [(0, 1.0), (1, 2.0)]:
 pvd = ET.parse(f"{d}/box.pvd").getroot()
 files = [ds.get("file") for ds in pvd.iter("DataSet")]
 assert files == ["box_0.vtu", "box_1.vtu"], files
-print("meshio check: 2 passed, 0 failed")
+checked = 2
+
+
+def pvd(path):
+    """The files a PVD lists, in order."""
+    root = ET.parse(path).getroot()
+    return [os.path.join(os.path.dirname(path), ds.get("file")) for ds in root.iter("DataSet")]
+
+
+def fields(m, point, cell):
+    """Every listed field is there with (count, components) and finite."""
+    n = len(m.points)
+    for name, c in point.items():
+        v = m.point_data[name]
+        assert v.reshape(n, -1).shape == (n, c), (name, v.shape)
+        assert np.isfinite(v).all(), name
+    ncell = sum(len(b.data) for b in m.cells)
+    for name, c in cell.items():
+        v = np.concatenate([np.asarray(a).reshape(len(a), -1) for a in m.cell_data[name]])
+        assert v.shape == (ncell, c), (name, v.shape)
+        assert np.isfinite(v).all(), name
+
+
+if len(sys.argv) > 3:
+    run, solve = sys.argv[2], sys.argv[3]
+    results = json.load(open(f"{run}/results.json"))
+    models = pvd(f"{run}/model.pvd")
+    fronts = pvd(f"{run}/front.pvd")
+    assert len(models) == len(fronts) == len(results["levels"]) > 0
+    for path, level in zip(models, results["levels"]):
+        m = meshio.read(path)
+        fields(
+            m,
+            {"node": 1, "displacement_mm": 3, "strain_green_lagrange": 6, "stress_pk2_MPa": 6,
+             "stress_cauchy_MPa": 6, "reaction_N": 3, "crack_opening_mm": 3},
+            {"material": 1, "ply_angle_deg": 1, "strain_green_lagrange": 6,
+             "stress_pk2_MPa": 6, "stress_cauchy_MPa": 6},
+        )
+        checked += 1
+    for path, level in zip(fronts, results["levels"]):
+        m = meshio.read(path)
+        rows = level["front"]
+        fields(m, {k: 1 for k in ["s_mm", "G_I_J_m2", "G_II_J_m2", "G_III_J_m2", "G_T_J_m2",
+                                  "mode_mix", "open"]}, {})
+        assert m.cells[0].type == "line" and m.cells[0].data.shape == (len(rows) - 1, 2)
+        for name, key in [("G_I_J_m2", "g_i"), ("G_II_J_m2", "g_ii"), ("G_III_J_m2", "g_iii"),
+                          ("G_T_J_m2", "g_t")]:
+            got = np.ravel(m.point_data[name])
+            want = np.array([r[key] for r in rows])
+            assert np.allclose(got, want, rtol=1e-15, atol=0), (name, got, want)
+        opened = np.ravel(m.point_data["open"]) == 1.0
+        assert (opened == np.array([r["faces"] == "open" for r in rows])).all()
+        checked += 1
+    e_mod = 70000.0
+    for path in pvd(f"{solve}/model.pvd"):
+        m = meshio.read(path)
+        fields(
+            m,
+            {"node": 1, "displacement": 3, "strain_green_lagrange": 6, "stress_pk2": 6,
+             "stress_cauchy": 6, "reaction": 3},
+            {"material": 1, "ply_angle_deg": 1, "strain_green_lagrange": 6, "stress_pk2": 6,
+             "stress_cauchy": 6},
+        )
+        s, e = m.point_data["stress_pk2"], m.point_data["strain_green_lagrange"]
+        assert np.allclose(s[:, 0], e_mod * e[:, 0], rtol=1e-6, atol=0)
+        checked += 1
+print(f"meshio check: {checked} passed, 0 failed")

@@ -65,7 +65,7 @@ fn run_writes_every_output() {
     assert_eq!(pvd.matches("model_").count(), 2);
     for k in 0..2 {
         let vtu = std::fs::read_to_string(out.join(format!("model_{k}.vtu"))).unwrap();
-        assert!(vtu.contains("Name=\"displacement\""));
+        assert!(vtu.contains("Name=\"displacement_mm\""));
     }
     for f in ["g_i.svg", "g_ii.svg", "g_t.svg", "deflection.svg"] {
         let svg = std::fs::read_to_string(out.join(f)).unwrap();

@@ -17,10 +17,16 @@
 //! nothing for the decks nonlin3d solves today and costly for a large one asking for every
 //! stress every increment (docs/RELIABILITY.md gives the numbers).
 
-use super::{Progress, StepResult};
+use super::check::{Prepared, prepare};
+use super::{Progress, StepOptions, StepResult};
 use crate::Error;
+use crate::fields::{Units, state_vtu};
 use crate::output::{InterruptHandle, write_atomic};
-use nonlin3d_mesh::InpModel;
+use nonlin3d_assembly::StressRules;
+use nonlin3d_element::{IntegrationRule, Kinematics, Material};
+use nonlin3d_laminate::ShearCoupling;
+use nonlin3d_mesh::vtu::pvd_string;
+use nonlin3d_mesh::{InpModel, Mesh};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -43,7 +49,11 @@ fn ours_in_step(name: &str) -> bool {
 
 /// Names of the files a solve writes in its folder.
 fn ours(name: &str) -> bool {
-    matches!(name, "summary.json" | "displacements.csv")
+    matches!(name, "summary.json" | "displacements.csv" | "model.pvd")
+        || name
+            .strip_prefix("model_")
+            .and_then(|r| r.strip_suffix(".vtu"))
+            .is_some_and(|k| !k.is_empty() && k.bytes().all(|b| b.is_ascii_digit()))
         || (name.starts_with('.') && name.ends_with(".partial"))
 }
 
@@ -128,6 +138,14 @@ pub struct DeckOutput<'a> {
     complete: bool,
     stopped: Option<String>,
     handle: InterruptHandle,
+    /// The oriented mesh, materials and rule of the solve, for the VTU files.
+    mesh: Mesh,
+    materials: Vec<Material>,
+    rule: IntegrationRule,
+    /// The PVD's steps so far (total time, file) and the (step, converged increments) of the
+    /// last VTU written.
+    vtu_steps: Vec<(f64, String)>,
+    vtu_last: Option<(usize, usize)>,
 }
 
 impl<'a> DeckOutput<'a> {
@@ -140,6 +158,11 @@ impl<'a> DeckOutput<'a> {
         std::fs::write(&probe, b"").map_err(io(&probe))?;
         std::fs::remove_file(&probe).map_err(io(&probe))?;
         remove_stale(dir)?;
+        let Prepared {
+            mesh,
+            materials,
+            rule,
+        } = prepare(model, &StepOptions::default())?;
         let out = Self {
             dir: dir.to_path_buf(),
             model,
@@ -149,6 +172,11 @@ impl<'a> DeckOutput<'a> {
             complete: false,
             stopped: None,
             handle: InterruptHandle::new(&dir.join("summary.json")),
+            mesh,
+            materials,
+            rule,
+            vtu_steps: Vec::new(),
+            vtu_last: None,
         };
         out.publish(|| Ok(()))?;
         Ok(out)
@@ -188,6 +216,25 @@ impl<'a> DeckOutput<'a> {
             .collect();
         let displacements =
             matches!(p, Progress::Step(_)).then(|| displacements_csv(self.model, &r.displacements));
+        let vtu = match p {
+            Progress::Failed(_) => None,
+            _ => self.state_vtu(r)?,
+        };
+        let pvd = match &vtu {
+            Some((name, _)) => {
+                let mut steps = self.vtu_steps.clone();
+                let time = r
+                    .increments
+                    .iter()
+                    .rev()
+                    .find(|i| i.converged)
+                    .map_or(r.start_time, |i| i.total_time);
+                steps.push((time, name.clone()));
+                Some((pvd_string(&steps)?, steps))
+            }
+            None => None,
+        };
+        let dir = self.dir.clone();
         self.publish(|| {
             std::fs::create_dir_all(&sub).map_err(io(&sub))?;
             for &i in &grown {
@@ -197,12 +244,49 @@ impl<'a> DeckOutput<'a> {
             if let Some(csv) = &displacements {
                 write_atomic(&sub.join("displacements.csv"), csv.as_bytes())?;
             }
+            if let (Some((name, text)), Some((pvd, _))) = (&vtu, &pvd) {
+                write_atomic(&dir.join(name), text.as_bytes())?;
+                write_atomic(&dir.join("model.pvd"), pvd.as_bytes())?;
+            }
             Ok(())
         })?;
+        if let Some((_, steps)) = pvd {
+            self.vtu_steps = steps;
+        }
         for i in grown {
             self.written[i] = Some(r.outputs[i].increments.len());
         }
         Ok(())
+    }
+
+    /// The VTU of the state `r` holds (its last converged increment), named `model_N.vtu` with
+    /// N counting the VTU files of the solve; None when that state was written already.
+    fn state_vtu(&mut self, r: &StepResult) -> Result<Option<(String, String)>, Error> {
+        let key = (r.step, r.increments.iter().filter(|i| i.converged).count());
+        if self.vtu_last == Some(key) || r.displacements.is_empty() {
+            return Ok(None);
+        }
+        let rules = StressRules {
+            materials: &self.materials,
+            coupling: ShearCoupling::Exact,
+            hex20_rule: self.rule,
+            hex8_rule: IntegrationRule::Gauss2,
+            kinematics: if r.nlgeom {
+                Kinematics::Nonlinear
+            } else {
+                Kinematics::Linear
+            },
+        };
+        let u: Vec<f64> = r.displacements.iter().flatten().copied().collect();
+        let text = state_vtu(
+            &self.mesh,
+            &rules,
+            &u,
+            Some(&self.model.node_ids),
+            Units::DECK,
+        )?;
+        self.vtu_last = Some(key);
+        Ok(Some((format!("model_{}.vtu", self.vtu_steps.len()), text)))
     }
 
     /// The solve failed: `summary.json` keeps every step and increment so far, `"complete":
@@ -261,10 +345,21 @@ mod tests {
 
     #[test]
     fn only_our_file_names_are_cleaned() {
-        for n in ["summary.json", "displacements.csv", ".summary.json.partial"] {
+        for n in [
+            "summary.json",
+            "displacements.csv",
+            ".summary.json.partial",
+            "model.pvd",
+            "model_12.vtu",
+        ] {
             assert!(ours(n), "{n}");
         }
-        for n in ["notes.txt", "summary.json.bak", "results.json"] {
+        for n in [
+            "notes.txt",
+            "summary.json.bak",
+            "results.json",
+            "model_.vtu",
+        ] {
             assert!(!ours(n), "{n}");
         }
         for n in [

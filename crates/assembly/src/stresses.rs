@@ -53,20 +53,7 @@ pub fn station_stresses<M: Copy + Into<Material>>(
             expected: mesh.cells.len(),
             got: c,
         })?;
-        let base: &Material = &rules
-            .materials
-            .get(cell.material)
-            .map(|&m| m.into())
-            .ok_or(AssemblyError::Material {
-                cell: c,
-                material: cell.material,
-                count: rules.materials.len(),
-            })?;
-        let material = if cell.ply_angle_deg == 0.0 {
-            *base
-        } else {
-            base.rotated_about_z(cell.ply_angle_deg.to_radians(), rules.coupling)?
-        };
+        let material = cell_material(mesh, rules, c)?;
         let k = match tables.iter().position(|t| t.0 == cell.kind) {
             Some(k) => k,
             None => {
@@ -102,8 +89,31 @@ pub fn station_stresses<M: Copy + Into<Material>>(
     Ok(out)
 }
 
+/// The material of cell `c` in global axes: its material rotated about z by its ply angle.
+pub(crate) fn cell_material<M: Copy + Into<Material>>(
+    mesh: &Mesh,
+    rules: &StressRules<'_, M>,
+    c: usize,
+) -> Result<Material, AssemblyError> {
+    let cell = &mesh.cells[c];
+    let base: Material = rules
+        .materials
+        .get(cell.material)
+        .map(|&m| m.into())
+        .ok_or(AssemblyError::Material {
+            cell: c,
+            material: cell.material,
+            count: rules.materials.len(),
+        })?;
+    Ok(if cell.ply_angle_deg == 0.0 {
+        base
+    } else {
+        base.rotated_about_z(cell.ply_angle_deg.to_radians(), rules.coupling)?
+    })
+}
+
 /// F = I + ∂u/∂X at station `g`: ∂N/∂X = J⁻ᵀ ∂N/∂ξ with J_ij = Σ_a x_a,i ∂N_a/∂ξ_j.
-fn deformation_gradient(
+pub(crate) fn deformation_gradient(
     table: &ShapeTable,
     g: usize,
     x: &[[f64; 3]],
@@ -152,7 +162,7 @@ fn inverse(a: &[[f64; 3]; 3]) -> [[f64; 3]; 3] {
 }
 
 /// σ = F S Fᵀ / det F, Voigt order xx, yy, zz, xy, yz, xz.
-fn cauchy(s: &[f64; 6], f: &[[f64; 3]; 3]) -> [f64; 6] {
+pub(crate) fn cauchy(s: &[f64; 6], f: &[[f64; 3]; 3]) -> [f64; 6] {
     let t = [[s[0], s[3], s[5]], [s[3], s[1], s[4]], [s[5], s[4], s[2]]];
     let j = det(f);
     let mut sig = [[0.0; 3]; 3];

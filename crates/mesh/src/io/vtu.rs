@@ -4,7 +4,7 @@
 //!
 //! ASCII with shortest round-trip number formatting: files are larger than binary ones, but exact,
 //! diffable and written without a base64/compression dependency. Every cell also carries its
-//! `material` and `ply_angle`.
+//! `material` (index) and `ply_angle_deg`.
 
 use crate::{Mesh, MeshError};
 use nonlin3d_element::ElementKind;
@@ -103,7 +103,7 @@ pub fn vtu_string(
     s.push_str("\n        </DataArray>\n");
     data_array(
         &mut s,
-        "ply_angle",
+        "ply_angle_deg",
         1,
         mesh.cells.iter().map(|c| c.ply_angle_deg),
     );
@@ -133,6 +133,64 @@ pub fn vtu_string(
             ElementKind::Hex20 => 25,
         };
         let _ = write!(s, "{}{t}", if i > 0 { " " } else { "" });
+    }
+    s.push_str(
+        "\n        </DataArray>\n      </Cells>\n    </Piece>\n  </UnstructuredGrid>\n</VTKFile>\n",
+    );
+    Ok(s)
+}
+
+/// Points joined by line segments (`VTK_LINE`, 3) with point fields, as a VTU document: e.g. a
+/// delamination front through its points in S order. (`VTK_POLY_LINE` would be one cell, but
+/// meshio does not read it; segments show the same curve in ParaView.)
+pub fn lines_vtu_string(
+    points: &[[f64; 3]],
+    segments: &[[usize; 2]],
+    point_fields: &[Field<'_>],
+) -> Result<String, MeshError> {
+    if let Some(i) = points.iter().position(|p| !p.iter().all(|v| v.is_finite())) {
+        return Err(MeshError::NonFinite {
+            what: "point",
+            index: i,
+        });
+    }
+    if let Some(s) = segments
+        .iter()
+        .find(|s| s.iter().any(|&n| n >= points.len()))
+    {
+        return Err(MeshError::Parameter {
+            name: "segment",
+            reason: format!("{s:?} names a point past the {} given", points.len()),
+        });
+    }
+    for f in point_fields {
+        check(f, points.len(), "point")?;
+    }
+    let mut s = String::new();
+    s.push_str("<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n  <UnstructuredGrid>\n");
+    let _ = writeln!(
+        s,
+        "    <Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">",
+        points.len(),
+        segments.len()
+    );
+    s.push_str("      <PointData>\n");
+    for f in point_fields {
+        data_array(&mut s, f.name, f.components, f.values.iter().copied());
+    }
+    s.push_str("      </PointData>\n      <Points>\n");
+    data_array(&mut s, "Points", 3, points.iter().flatten().copied());
+    s.push_str("      </Points>\n      <Cells>\n        <DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n          ");
+    for (i, [a, b]) in segments.iter().enumerate() {
+        let _ = write!(s, "{}{a} {b}", if i > 0 { " " } else { "" });
+    }
+    s.push_str("\n        </DataArray>\n        <DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n          ");
+    for i in 0..segments.len() {
+        let _ = write!(s, "{}{}", if i > 0 { " " } else { "" }, 2 * (i + 1));
+    }
+    s.push_str("\n        </DataArray>\n        <DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n          ");
+    for i in 0..segments.len() {
+        let _ = write!(s, "{}3", if i > 0 { " " } else { "" });
     }
     s.push_str(
         "\n        </DataArray>\n      </Cells>\n    </Piece>\n  </UnstructuredGrid>\n</VTKFile>\n",
@@ -238,6 +296,19 @@ mod tests {
             )
             .is_err()
         );
+        let line = lines_vtu_string(
+            &[[0.0; 3], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0]],
+            &[[0, 1], [1, 2]],
+            &[Field {
+                name: "g",
+                components: 1,
+                values: &[1.0, 2.0, 3.0],
+            }],
+        )
+        .unwrap();
+        assert!(line.contains("NumberOfPoints=\"3\" NumberOfCells=\"2\""));
+        assert!(line.contains("\n          0 1 1 2\n") && line.contains("\n          2 4\n"));
+        assert!(lines_vtu_string(&[[0.0; 3]], &[[0, 1]], &[]).is_err());
         let mut bad = sxx.clone();
         bad[1] = f64::NAN;
         assert!(
