@@ -1,0 +1,2 @@
+//! Condensation benchmark (filled in the next commit).
+fn main() {}
