@@ -356,3 +356,88 @@ pub(crate) fn symmetrise(k: &mut [f64], n: usize) -> f64 {
     }
     if scale > 0.0 { worst / scale } else { 0.0 }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nonlin3d_element::{ElementKind, IntegrationRule, Kinematics};
+    use nonlin3d_laminate::ShearCoupling;
+    use nonlin3d_mesh::{BoxParams, Mesh, names, structured_box};
+
+    fn assembler(mesh: &Mesh, kinematics: Kinematics) -> Assembler {
+        let steel = nonlin3d_laminate::materials::steel().stiffness().unwrap();
+        Assembler::new(
+            mesh,
+            &[steel],
+            ShearCoupling::Exact,
+            IntegrationRule::Gauss2,
+            IntegrationRule::Gauss2,
+            kinematics,
+        )
+        .unwrap()
+    }
+
+    /// At u = 0 the total Lagrangian tangent is the small-strain K: no stress (no geometric
+    /// stiffness) and B_NL = 0, so both kinematics give the same entries to rounding
+    /// (1e-14 of the largest; they take different code paths).
+    #[test]
+    fn the_tangent_at_zero_is_the_small_strain_stiffness() {
+        let mesh = structured_box(&BoxParams::new(
+            ElementKind::Hex20,
+            [2, 2, 1],
+            [2.0, 1.5, 0.5],
+        ))
+        .unwrap();
+        let tangent = |k: Kinematics| {
+            let a = assembler(&mesh, k);
+            let mut t = a.new_tangent();
+            a.assemble(&vec![0.0; a.n()], Some(&mut t)).unwrap();
+            t.values().to_vec()
+        };
+        let (nl, l) = (tangent(Kinematics::Nonlinear), tangent(Kinematics::Linear));
+        let scale = l.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let diff = nl
+            .iter()
+            .zip(&l)
+            .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+        assert!(diff <= 1e-14 * scale, "{diff:e} of {scale:e}");
+    }
+
+    /// K_red does not depend on the block width (1, 5 and all columns at once): the same
+    /// solves in another grouping, equal to rounding.
+    #[test]
+    fn the_block_width_changes_nothing() {
+        let mesh = structured_box(&BoxParams::new(
+            ElementKind::Hex8,
+            [4, 2, 2],
+            [4.0, 2.0, 2.0],
+        ))
+        .unwrap();
+        let p = Partition::from_linear_cells(&mesh, &(0..8).collect::<Vec<_>>()).unwrap();
+        let mut c = Constraints::new(3 * mesh.nodes.len());
+        for &v in &mesh.node_sets[names::X0] {
+            c.prescribe(3 * v, 0.1).unwrap();
+        }
+        let a = assembler(p.linear_mesh(), Kinematics::Linear);
+        let k = |block: usize| {
+            let s = CondenseSettings { block, threads: 1 };
+            let done = condense(&p, &a, &c, &s).unwrap();
+            (
+                done.superelement.stiffness().to_vec(),
+                done.superelement.load().clone(),
+            )
+        };
+        let (k0, l0) = k(0);
+        let scale = k0.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        for block in [1, 5] {
+            let (kb, lb) = k(block);
+            let diff = kb
+                .iter()
+                .zip(&k0)
+                .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+            assert!(diff <= 1e-12 * scale, "block {block}: {diff:e}");
+            assert_eq!(lb, l0);
+        }
+        assert!(l0.prescribed.iter().any(|&x| x != 0.0));
+    }
+}
