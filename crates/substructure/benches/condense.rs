@@ -1,7 +1,7 @@
-//! Substructuring cost on the thesis's reference plate (30 mm circle, Hex20, 2 263 nodes;
-//! thesis Fig. 3.2.2's partition: the sublaminate inside the front offset inward by ℓ = h is
+//! Substructuring cost on the thesis's reference plate (30 mm circle, Hex20, 2 263 nodes) and
+//! on a refined one (16 slices, two sublaminate layers); thesis Fig. 3.2.2's partition: the sublaminate inside the front offset inward by ℓ = h is
 //! nonlinear, the rest linear): the condensation (assembly of the linear region, factorisation
-//! of K_ii, the blocked multi-RHS solves) at block widths 1, 16, 64 and all, and one Newton
+//! of K_ii, the blocked multi-RHS solves) at block widths 1 (reference only), 16, 64 and all, and one Newton
 //! iteration (residual + tangent assembly, factorisation, solve) on the nonlinear region with
 //! the superelement against the same on the whole model. The sizes are printed first.
 //!
@@ -34,9 +34,8 @@ fn assembler(mesh: &Mesh) -> Assembler {
 
 /// The reference plate, its §3.2 supports (u = 0 on x = 0, symmetry on y = 0 and z = 0,
 /// u = −W·0.3 % on x = W) and the thesis's partition with ℓ = h.
-fn plate() -> (Mesh, Constraints, Partition) {
-    let p = EmbeddedParams::thesis_reference();
-    let mesh = embedded_delamination(&p).unwrap_or_else(|e| panic!("{e}"));
+fn plate(p: &EmbeddedParams) -> (Mesh, Constraints, Partition) {
+    let mesh = embedded_delamination(p).unwrap_or_else(|e| panic!("{e}"));
     let mut c = Constraints::new(3 * mesh.nodes.len());
     let fix = |c: &mut Constraints, set: &str, r: usize| {
         c.fix_nodes(&mesh.node_sets[set], r)
@@ -85,60 +84,72 @@ fn iteration(system: &System, solver: &mut dyn LinearSolver) -> f64 {
 }
 
 fn bench(cr: &mut Criterion) {
-    let (mesh, c, part) = plate();
-    let linear = assembler(part.linear_mesh());
-    let done = condense(&part, &linear, &c, &CondenseSettings::default())
-        .unwrap_or_else(|e| panic!("{e}"));
-    let r = &done.report;
-    println!(
-        "reference plate: {} DOF; linear region {} cells, interface {} DOF, interior {} free + {} \
-         prescribed DOF, K_ii factor {} entries; nonlinear region {} cells, {} DOF; asymmetry \
-         {:.1e}; condensation s (assembly, factor, solves) {:.3?}",
-        3 * mesh.nodes.len(),
-        part.linear_cells().len(),
-        r.interface_dofs,
-        r.interior_dofs,
-        r.prescribed_dofs,
-        r.factor_entries,
-        part.nonlinear_cells().len(),
-        3 * part.nonlinear_nodes().len(),
-        r.asymmetry,
-        r.seconds
-    );
-    let mut g = cr.benchmark_group("condense");
-    g.measurement_time(Duration::from_secs(6)).sample_size(10);
-    for block in [1, 16, 64, 0] {
-        g.bench_function(format!("reference plate, block {block}"), |b| {
-            let s = CondenseSettings { block, threads: 1 };
-            b.iter(|| black_box(condense(&part, &linear, &c, &s).map(|d| d.report.block)))
-        });
-    }
-    g.finish();
+    let reference = EmbeddedParams::thesis_reference();
+    // Twice the slices and two sublaminate layers: a longer, thicker interface.
+    let refined = EmbeddedParams {
+        slices: 16,
+        sub_layers: 2,
+        ..EmbeddedParams::thesis_reference()
+    };
+    for (name, params, blocks) in [
+        ("reference plate", &reference, &[1, 16, 64, 0][..]),
+        ("refined plate", &refined, &[16, 64, 0][..]),
+    ] {
+        let (mesh, c, part) = plate(params);
+        let linear = assembler(part.linear_mesh());
+        let done = condense(&part, &linear, &c, &CondenseSettings::default())
+            .unwrap_or_else(|e| panic!("{e}"));
+        let r = &done.report;
+        println!(
+            "{name}: {} DOF; linear region {} cells, interface {} DOF, interior {} free + {} \
+             prescribed DOF, K_ii factor {} entries; nonlinear region {} cells, {} DOF; \
+             asymmetry {:.1e}; condensation s (assembly, factor, solves) {:.3?}",
+            3 * mesh.nodes.len(),
+            part.linear_cells().len(),
+            r.interface_dofs,
+            r.interior_dofs,
+            r.prescribed_dofs,
+            r.factor_entries,
+            part.nonlinear_cells().len(),
+            3 * part.nonlinear_nodes().len(),
+            r.asymmetry,
+            r.seconds
+        );
+        let mut g = cr.benchmark_group("condense");
+        g.measurement_time(Duration::from_secs(6)).sample_size(10);
+        for &block in blocks {
+            g.bench_function(format!("{name}, block {block}"), |b| {
+                let s = CondenseSettings { block, threads: 1 };
+                b.iter(|| black_box(condense(&part, &linear, &c, &s).map(|d| d.report.block)))
+            });
+        }
+        g.finish();
 
-    let whole = System::builder(c.clone())
-        .contribution(assembler(&mesh))
+        let whole = System::builder(c.clone())
+            .contribution(assembler(&mesh))
+            .build()
+            .unwrap_or_else(|e| panic!("{e}"));
+        let sub = System::builder(
+            part.nonlinear_constraints(&c)
+                .unwrap_or_else(|e| panic!("{e}")),
+        )
+        .contribution(assembler(part.nonlinear_mesh()))
+        .contribution(done.superelement.clone())
         .build()
         .unwrap_or_else(|e| panic!("{e}"));
-    let sub = System::builder(
-        part.nonlinear_constraints(&c)
-            .unwrap_or_else(|e| panic!("{e}")),
-    )
-    .contribution(assembler(part.nonlinear_mesh()))
-    .contribution(done.superelement.clone())
-    .build()
-    .unwrap_or_else(|e| panic!("{e}"));
-    let mut g = cr.benchmark_group("newton iteration");
-    g.measurement_time(Duration::from_secs(6)).sample_size(10);
-    for (name, system) in [("monolithic", &whole), ("superelement", &sub)] {
-        let mut solver = SolverKind::FaerLdlt.build();
-        solver
-            .analyze(system.pattern())
-            .unwrap_or_else(|e| panic!("{e}"));
-        g.bench_function(name, |b| {
-            b.iter(|| black_box(iteration(system, &mut *solver)))
-        });
+        let mut g = cr.benchmark_group("newton iteration");
+        g.measurement_time(Duration::from_secs(6)).sample_size(10);
+        for (kind, system) in [("monolithic", &whole), ("superelement", &sub)] {
+            let mut solver = SolverKind::FaerLdlt.build();
+            solver
+                .analyze(system.pattern())
+                .unwrap_or_else(|e| panic!("{e}"));
+            g.bench_function(format!("{name}, {kind}"), |b| {
+                b.iter(|| black_box(iteration(system, &mut *solver)))
+            });
+        }
+        g.finish();
     }
-    g.finish();
 }
 
 criterion_group!(benches, bench);
