@@ -1,17 +1,20 @@
 //! One-shot solver report over problem sizes (issue: sparse solvers): for structured Hex20
 //! elasticity matrices of ~1 k to ~150 k DOF and a laminate-like thin model, the time of
 //! symbolic analysis, numeric factorisation and one solve, factor entries, flops, GFLOP/s and
-//! peak memory, for the profile solver (RCM) and faer LDLᵀ (AMD) on 1 and 2 threads, plus the
-//! dense matmul GFLOP/s of this machine in the same run. Each case runs once (the large ones
+//! peak memory, for the profile solver (RCM) and faer LDLᵀ (AMD, nested dissection) on 1 and 2
+//! threads, plus the dense matmul GFLOP/s of this machine in the same run. Each case runs once (the large ones
 //! take seconds); criterion covers the small cases in `benches/solvers.rs`.
 //!
-//! Run: `cargo bench --bench solver_report` (add `-- quick` to stop at ~50 k DOF, or
-//! `-- only=laminate` to run the cases whose name contains that text).
+//! Run: `cargo bench --bench solver_report` (add `-- quick` to stop at ~50 k DOF,
+//! `-- only=laminate` to run the cases whose name contains that text, `-- noprofile` to leave
+//! out the profile solver).
 
 #[path = "../tests/common/mod.rs"]
 mod common;
 
-use nonlin3d::solver::{FaerMode, FaerSolver, LinearSolver, ProfileLdlt, SymmetricMatrix};
+use nonlin3d::solver::{
+    FaerMode, FaerOrdering, FaerSolver, LinearSolver, ProfileLdlt, SymmetricMatrix,
+};
 use std::time::Instant;
 
 /// A memory figure of this process from /proc/self/status (`VmHWM` peak, `VmRSS` current), MiB.
@@ -65,6 +68,7 @@ struct Row {
     numeric: f64,
     solve: f64,
     entries: usize,
+    lower: usize,
     flops: f64,
     peak: f64,
     negative: usize,
@@ -83,7 +87,7 @@ fn run(
     let analysis = match s.analyze(k.pattern()) {
         Ok(a) => a,
         Err(e) => {
-            println!("| {case} | {n} | {label} | {e} | | | | | | |");
+            println!("| {case} | {n} | {label} | {e} | | | | | | | | |");
             return None;
         }
     };
@@ -111,6 +115,7 @@ fn run(
         numeric,
         solve,
         entries: analysis.factor_entries,
+        lower: analysis.lower_nonzeros,
         flops: f.flops,
         peak,
         negative: f.negative_pivots,
@@ -126,9 +131,9 @@ fn main() {
     );
     println!();
     println!(
-        "| case | DOF | solver | symbolic ms | numeric ms (best of 15 below 20 k DOF) | solve ms | factor entries | GFLOP/s | peak MiB | neg. pivots |"
+        "| case | DOF | solver | symbolic ms | numeric ms (best of 15 below 20 k DOF) | solve ms | factor entries | nnz(L) | GFLOP | GFLOP/s | peak MiB | neg. pivots |"
     );
-    println!("|---|---:|---|---:|---:|---:|---:|---:|---:|---:|");
+    println!("|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
     let mut cases: Vec<(&str, [usize; 3], [f64; 3])> = vec![
         ("cube 2×2×1", [2, 2, 1], [2e-3, 2e-3, 1e-3]),
         ("cube 3×3×2", [3, 3, 2], [2e-3, 2e-3, 1e-3]),
@@ -156,26 +161,38 @@ fn main() {
     cases.retain(|c| only.as_deref().is_none_or(|o| c.0.contains(o)));
     for (case, n, h) in cases {
         let k = common::clamped_box_stiffness(n, h);
-        let mut solvers: Vec<(Box<dyn LinearSolver>, String)> = vec![
-            (
-                Box::new(FaerSolver::new(FaerMode::Ldlt)),
-                "faer LDLᵀ, 1 thread".into(),
-            ),
-            (
-                Box::new(FaerSolver::new(FaerMode::Ldlt).with_threads(2)),
-                "faer LDLᵀ, 2 threads".into(),
-            ),
-        ];
-        // The profile solver: only where its envelope fits the 3 GiB cap and its time is
-        // reasonable (analysis reports TooLarge otherwise).
-        solvers.insert(
-            0,
-            (Box::new(ProfileLdlt::new()), "profile LDLᵀ (RCM)".into()),
-        );
+        // faer with each ordering on 1 and 2 threads, side by side in one run.
+        let mut solvers: Vec<(Box<dyn LinearSolver>, String)> = Vec::new();
+        for (ordering, name) in [
+            (FaerOrdering::Amd, "AMD"),
+            (FaerOrdering::NestedDissection, "ND"),
+        ] {
+            for threads in [1, 2] {
+                solvers.push((
+                    Box::new(
+                        FaerSolver::new(FaerMode::Ldlt)
+                            .with_ordering(ordering)
+                            .with_threads(threads),
+                    ),
+                    format!(
+                        "faer LDLᵀ {name}, {threads} thread{}",
+                        if threads > 1 { "s" } else { "" }
+                    ),
+                ));
+            }
+        }
+        // The profile solver (RCM): only where its envelope fits the 3 GiB cap and its time is
+        // reasonable (analysis reports TooLarge otherwise); `noprofile` skips it.
+        if !std::env::args().any(|a| a == "noprofile") {
+            solvers.insert(
+                0,
+                (Box::new(ProfileLdlt::new()), "profile LDLᵀ (RCM)".into()),
+            );
+        }
         for (s, label) in solvers {
             if let Some(r) = run(case, &k, s, label) {
                 println!(
-                    "| {} | {} | {} | {:.3} | {:.3} | {:.3} | {} | {:.1} | {:.0} | {} |",
+                    "| {} | {} | {} | {:.3} | {:.3} | {:.3} | {} | {} | {:.2} | {:.1} | {:.0} | {} |",
                     r.case,
                     r.dofs,
                     r.solver,
@@ -183,6 +200,8 @@ fn main() {
                     1e3 * r.numeric,
                     1e3 * r.solve,
                     r.entries,
+                    r.lower,
+                    r.flops / 1e9,
                     r.flops / r.numeric / 1e9,
                     r.peak,
                     r.negative

@@ -8,6 +8,10 @@ use std::sync::Arc;
 pub struct Analysis {
     /// Stored entries of the factor (envelope for the profile solver, L for faer).
     pub factor_entries: usize,
+    /// Structural nonzeros of L's lower triangle, diagonal included (what PARDISO and CHOLMOD
+    /// report; faer's supernodal storage also holds the upper half of each diagonal block and
+    /// the zeros of merged supernodes, counted in `factor_entries`).
+    pub lower_nonzeros: usize,
     /// Floating-point operations of one numeric factorisation (a multiply-add counts 2).
     pub flops: f64,
     /// Bandwidth after ordering (profile solver).
