@@ -1,8 +1,8 @@
 //! Nested dissection (George 1973; multilevel bisection after Karypis & Kumar's METIS) on the
 //! node graph of a finite-element pattern.
 //!
-//! DOFs with the same closed neighbourhood (the 3 displacements of a node) are merged into one
-//! supervariable first, so the graph is 3× smaller with 9× fewer edges. Each graph is bisected by
+//! Consecutive DOFs with the same closed neighbourhood (the 3 displacements of a node) are
+//! merged into one supervariable first, so the graph is 3× smaller with 9× fewer edges. Each graph is bisected by
 //! heavy-edge-matching coarsening, greedy graph growing from several seeds on the coarsest graph
 //! and Fiduccia–Mattheyses refinement on the way back; the cut edges give a vertex separator as
 //! a minimum vertex cover of their bipartite graph (König). The two halves are ordered
@@ -17,6 +17,8 @@ use bisect::bisect;
 
 /// Parts of at most this many nodes are ordered by AMD instead of being dissected further.
 pub const LEAF_NODES: usize = 120;
+/// Parts larger than this are split between threads.
+const PARALLEL_NODES: usize = 2000;
 /// Coarsening stops at this many vertices.
 pub(crate) const COARSEST: usize = 80;
 /// Seeds of the greedy growing on the coarsest graph.
@@ -57,9 +59,8 @@ impl Graph {
 /// Nested-dissection order of `pattern`'s DOFs (`forward[new] = old`).
 pub fn nested_dissection(pattern: &SymmetricPattern) -> Result<Permutation, SolverError> {
     let (members, graph) = compress(pattern);
-    let mut order = Vec::with_capacity(graph.n());
     let ids: Vec<usize> = (0..graph.n()).collect();
-    dissect(&graph, &ids, &mut order)?;
+    let order = dissect(&graph, &ids)?;
     let forward: Vec<usize> = order
         .iter()
         .flat_map(|&s| members[s].iter().copied())
@@ -67,110 +68,99 @@ pub fn nested_dissection(pattern: &SymmetricPattern) -> Result<Permutation, Solv
     Permutation::from_forward(forward)
 }
 
-/// Supervariables (DOFs with equal closed neighbourhoods, in increasing DOF order) and their
-/// graph, vertex weight = DOF count, edge weight 1.
+/// Supervariables and their graph (vertex weight = DOF count, edge weight 1). Consecutive
+/// DOFs i − 1, i join when their closed neighbourhoods are equal: the lower columns match
+/// exactly (column i − 1 is {i − 1} ∪ column i) and the neighbours above are compared by an
+/// order-independent hash (a collision could only merge two DOFs wrongly, which changes the
+/// quality of the order, never its validity). A node's DOFs are consecutive in nonlin3d's
+/// numbering; DOFs that are not stay apart.
 fn compress(pattern: &SymmetricPattern) -> (Vec<Vec<usize>>, Graph) {
     let n = pattern.n();
-    let (ptr, adj) = pattern.adjacency();
-    // Order-independent hash of the closed neighbourhood.
     let mix = |v: usize| {
         (v as u64 + 1)
             .wrapping_mul(0x9E37_79B9_7F4A_7C15)
             .rotate_left(17)
     };
-    let hash: Vec<u64> = (0..n)
-        .map(|v| {
-            adj[ptr[v]..ptr[v + 1]]
-                .iter()
-                .fold(mix(v), |h, &w| h.wrapping_add(mix(w)))
-        })
-        .collect();
-    let mut by_hash: Vec<usize> = (0..n).collect();
-    by_hash.sort_unstable_by_key(|&v| (hash[v], v));
-    let closed = |v: usize| {
-        let mut c: Vec<usize> = adj[ptr[v]..ptr[v + 1]].to_vec();
-        c.push(v);
-        c.sort_unstable();
-        c
-    };
-    let mut sv = vec![usize::MAX; n];
-    let mut members: Vec<Vec<usize>> = Vec::new();
-    let mut i = 0;
-    while i < n {
-        let mut j = i;
-        while j < n && hash[by_hash[j]] == hash[by_hash[i]] {
-            j += 1;
+    // Hash of the neighbours j < i of each i.
+    let mut above = vec![0u64; n];
+    for j in 0..n {
+        for &i in &pattern.column(j)[1..] {
+            above[i] = above[i].wrapping_add(mix(j));
         }
-        // Within a run of equal hashes, group the equal neighbourhoods (runs are short).
-        let run = &by_hash[i..j];
-        let mut heads: Vec<(usize, Vec<usize>)> = Vec::new();
-        for &v in run {
-            let c = closed(v);
-            match heads.iter().find(|(_, hc)| *hc == c) {
-                Some(&(s, _)) => members[s].push(v),
-                None => {
-                    heads.push((members.len(), c));
-                    members.push(vec![v]);
+    }
+    let mut sv = vec![0usize; n];
+    let mut members: Vec<Vec<usize>> = Vec::new();
+    for i in 0..n {
+        let joins = i > 0 && {
+            let (a, b) = (pattern.column(i - 1), pattern.column(i));
+            a[1..] == *b && above[i] == above[i - 1].wrapping_add(mix(i - 1))
+        };
+        match members.last_mut() {
+            Some(m) if joins => m.push(i),
+            _ => members.push(vec![i]),
+        }
+        sv[i] = members.len() - 1;
+    }
+    // Edge S–T (first DOFs r_S < r_T) appears once: row r_T of column r_S.
+    let ns = members.len();
+    let edges = |f: &mut dyn FnMut(usize, usize)| {
+        for (s, m) in members.iter().enumerate() {
+            for &i in &pattern.column(m[0])[1..] {
+                let t = sv[i];
+                if t != s && members[t][0] == i {
+                    f(s, t);
                 }
             }
         }
-        i = j;
+    };
+    let mut xadj = vec![0usize; ns + 1];
+    edges(&mut |s, t| {
+        xadj[s + 1] += 1;
+        xadj[t + 1] += 1;
+    });
+    for s in 0..ns {
+        xadj[s + 1] += xadj[s];
     }
-    // Number the supervariables by their smallest DOF, so the graph does not depend on hashes.
-    members.sort_unstable_by_key(|m| m[0]);
-    for (s, m) in members.iter().enumerate() {
-        for &v in m {
-            sv[v] = s;
-        }
-    }
-    let ns = members.len();
-    let mut xadj = Vec::with_capacity(ns + 1);
-    let mut nadj = Vec::new();
-    let mut mark = vec![usize::MAX; ns];
-    xadj.push(0);
-    for (s, m) in members.iter().enumerate() {
-        mark[s] = s;
-        let start = nadj.len();
-        for &w in &adj[ptr[m[0]]..ptr[m[0] + 1]] {
-            let t = sv[w];
-            if mark[t] != s {
-                mark[t] = s;
-                nadj.push(t);
-            }
-        }
-        nadj[start..].sort_unstable();
-        xadj.push(nadj.len());
-    }
+    let mut fill = xadj.clone();
+    let mut adj = vec![0usize; xadj[ns]];
+    edges(&mut |s, t| {
+        adj[fill[s]] = t;
+        fill[s] += 1;
+        adj[fill[t]] = s;
+        fill[t] += 1;
+    });
     let vw = members.iter().map(|m| m.len() as i64).collect();
-    let ew = vec![1; nadj.len()];
-    (
-        members,
-        Graph {
-            xadj,
-            adj: nadj,
-            ew,
-            vw,
-        },
-    )
+    let ew = vec![1; adj.len()];
+    (members, Graph { xadj, adj, ew, vw })
 }
 
-/// Appends the order of `g`'s vertices (named `ids`) to `out`: halves, then separator.
-fn dissect(g: &Graph, ids: &[usize], out: &mut Vec<usize>) -> Result<(), SolverError> {
+/// The order of `g`'s vertices (named `ids`): side 0, side 1, then the separator. The two
+/// sides are ordered in parallel (rayon) above [`PARALLEL_NODES`]; each is a pure function of
+/// its subgraph and they are joined in a fixed order, so the result is the same on any number
+/// of threads.
+fn dissect(g: &Graph, ids: &[usize]) -> Result<Vec<usize>, SolverError> {
     if g.n() <= LEAF_NODES {
-        return leaf_order(g, ids, out);
+        return leaf_order(g, ids);
     }
     let side = bisect(g);
     let count = |s: u8| side.iter().filter(|&&x| x == s).count();
     if count(0) == 0 || count(1) == 0 {
         // Nothing to dissect (a clique-like part): minimum degree on the whole.
-        return leaf_order(g, ids, out);
+        return leaf_order(g, ids);
     }
-    for s in [0u8, 1] {
+    let half = |s: u8| {
         let (sub, sub_ids) = subgraph(g, ids, &side, s);
-        dissect(&sub, &sub_ids, out)?;
-    }
+        dissect(&sub, &sub_ids)
+    };
+    let (first, second) = if g.n() > PARALLEL_NODES {
+        rayon::join(|| half(0), || half(1))
+    } else {
+        (half(0), half(1))
+    };
+    let mut out = first?;
+    out.extend(second?);
     out.extend((0..g.n()).filter(|&v| side[v] == 2).map(|v| ids[v]));
-    Ok(())
+    Ok(out)
 }
 
 /// The subgraph of the vertices with `side[v] == s`.
@@ -198,19 +188,17 @@ fn subgraph(g: &Graph, ids: &[usize], side: &[u8], s: u8) -> (Graph, Vec<usize>)
 }
 
 /// Approximate minimum degree on a small part.
-fn leaf_order(g: &Graph, ids: &[usize], out: &mut Vec<usize>) -> Result<(), SolverError> {
+fn leaf_order(g: &Graph, ids: &[usize]) -> Result<Vec<usize>, SolverError> {
     let n = g.n();
     if n <= 2 {
-        out.extend_from_slice(ids);
-        return Ok(());
+        return Ok(ids.to_vec());
     }
     let columns: Vec<Vec<usize>> = (0..n)
         .map(|v| g.nbrs(v).map(|(w, _)| w).filter(|&w| w > v).collect())
         .collect();
     let p = SymmetricPattern::from_lower_columns(n, &columns)?;
     let perm = crate::approximate_minimum_degree(&p)?;
-    out.extend(perm.forward().iter().map(|&v| ids[v]));
-    Ok(())
+    Ok(perm.forward().iter().map(|&v| ids[v]).collect())
 }
 
 #[cfg(test)]
