@@ -50,16 +50,17 @@ pub trait LinearSolver: Send {
 pub enum SolverKind {
     /// [`crate::ProfileLdlt`] with reverse Cuthill–McKee.
     Profile,
-    /// [`crate::FaerSolver`] LDLᵀ with AMD: the default. Measured faster than the profile
+    /// [`crate::FaerSolver`] LDLᵀ, ordered by AMD or nested dissection (whichever needs fewer
+    /// flops, [`crate::FaerOrdering::Auto`]): the default. Measured faster than the profile
     /// solver from about 450 equations on, 2.7× at 11 k and 3–4× at 50–140 k DOF
     /// (docs/PERFORMANCE.md); the profile solver wins only on tiny systems (153 DOF: 3×).
     #[default]
     FaerLdlt,
-    /// [`crate::FaerSolver`] LLᵀ with AMD: positive definite matrices only.
+    /// [`crate::FaerSolver`] LLᵀ (ordering as `FaerLdlt`): positive definite matrices only.
     FaerLlt,
-    /// [`crate::FaerSolver`] LDLᵀ with AMD, numeric phase on this many rayon threads. Faster
-    /// from about 10 k DOF on two cores; the sums are split differently from the sequential
-    /// solver, so results agree with it to rounding, not bitwise.
+    /// [`crate::FaerSolver`] LDLᵀ (ordering as `FaerLdlt`), numeric phase on this many rayon
+    /// threads. Faster from about 10 k DOF on two cores; the sums are split differently from
+    /// the sequential solver, so results agree with it to rounding, not bitwise.
     FaerLdltThreads(usize),
 }
 
