@@ -126,6 +126,10 @@ fn initial_partition(g: &Graph) -> Vec<u8> {
         let mut conn = vec![0i64; n];
         let deg: Vec<i64> = (0..n).map(|v| g.nbrs(v).map(|(_, e)| e).sum()).collect();
         let mut weight = 0;
+        // Frontier by gain (lazy heap: an entry is current while its gain matches), then the
+        // first vertex left for a graph in several pieces: O(E log n) however it is shaped.
+        let mut heap: BinaryHeap<(i64, Reverse<usize>)> = BinaryHeap::new();
+        let mut cursor = 0;
         let mut next = Some(seed);
         while let Some(v) = next {
             if 2 * (weight + g.vw[v]) > total + g.vw[v] {
@@ -134,13 +138,26 @@ fn initial_partition(g: &Graph) -> Vec<u8> {
             part[v] = 0;
             weight += g.vw[v];
             for (w, e) in g.nbrs(v) {
-                conn[w] += e;
+                if part[w] == 1 {
+                    conn[w] += e;
+                    heap.push((2 * conn[w] - deg[w], Reverse(w)));
+                }
             }
-            // The frontier vertex whose move cuts least; else any vertex left (disconnected).
-            next = (0..n)
-                .filter(|&w| part[w] == 1 && conn[w] > 0)
-                .max_by_key(|&w| (2 * conn[w] - deg[w], Reverse(w)))
-                .or_else(|| (0..n).find(|&w| part[w] == 1));
+            // The frontier vertex whose move cuts least (smallest index on ties).
+            next = loop {
+                match heap.pop() {
+                    Some((gain, Reverse(w))) if part[w] == 1 && gain == 2 * conn[w] - deg[w] => {
+                        break Some(w);
+                    }
+                    Some(_) => continue,
+                    None => {
+                        while cursor < n && part[cursor] != 1 {
+                            cursor += 1;
+                        }
+                        break (cursor < n).then_some(cursor);
+                    }
+                }
+            };
         }
         refine(g, &mut part);
         let c = cut(g, &part);

@@ -204,3 +204,16 @@ fn solve_agrees_with_amd() {
         .sqrt();
     assert!(diff <= 1e-10 * norm, "difference {diff} of {norm}");
 }
+
+/// A pattern with many DOFs no element couples (diagonal only) beside a grid: the parts fall
+/// apart into single vertices that coarsening cannot merge; the order stays valid and quick
+/// (the greedy growing is O(E log n), not O(n²)).
+#[test]
+fn isolated_dofs_are_ordered() {
+    let (n, mut lists) = grid_lists(8, 8, 2, 3);
+    let extra = 20_000;
+    lists.extend((n..n + extra).map(|d| vec![d]));
+    let p = SymmetricPattern::from_dof_lists(n + extra, &lists).unwrap();
+    let perm = nested_dissection(&p).unwrap();
+    assert_eq!(perm.len(), n + extra);
+}
