@@ -180,6 +180,9 @@ impl FaerSolver {
     }
 }
 
+/// The packing buffer faer's dense matrix product (private-gemm) allocates per thread.
+const GEMM_BUFFER_BYTES: usize = 64 << 20;
+
 /// Scratch sizes for numeric factorisation and solves with up to this many right-hand sides
 /// at once; larger batches are split.
 const RHS_BLOCK: usize = 16;
@@ -230,12 +233,26 @@ impl LinearSolver for FaerSolver {
             FaerOrdering::Amd => (symbolic_for(SymmetricOrdering::Amd)?, FaerOrdering::Amd),
             FaerOrdering::NestedDissection => (nested()?, FaerOrdering::NestedDissection),
             FaerOrdering::Auto => {
+                // One symbolic factor alive at a time: AMD's flops and order are kept, its
+                // structure dropped before nested dissection runs, rebuilt if AMD wins.
                 let amd = symbolic_for(SymmetricOrdering::Amd)?;
+                let amd_flops = factor_flops(&amd);
+                let amd_perm: Option<(Vec<usize>, Vec<usize>)> = amd
+                    .perm()
+                    .map(|p| (p.arrays().0.to_vec(), p.arrays().1.to_vec()));
+                drop(amd);
                 let nd = nested()?;
-                if factor_flops(&nd) < factor_flops(&amd) {
+                if factor_flops(&nd) < amd_flops {
                     (nd, FaerOrdering::NestedDissection)
                 } else {
-                    (amd, FaerOrdering::Amd)
+                    drop(nd);
+                    let again = match &amd_perm {
+                        Some((fwd, inv)) => symbolic_for(SymmetricOrdering::Custom(
+                            faer::perm::PermRef::new_checked(fwd, inv, n),
+                        ))?,
+                        None => symbolic_for(SymmetricOrdering::Identity)?,
+                    };
+                    (again, FaerOrdering::Amd)
                 }
             }
         };
@@ -257,8 +274,14 @@ impl LinearSolver for FaerSolver {
             },
             entries: len,
             factor_bytes: f64s(len),
-            // The scratch, and the permutation copy and diagonal each factorisation makes.
-            workspace_bytes: req.size_bytes().saturating_add(f64s(2 * n)),
+            // The scratch, the permutation copy and diagonal each factorisation makes, and the
+            // dense kernels' per-thread packing buffer (64 MiB, allocated by faer's gemm on
+            // first use, outside our budget's reach: an address-space limit it does not fit
+            // aborts the process).
+            workspace_bytes: req
+                .size_bytes()
+                .saturating_add(f64s(2 * n))
+                .saturating_add(GEMM_BUFFER_BYTES.saturating_mul(self.par.degree().max(1))),
             matrix_bytes: f64s(pattern.nnz_lower()),
         }
         .check(current_budget(self.memory_budget.as_ref()))?;

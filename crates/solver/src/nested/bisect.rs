@@ -8,26 +8,30 @@ use std::collections::BinaryHeap;
 
 /// Sides 0 and 1 and separator 2 of a multilevel bisection of `g`.
 pub(crate) fn bisect(g: &Graph) -> Vec<u8> {
-    // Coarsen.
+    // Coarsen: levels[k] holds the k-th coarser graph and the map onto it from the one before
+    // (no copy of `g` itself).
     let mut levels: Vec<(Graph, Vec<usize>)> = Vec::new();
-    let mut current = g.clone();
-    while current.n() > COARSEST {
-        let (coarse, cmap) = coarsen(&current);
-        if coarse.n() as f64 > 0.9 * current.n() as f64 {
+    loop {
+        let fine = levels.last().map_or(g, |l| &l.0);
+        if fine.n() <= COARSEST {
             break;
         }
-        levels.push((std::mem::replace(&mut current, coarse), cmap));
+        let (coarse, cmap) = coarsen(fine);
+        if coarse.n() as f64 > 0.9 * fine.n() as f64 {
+            break;
+        }
+        levels.push((coarse, cmap));
     }
     // Initial partition: the best of several grown ones.
-    let mut part = initial_partition(&current);
+    let mut part = initial_partition(levels.last().map_or(g, |l| &l.0));
     // Uncoarsen and refine.
-    while let Some((fine, cmap)) = levels.pop() {
+    while let Some((_, cmap)) = levels.pop() {
         part = cmap.iter().map(|&c| part[c]).collect();
-        refine(&fine, &mut part);
-        current = fine;
+        refine(levels.last().map_or(g, |l| &l.0), &mut part);
     }
-    let mut part = separator(&current, part);
-    refine_separator(&current, &mut part);
+    let current = g;
+    let mut part = separator(current, part);
+    refine_separator(current, &mut part);
     part
 }
 
