@@ -1,17 +1,26 @@
 //! One-shot solver report over problem sizes (issue: sparse solvers): for structured Hex20
 //! elasticity matrices of ~1 k to ~150 k DOF and a laminate-like thin model, the time of
 //! symbolic analysis, numeric factorisation and one solve, factor entries, flops, GFLOP/s and
-//! peak memory, for the profile solver (RCM) and faer LDLᵀ (AMD) on 1 and 2 threads, plus the
-//! dense matmul GFLOP/s of this machine in the same run. Each case runs once (the large ones
+//! peak memory, for the profile solver (RCM) and faer LDLᵀ (AMD, nested dissection) on 1 and 2
+//! threads, plus the dense matmul GFLOP/s of this machine in the same run. Each case runs once (the large ones
 //! take seconds); criterion covers the small cases in `benches/solvers.rs`.
 //!
-//! Run: `cargo bench --bench solver_report` (add `-- quick` to stop at ~50 k DOF, or
-//! `-- only=laminate` to run the cases whose name contains that text).
+//! Run: `cargo bench --bench solver_report` (add `-- quick` to stop at ~50 k DOF,
+//! `-- only=laminate` to run the cases whose name contains that text, `-- noprofile` to leave
+//! out the profile solver).
 
 #[path = "../tests/common/mod.rs"]
 mod common;
 
-use nonlin3d::solver::{FaerMode, FaerSolver, LinearSolver, ProfileLdlt, SymmetricMatrix};
+use nonlin3d::element::IntegrationRule;
+use nonlin3d::laminate::materials;
+use nonlin3d::mesh::{
+    EmbeddedParams, Mesh, ThroughWidthParams, embedded_delamination, names,
+    through_width_delamination,
+};
+use nonlin3d::solver::{
+    FaerMode, FaerOrdering, FaerSolver, LinearSolver, ProfileLdlt, SymmetricMatrix,
+};
 use std::time::Instant;
 
 /// A memory figure of this process from /proc/self/status (`VmHWM` peak, `VmRSS` current), MiB.
@@ -57,6 +66,46 @@ fn dense_matmul_gflops(threads: usize) -> f64 {
     2.0 * (n as f64).powi(3) / best / 1e9
 }
 
+/// Where a case's matrix comes from.
+enum Source {
+    /// `common::clamped_box_stiffness` with these cells and sizes.
+    Box([usize; 3], [f64; 3]),
+    /// The embedded-delamination plate (steel, symmetry planes x0, y0, z0 fixed), tangent at
+    /// zero displacement.
+    Plate(EmbeddedParams),
+    /// The through-width delamination model (steel, x0 clamped), tangent at zero displacement.
+    Through(ThroughWidthParams),
+}
+
+impl Source {
+    fn matrix(&self) -> SymmetricMatrix {
+        let (mesh, fixes): (Mesh, &[(&str, usize)]) = match self {
+            Self::Box(n, h) => return common::clamped_box_stiffness(*n, *h),
+            Self::Plate(p) => (
+                embedded_delamination(p).unwrap_or_else(|e| panic!("{e}")),
+                &[(names::X0, 0), (names::Y0, 1), (names::Z0, 2)],
+            ),
+            Self::Through(p) => (
+                through_width_delamination(p)
+                    .unwrap_or_else(|e| panic!("{e}"))
+                    .0,
+                &[(names::X0, 0), (names::X0, 1), (names::X0, 2)],
+            ),
+        };
+        let steel = materials::steel()
+            .stiffness()
+            .unwrap_or_else(|e| panic!("{e}"));
+        let problem = common::structural_problem(&mesh, steel, IntegrationRule::Gauss2, fixes);
+        let u = vec![0.0; problem.assembler().n()];
+        let mut k = problem.assembler().new_tangent();
+        problem
+            .assembler()
+            .residual(&u, 1.0, problem.constraints(), Some(&mut k))
+            .unwrap_or_else(|e| panic!("{e}"));
+        k
+    }
+}
+
 struct Row {
     case: String,
     dofs: usize,
@@ -65,6 +114,7 @@ struct Row {
     numeric: f64,
     solve: f64,
     entries: usize,
+    lower: usize,
     flops: f64,
     peak: f64,
     negative: usize,
@@ -83,7 +133,7 @@ fn run(
     let analysis = match s.analyze(k.pattern()) {
         Ok(a) => a,
         Err(e) => {
-            println!("| {case} | {n} | {label} | {e} | | | | | | |");
+            println!("| {case} | {n} | {label} | {e} | | | | | | | | |");
             return None;
         }
     };
@@ -111,6 +161,7 @@ fn run(
         numeric,
         solve,
         entries: analysis.factor_entries,
+        lower: analysis.lower_nonzeros,
         flops: f.flops,
         peak,
         negative: f.negative_pivots,
@@ -126,10 +177,10 @@ fn main() {
     );
     println!();
     println!(
-        "| case | DOF | solver | symbolic ms | numeric ms (best of 15 below 20 k DOF) | solve ms | factor entries | GFLOP/s | peak MiB | neg. pivots |"
+        "| case | DOF | solver | symbolic ms | numeric ms (best of 15 below 20 k DOF) | solve ms | factor entries | nnz(L) | GFLOP | GFLOP/s | peak MiB | neg. pivots |"
     );
-    println!("|---|---:|---|---:|---:|---:|---:|---:|---:|---:|");
-    let mut cases: Vec<(&str, [usize; 3], [f64; 3])> = vec![
+    println!("|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
+    let mut boxes: Vec<(&str, [usize; 3], [f64; 3])> = vec![
         ("cube 2×2×1", [2, 2, 1], [2e-3, 2e-3, 1e-3]),
         ("cube 3×3×2", [3, 3, 2], [2e-3, 2e-3, 1e-3]),
         ("cube 4×4×2", [4, 4, 2], [2e-3, 2e-3, 1e-3]),
@@ -144,38 +195,85 @@ fn main() {
         ("cube 20×20×8 (~50 k)", [20, 20, 8], [2e-3, 2e-3, 1e-3]),
     ];
     if !quick {
-        cases.push(("cube 30×30×12 (~150 k)", [30, 30, 12], [2e-3, 2e-3, 1e-3]));
-        cases.push((
+        boxes.push(("cube 30×30×12 (~150 k)", [30, 30, 12], [2e-3, 2e-3, 1e-3]));
+        boxes.push((
             "laminate 55×55×3, 16:1 (~140 k)",
             [55, 55, 3],
             [2e-3, 2e-3, 0.125e-3],
         ));
     }
+    let mut cases: Vec<(String, Source)> = boxes
+        .into_iter()
+        .map(|(name, n, h)| (name.to_owned(), Source::Box(n, h)))
+        .collect();
+    // The scene meshes: the embedded-delamination plate at the thesis's reference size and at
+    // the 89 k-DOF size of `benches/newton_report.rs`, and a through-width model 24 cells across.
+    cases.push((
+        "plate, embedded delamination, 12 slices (~10 k)".into(),
+        Source::Plate(EmbeddedParams {
+            slices: 12,
+            ..EmbeddedParams::thesis_reference()
+        }),
+    ));
+    cases.push((
+        "through-width, 24 across (~25 k)".into(),
+        Source::Through(ThroughWidthParams {
+            across: 24,
+            width: 12e-3,
+            ..ThroughWidthParams::example()
+        }),
+    ));
+    if !quick {
+        cases.push((
+            "plate, embedded delamination, 24 slices (~89 k)".into(),
+            Source::Plate(EmbeddedParams {
+                slices: 24,
+                radial_inside: 10,
+                radial_outside: 12,
+                sub_layers: 3,
+                base_layers: 6,
+                ..EmbeddedParams::thesis_reference()
+            }),
+        ));
+    }
     // `only=TEXT` keeps the cases whose name contains TEXT.
     let only = std::env::args().find_map(|a| a.strip_prefix("only=").map(str::to_owned));
     cases.retain(|c| only.as_deref().is_none_or(|o| c.0.contains(o)));
-    for (case, n, h) in cases {
-        let k = common::clamped_box_stiffness(n, h);
-        let mut solvers: Vec<(Box<dyn LinearSolver>, String)> = vec![
-            (
-                Box::new(FaerSolver::new(FaerMode::Ldlt)),
-                "faer LDLᵀ, 1 thread".into(),
-            ),
-            (
-                Box::new(FaerSolver::new(FaerMode::Ldlt).with_threads(2)),
-                "faer LDLᵀ, 2 threads".into(),
-            ),
-        ];
-        // The profile solver: only where its envelope fits the 3 GiB cap and its time is
-        // reasonable (analysis reports TooLarge otherwise).
-        solvers.insert(
-            0,
-            (Box::new(ProfileLdlt::new()), "profile LDLᵀ (RCM)".into()),
-        );
+    for (case, source) in cases {
+        let case = case.as_str();
+        let k = source.matrix();
+        // faer with each ordering on 1 and 2 threads, side by side in one run.
+        let mut solvers: Vec<(Box<dyn LinearSolver>, String)> = Vec::new();
+        for (ordering, name) in [
+            (FaerOrdering::Amd, "AMD"),
+            (FaerOrdering::NestedDissection, "ND"),
+        ] {
+            for threads in [1, 2] {
+                solvers.push((
+                    Box::new(
+                        FaerSolver::new(FaerMode::Ldlt)
+                            .with_ordering(ordering)
+                            .with_threads(threads),
+                    ),
+                    format!(
+                        "faer LDLᵀ {name}, {threads} thread{}",
+                        if threads > 1 { "s" } else { "" }
+                    ),
+                ));
+            }
+        }
+        // The profile solver (RCM): only where its envelope fits the 3 GiB cap and its time is
+        // reasonable (analysis reports TooLarge otherwise); `noprofile` skips it.
+        if !std::env::args().any(|a| a == "noprofile") {
+            solvers.insert(
+                0,
+                (Box::new(ProfileLdlt::new()), "profile LDLᵀ (RCM)".into()),
+            );
+        }
         for (s, label) in solvers {
             if let Some(r) = run(case, &k, s, label) {
                 println!(
-                    "| {} | {} | {} | {:.3} | {:.3} | {:.3} | {} | {:.1} | {:.0} | {} |",
+                    "| {} | {} | {} | {:.3} | {:.3} | {:.3} | {} | {} | {:.2} | {:.1} | {:.0} | {} |",
                     r.case,
                     r.dofs,
                     r.solver,
@@ -183,6 +281,8 @@ fn main() {
                     1e3 * r.numeric,
                     1e3 * r.solve,
                     r.entries,
+                    r.lower,
+                    r.flops / 1e9,
                     r.flops / r.numeric / 1e9,
                     r.peak,
                     r.negative

@@ -1,14 +1,16 @@
 //! Criterion benchmarks of the sparse solvers (issue: sparse solvers) on structured Hex20
 //! elasticity matrices: symbolic analysis, numeric factorisation and solve for the profile
-//! solver (RCM) and faer LDLᵀ (AMD) on 1 and 2 threads, with the dense matmul of the same
-//! machine as the yardstick. The size sweep up to 150 k DOF with memory figures is
+//! solver (RCM) and faer LDLᵀ (AMD, nested dissection) on 1 and 2 threads, with the dense
+//! matmul of the same machine as the yardstick. The size sweep up to 150 k DOF with memory figures is
 //! `benches/solver_report.rs`; figures in docs/PERFORMANCE.md.
 
 #[path = "../tests/common/mod.rs"]
 mod common;
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
-use nonlin3d::solver::{FaerMode, FaerSolver, LinearSolver, ProfileLdlt, SymmetricMatrix};
+use nonlin3d::solver::{
+    FaerMode, FaerOrdering, FaerSolver, LinearSolver, ProfileLdlt, SymmetricMatrix,
+};
 use std::hint::black_box;
 use std::time::Duration;
 
@@ -18,16 +20,23 @@ fn bench_phases(c: &mut Criterion, name: &str, k: &SymmetricMatrix, profile: boo
         .sample_size(10)
         .warm_up_time(Duration::from_millis(500))
         .measurement_time(Duration::from_secs(4));
-    let mut solvers: Vec<(String, Box<dyn LinearSolver>)> = vec![
-        (
-            "faer_ldlt_1thread".into(),
-            Box::new(FaerSolver::new(FaerMode::Ldlt)),
-        ),
-        (
-            "faer_ldlt_2threads".into(),
-            Box::new(FaerSolver::new(FaerMode::Ldlt).with_threads(2)),
-        ),
-    ];
+    // faer with AMD and with nested dissection, each on 1 and 2 threads.
+    let mut solvers: Vec<(String, Box<dyn LinearSolver>)> = Vec::new();
+    for (ordering, name) in [
+        (FaerOrdering::Amd, "amd"),
+        (FaerOrdering::NestedDissection, "nd"),
+    ] {
+        for threads in [1, 2] {
+            solvers.push((
+                format!("faer_ldlt_{name}_{threads}thread"),
+                Box::new(
+                    FaerSolver::new(FaerMode::Ldlt)
+                        .with_ordering(ordering)
+                        .with_threads(threads),
+                ),
+            ));
+        }
+    }
     if profile {
         solvers.insert(0, ("profile_rcm".into(), Box::new(ProfileLdlt::new())));
     }

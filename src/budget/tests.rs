@@ -6,7 +6,7 @@ use super::limits::{
 };
 use super::*;
 use crate::scene::DEFAULT_SCENE;
-use nonlin3d_solver::{FaerMode, FaerSolver, LinearSolver, SolverError};
+use nonlin3d_solver::{FaerMode, FaerOrdering, FaerSolver, LinearSolver, SolverError};
 
 const GIB: u64 = 1 << 30;
 
@@ -168,12 +168,12 @@ fn scene(mesh: &str, geometry: Option<&str>) -> Scene {
 const THROUGH_WIDTH: &str = "[geometry]\nkind = \"through-width\"\na_mm = 10.0\nlength_mm = \
                              30.0\nwidth_mm = 8.0\nh_mm = 0.4\nbase_mm = 4.0\n\n";
 
-/// faer's factor entries for a scene: the count its symbolic analysis refuses with under a
-/// 1-byte budget (nothing numeric is allocated).
-fn faer_entries(s: &Scene) -> u64 {
+/// faer's factor entries for a scene with `ordering`: the count its symbolic analysis refuses
+/// with under a 1-byte budget (nothing numeric is allocated).
+fn faer_entries(s: &Scene, ordering: FaerOrdering) -> u64 {
     let model = crate::analysis::build_model(s).unwrap();
     let problem = crate::analysis::build_problem(s, &model).unwrap();
-    let mut solver = FaerSolver::new(FaerMode::Ldlt);
+    let mut solver = FaerSolver::new(FaerMode::Ldlt).with_ordering(ordering);
     solver.memory_budget = Some(MemoryBudget::new(1, "test"));
     match solver.analyze(problem.assembler().pattern()) {
         Err(SolverError::OverBudget { entries, .. }) => entries as u64,
@@ -182,8 +182,10 @@ fn faer_entries(s: &Scene) -> u64 {
 }
 
 /// The estimate's exact parts match the built model and its factor estimate lies in the band
-/// the documentation states (faer's count 0.7–1.2 × the estimate above 2 M entries) on an
-/// embedded, a thicker, a Hex8 and a through-width scene.
+/// the documentation states (faer's count with AMD, which it was fitted to, 0.7–1.2 × the
+/// estimate above 2 M entries) on an embedded, a thicker, a Hex8 and a through-width scene; on
+/// each the default ordering (AMD or nested dissection, the fewer flops) stores no more than
+/// AMD, so the estimate stays on the high side for it.
 #[test]
 fn estimates_match_built_models() {
     let cases = [
@@ -208,7 +210,8 @@ fn estimates_match_built_models() {
         assert_eq!(e.nodes, model.mesh.nodes.len() as u64);
         assert_eq!(e.cells, model.mesh.cells.len() as u64);
         assert_eq!(e.dofs, 3 * e.nodes);
-        let f = faer_entries(s);
+        let f = faer_entries(s, FaerOrdering::Amd);
+        assert!(faer_entries(s, FaerOrdering::default()) <= f);
         let ratio = f as f64 / e.factor_entries as f64;
         assert!(
             f > 2_000_000 && (0.7..=1.2).contains(&ratio),

@@ -5,9 +5,9 @@
 //! |---|---|
 //! | [`SymmetricPattern`] | lower-triangle CSC pattern, built once from element DOF lists |
 //! | [`SymmetricMatrix`] | values on a shared pattern: zero, scatter-add, matvec |
-//! | [`reverse_cuthill_mckee`], [`approximate_minimum_degree`], [`envelope_stats`] | orderings and their bandwidth/profile |
+//! | [`reverse_cuthill_mckee`], [`approximate_minimum_degree`], [`nested_dissection`], [`envelope_stats`] | orderings and their bandwidth/profile |
 //! | [`ProfileLdlt`] | envelope LDLᵀ, RCM ordered, SIMD inner products |
-//! | [`FaerSolver`] | faer LDLᵀ / LLᵀ with AMD, supernodal or simplicial |
+//! | [`FaerSolver`], [`FaerOrdering`] | faer LDLᵀ / LLᵀ, AMD or nested-dissection ordered, supernodal or simplicial |
 //! | [`LinearSolver`], [`SolverKind`] | the common interface; [`Factorization::negative_pivots`] is the inertia |
 //! | [`MemoryBudget`], [`set_memory_budget`] | the bytes a factorisation may take, checked by `analyze` before allocating |
 //!
@@ -37,14 +37,16 @@ pub mod budget;
 mod error;
 mod faer_backend;
 mod matrix;
+mod nested;
 mod ordering;
 pub mod profile;
 mod solver;
 
 pub use budget::{MemoryBudget, set_memory_budget};
 pub use error::SolverError;
-pub use faer_backend::{FaerMode, FaerSolver, FaerStructure};
+pub use faer_backend::{FaerMode, FaerOrdering, FaerSolver, FaerStructure};
 pub use matrix::SymmetricMatrix;
+pub use nested::{LEAF_NODES, nested_dissection};
 pub use ordering::{
     EnvelopeStats, Permutation, approximate_minimum_degree, envelope_stats, reverse_cuthill_mckee,
 };

@@ -200,6 +200,7 @@ impl LinearSolver for ProfileLdlt {
         self.flops = flops;
         Ok(Analysis {
             factor_entries: total,
+            lower_nonzeros: total,
             flops,
             bandwidth: Some(stats.bandwidth),
             profile: Some(stats.profile),

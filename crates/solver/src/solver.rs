@@ -8,6 +8,10 @@ use std::sync::Arc;
 pub struct Analysis {
     /// Stored entries of the factor (envelope for the profile solver, L for faer).
     pub factor_entries: usize,
+    /// Structural nonzeros of L's lower triangle, diagonal included (what PARDISO and CHOLMOD
+    /// report; faer's supernodal storage also holds the upper half of each diagonal block and
+    /// the zeros of merged supernodes, counted in `factor_entries`).
+    pub lower_nonzeros: usize,
     /// Floating-point operations of one numeric factorisation (a multiply-add counts 2).
     pub flops: f64,
     /// Bandwidth after ordering (profile solver).
@@ -46,16 +50,17 @@ pub trait LinearSolver: Send {
 pub enum SolverKind {
     /// [`crate::ProfileLdlt`] with reverse Cuthill–McKee.
     Profile,
-    /// [`crate::FaerSolver`] LDLᵀ with AMD: the default. Measured faster than the profile
+    /// [`crate::FaerSolver`] LDLᵀ, ordered by AMD or nested dissection (whichever needs fewer
+    /// flops, [`crate::FaerOrdering::Auto`]): the default. Measured faster than the profile
     /// solver from about 450 equations on, 2.7× at 11 k and 3–4× at 50–140 k DOF
     /// (docs/PERFORMANCE.md); the profile solver wins only on tiny systems (153 DOF: 3×).
     #[default]
     FaerLdlt,
-    /// [`crate::FaerSolver`] LLᵀ with AMD: positive definite matrices only.
+    /// [`crate::FaerSolver`] LLᵀ (ordering as `FaerLdlt`): positive definite matrices only.
     FaerLlt,
-    /// [`crate::FaerSolver`] LDLᵀ with AMD, numeric phase on this many rayon threads. Faster
-    /// from about 10 k DOF on two cores; the sums are split differently from the sequential
-    /// solver, so results agree with it to rounding, not bitwise.
+    /// [`crate::FaerSolver`] LDLᵀ (ordering as `FaerLdlt`), numeric phase on this many rayon
+    /// threads. Faster from about 10 k DOF on two cores; the sums are split differently from
+    /// the sequential solver, so results agree with it to rounding, not bitwise.
     FaerLdltThreads(usize),
 }
 
