@@ -59,7 +59,7 @@ impl CrackFaces {
         Self::from_sets(mesh, set(CRACK_UPPER)?, set(CRACK_LOWER)?)
     }
 
-    /// The pairs (upper[i], lower[i]) of a mesh; the lower face's facets are derived from its
+    /// The pairs (`upper[i]`, `lower[i]`) of a mesh; the lower face's facets are derived from its
     /// cells. Errors: lists of different lengths, a node out of range or in both lists, a
     /// lower node on no facet.
     pub fn from_sets(mesh: &Mesh, upper: &[usize], lower: &[usize]) -> Result<Self, ContactError> {
