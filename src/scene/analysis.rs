@@ -97,7 +97,7 @@ pub struct AnalysisOptions {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "kebab-case")]
 pub enum SolverName {
-    /// faer's supernodal/simplicial LDLᵀ with AMD ordering.
+    /// faer's supernodal/simplicial LDLᵀ with AMD or nested-dissection ordering (`FaerOrdering::Auto`: whichever needs fewer flops).
     #[default]
     Faer,
     /// The thesis's profile (skyline) LDLᵀ with RCM ordering.
