@@ -7,6 +7,7 @@
 use crate::model::Value;
 pub use crate::model::{Model, ModelKind, build_model, perturbation_force, perturbation_loads};
 use crate::scene::{ForceKinematics, Geometry, NewtonName, Scene, SolverName};
+use crate::substructure::Substructured;
 use crate::{Error, results::*};
 use nonlin3d_assembly::{Assembler, Constraints};
 use nonlin3d_element::Kinematics;
@@ -212,15 +213,19 @@ pub fn run(
     let model = build_model(scene)?;
     let t_mesh = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
-    let mut problem = build_problem(scene, &model)?;
+    // With `[substructure]` Newton solves the nonlinear sub-mesh and its superelement.
+    let (mut problem, mut sub) = match crate::substructure::build(scene, &model)? {
+        Some((p, s)) => (p, Some(s)),
+        None => (build_problem(scene, &model)?, None),
+    };
     let t_setup = t1.elapsed().as_secs_f64();
-    let dofs = problem.assembler().n();
+    let dofs = 3 * model.mesh.nodes.len();
     progress(Progress::Built {
         model: &model,
         dofs,
         levels: load_factors(scene).0.len(),
     })?;
-    let mut sweep = sweep(scene, &model, &mut problem, dofs, progress)?;
+    let mut sweep = sweep(scene, &model, &mut problem, sub.as_mut(), progress)?;
     let critical = criterion(scene, model.kind, &mut sweep.levels)?;
     let mut results = Results {
         title: scene.title.clone(),
@@ -239,6 +244,7 @@ pub fn run(
             front_points: sweep.levels.first().map_or(0, |l| l.front.len()),
             perturbation_n: (sweep.force != 0.0).then_some(sweep.force),
             perturbed_at: sweep.perturbed_at,
+            substructure: sub.map(|s| s.summary),
         },
         levels: sweep.levels,
         critical,
@@ -277,7 +283,7 @@ fn sweep(
     scene: &Scene,
     model: &Model,
     problem: &mut StructuralProblem,
-    dofs: usize,
+    mut sub: Option<&mut Substructured>,
     progress: &mut dyn FnMut(Progress) -> Result<(), Error>,
 ) -> Result<Sweep, Error> {
     let plate = model.kind == ModelKind::Plate;
@@ -295,8 +301,11 @@ fn sweep(
     } else {
         perturbation_force(scene, model)?
     };
-    let perturbation = perturbation_loads(model, force)?;
-    let mut u = vec![0.0; dofs];
+    let mut perturbation = perturbation_loads(model, force)?;
+    if let Some(s) = &sub {
+        perturbation = s.to_nonlinear(&perturbation)?;
+    }
+    let mut u = vec![0.0; problem.assembler().n()];
     // One solver for every level: analysed once; with BFGS each level starts from the
     // factorisation its predecessor's stability test left.
     let mut session = PathSolver::new(problem, newton.solver)?;
@@ -321,8 +330,17 @@ fn sweep(
             value,
             source: Box::new(e),
         };
+        // Buckled into the base: judged on the full field (recovered with a superelement).
+        let mut inward = |u: &[f64]| {
+            !plate
+                && match sub.as_deref_mut() {
+                    Some(s) => s.recover(u, lambda).map(|f| deflections(model, &f).1),
+                    None => Ok(deflections(model, u).1),
+                }
+                .is_ok_and(|peak| peak < -0.01 * model.h)
+        };
         let solved = solve_or_redo(
-            model,
+            &mut inward,
             problem,
             &mut u,
             (from, lambda),
@@ -336,9 +354,15 @@ fn sweep(
         }
         out.solve_s += t.elapsed().as_secs_f64();
         let t = Instant::now();
-        let front = front_table(scene, model, problem, &u)?;
+        let (front, full) = match sub.as_deref_mut() {
+            Some(s) => {
+                let full = s.recover(&u, lambda)?;
+                (s.front_table(scene, model, &full)?, full)
+            }
+            None => (front_table(scene, model, problem, &u)?, u.clone()),
+        };
         out.vcct_s += t.elapsed().as_secs_f64();
-        let (centre, peak) = deflections(model, &u);
+        let (centre, peak) = deflections(model, &full);
         if !plate && peak < -0.01 * model.h {
             return Err(Error::BuckledIntoBase {
                 index: k,
@@ -346,7 +370,7 @@ fn sweep(
                 separation_mm: peak * 1e3,
             });
         }
-        let mut level = LevelResult::new(value, centre, peak, &solved.attempts, &front, u.clone());
+        let mut level = LevelResult::new(value, centre, peak, &solved.attempts, &front, full);
         level.set_negative_pivots(solved.pivots);
         level.convergence.full_newton_fallback = solved.fallback;
         level.convergence.bifurcation = solved.attempts.iter().find_map(|a| {
@@ -381,9 +405,10 @@ struct Solved {
 }
 
 /// One level from `from` to `to` by [`solve_level`]; with a kept tangent (BFGS) redone by full
-/// Newton from the same start if BFGS fails or lands on the branch buckled into the base.
+/// Newton from the same start if BFGS fails or lands on the branch buckled into the base
+/// (`inward` of the converged state).
 fn solve_or_redo(
-    model: &Model,
+    inward: &mut dyn FnMut(&[f64]) -> bool,
     problem: &mut StructuralProblem,
     u: &mut Vec<f64>,
     (from, lambda): (f64, f64),
@@ -391,7 +416,6 @@ fn solve_or_redo(
     (newton, stepping): (&NewtonSettings, &Stepping),
     session: &mut PathSolver,
 ) -> Result<Solved, Error> {
-    let plate = model.kind == ModelKind::Plate;
     let start = u.clone();
     let first = solve_level(problem, u, from, lambda, pert, newton, stepping, session)
         .map(|l| (l.attempts, l.perturbed, l.negative_pivots));
@@ -399,7 +423,6 @@ fn solve_or_redo(
     // across to the branch buckled into the base (seen on the reference scene at −0.003);
     // full Newton follows the outward branch, so the level is redone with it — also when
     // BFGS does not converge at all.
-    let inward = |u: &[f64]| !plate && deflections(model, u).1 < -0.01 * model.h;
     let redo = newton.keep_tangent && first.as_ref().map_or(true, |_| inward(u));
     let (mut attempts, mut perturbed, mut pivots) = match first {
         Err(_) if redo => (Vec::new(), false, None),

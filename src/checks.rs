@@ -5,7 +5,7 @@
 //! [`Scene::warnings`] live here.
 
 use crate::Error;
-use crate::scene::{Geometry, MaterialSpec, Scene, Shape};
+use crate::scene::{Geometry, MaterialSpec, PartitionName, Scene, Shape};
 use nonlin3d_mesh::EmbeddedParams;
 
 /// Element counts above this along one mesh axis are refused before anything is allocated
@@ -108,7 +108,23 @@ pub(crate) fn scene(s: &Scene) -> Result<(), Error> {
             .validate()
             .map_err(|e| Error::Scene(format!("criterion: {e}")))?;
     }
-    Ok(())
+    substructure(s)
+}
+
+/// `[substructure]`: ℓ positive and finite, given only with the thesis's partition (the other
+/// partitions have no offset; a key read and ignored would hide a mistake). Whether some
+/// sublaminate cell lies ℓ inside the front is the mesh's check (it names the largest ℓ that
+/// leaves cells).
+fn substructure(s: &Scene) -> Result<(), Error> {
+    let sub = &s.substructure;
+    match (sub.partition, sub.offset_mm) {
+        (PartitionName::Thesis, Some(l)) => positive("substructure.offset_mm", l),
+        (p, Some(l)) if p != PartitionName::Thesis => bad(format!(
+            "substructure.offset_mm = {l}: only the thesis's partition (partition = \"thesis\") \
+             has an offset ℓ"
+        )),
+        _ => Ok(()),
+    }
 }
 
 /// An orthotropic material's moduli within [`MAX_MODULUS_RATIO`] of each other (their signs

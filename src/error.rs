@@ -25,6 +25,9 @@ pub enum Error {
     /// VCCT failed (degenerate front, bad input).
     #[error(transparent)]
     Vcct(#[from] nonlin3d_vcct::VcctError),
+    /// Substructuring failed (empty region, singular interior: which DOF).
+    #[error(transparent)]
+    Substructure(#[from] nonlin3d_substructure::SubstructureError),
     /// A scene that cannot be parsed or describes an impossible model; names the field.
     #[error("scene: {0}")]
     Scene(String),

@@ -47,6 +47,7 @@ pub mod plot;
 pub mod report;
 pub mod results;
 pub mod scene;
+pub mod substructure;
 
 /// The README's code blocks, compiled and run as doc-tests.
 #[cfg(doctest)]

@@ -47,6 +47,8 @@ pub struct Model {
     /// min(a, b) embedded and edge, the radius for the plate, the half-length a through the
     /// width.
     pub a_min: f64,
+    /// The front's planform as a curve (for the thesis's partition, §3.2).
+    pub front_shape: nonlin3d_mesh::FrontShape,
 }
 
 /// Builds the mesh and front of a scene (with its imperfection, if any): the embedded
@@ -56,7 +58,7 @@ pub fn build_model(scene: &Scene) -> Result<Model, Error> {
     // Nodes and cells estimated from the scene before anything is allocated.
     crate::budget::check_mesh(scene, &crate::budget::limit())?;
     let materials = scene.stiffnesses()?;
-    let (mut mesh, front, model_kind, x_end, h, a_min) = match &scene.geometry {
+    let (mut mesh, front, model_kind, x_end, h, a_min, front_shape) = match &scene.geometry {
         Geometry::Embedded {
             shape,
             a_mm,
@@ -80,7 +82,7 @@ pub fn build_model(scene: &Scene) -> Result<Model, Error> {
             } else {
                 ModelKind::Embedded
             };
-            (m, f, k, p.w, p.h, p.a.min(p.b))
+            (m, f, k, p.w, p.h, p.a.min(p.b), p.front_shape())
         }
         Geometry::Plate {
             a_mm,
@@ -90,7 +92,7 @@ pub fn build_model(scene: &Scene) -> Result<Model, Error> {
         } => {
             let p = embedded_params(scene, Shape::Ellipse, *a_mm, *a_mm, *h_mm, *base_mm, *w_mm);
             let (m, f) = embedded_delamination_with_front(&p)?;
-            (m, f, ModelKind::Plate, p.w, p.h, p.a)
+            (m, f, ModelKind::Plate, p.w, p.h, p.a, p.front_shape())
         }
         Geometry::ThroughWidth {
             a_mm,
@@ -101,7 +103,8 @@ pub fn build_model(scene: &Scene) -> Result<Model, Error> {
         } => {
             let p = through_width_params(scene, *a_mm, *length_mm, *width_mm, *h_mm, *base_mm)?;
             let (m, f) = through_width_delamination(&p)?;
-            (m, f, ModelKind::ThroughWidth, p.length, p.h, p.a)
+            let shape = p.front_shape();
+            (m, f, ModelKind::ThroughWidth, p.length, p.h, p.a, shape)
         }
     };
     if let Some((shape, amp)) = imperfection(scene) {
@@ -117,6 +120,7 @@ pub fn build_model(scene: &Scene) -> Result<Model, Error> {
         x_end,
         h,
         a_min,
+        front_shape,
     })
 }
 

@@ -90,6 +90,7 @@ impl RunOutput {
                 front_points: 0,
                 perturbation_n: None,
                 perturbed_at: None,
+                substructure: None,
             },
             levels: Vec::new(),
             critical: None,

@@ -211,5 +211,25 @@ pub fn table(results: &Results) -> String {
         "{} nodes, {} DOFs; mesh {:.2} s, setup {:.2} s, solve {:.2} s, VCCT {:.3} s",
         results.model.nodes, results.model.dofs, t.mesh_s, t.setup_s, t.solve_s, t.vcct_s
     );
+    if let Some(sub) = &results.model.substructure {
+        let realised = sub.realised_offset_mm.map_or(String::new(), |[lo, hi]| {
+            format!(", realised ℓ {lo:.3}–{hi:.3} mm")
+        });
+        let _ = writeln!(
+            s,
+            "substructure \"{}\": Newton on {} of {} DOFs{realised}",
+            sub.partition, sub.nonlinear_dofs, sub.full_dofs
+        );
+        for (k, e) in sub.superelements.iter().enumerate() {
+            let _ = writeln!(
+                s,
+                "  superelement {}: {} interior DOFs onto {} interface DOFs, condensed in {:.2} s",
+                k + 1,
+                e.interior_dofs,
+                e.interface_dofs,
+                e.condensation_s
+            );
+        }
+    }
     s
 }

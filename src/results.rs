@@ -253,6 +253,9 @@ pub struct ModelSummary {
     /// The level (strain) at which the perturbation was applied: the first whose trivial state
     /// had negative pivots. None: the path never lost stability.
     pub perturbed_at: Option<f64>,
+    /// The superelement(s) and the nonlinear problem's size, with `[substructure]`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub substructure: Option<crate::substructure::SubstructureSummary>,
 }
 
 /// Wall-clock seconds per stage.

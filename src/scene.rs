@@ -12,6 +12,8 @@ use serde::{Deserialize, Serialize};
 
 mod analysis;
 pub use analysis::{AnalysisOptions, ForceKinematics, NewtonName, RuleName, SolverName};
+mod substructure;
+pub use substructure::{PartitionName, SubstructureOptions};
 
 /// The thesis's reference case (§4.3, §5.1): the scene `nonlin3d run` runs without arguments.
 pub const DEFAULT_SCENE: &str = include_str!("../examples/scenes/fig_5_1_3_circle_30mm.toml");
@@ -40,6 +42,9 @@ pub struct Scene {
     /// A growth criterion to evaluate along the front (optional).
     #[serde(default)]
     pub criterion: Option<CriterionSpec>,
+    /// Substructuring (thesis §2.6, §4.5): which cells are condensed into a superelement.
+    #[serde(default)]
+    pub substructure: SubstructureOptions,
 }
 
 /// Planform of an embedded or edge delamination.
