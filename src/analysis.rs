@@ -4,6 +4,7 @@
 //! Each stage is callable alone: [`build_model`], [`build_problem`], [`solve_level`],
 //! [`front_table`]; [`run`] (or [`Analysis::run`]) strings them together and times them.
 
+use crate::contact::ContactStage;
 use crate::model::Value;
 pub use crate::model::{Model, ModelKind, build_model, perturbation_force, perturbation_loads};
 use crate::scene::{ForceKinematics, Geometry, NewtonName, Scene, SolverName};
@@ -15,7 +16,7 @@ use nonlin3d_mesh::names::{CENTER_TOP, CRACK_LOWER, CRACK_UPPER};
 pub use nonlin3d_newton::solve_level;
 use nonlin3d_newton::{IncrementReport, NewtonSettings, PathSolver, Stepping, StructuralProblem};
 use nonlin3d_solver::SolverKind;
-use nonlin3d_vcct::{FrontRelease, cells_above, release_rates};
+use nonlin3d_vcct::{FrontRelease, cells_above, release_rates, respect_contact};
 use std::time::Instant;
 
 /// The load factors of the levels: strains (or loads) divided by the largest in magnitude,
@@ -307,6 +308,7 @@ fn sweep(
         solve_s: 0.0,
         vcct_s: 0.0,
     };
+    let mut stage = ContactStage::new(scene);
     let mut from = 0.0;
     for (k, (&lambda, &value)) in factors.iter().zip(values).enumerate() {
         let t = Instant::now();
@@ -321,25 +323,49 @@ fn sweep(
             value,
             source: Box::new(e),
         };
-        let solved = solve_or_redo(
-            model,
-            problem,
-            &mut u,
-            (from, lambda),
-            pert,
-            (&newton, &stepping),
-            &mut session,
-        )
-        .map_err(level_error)?;
+        let start = u.clone();
+        let mut solved = Solved::default();
+        if !stage.active() {
+            solved = solve_or_redo(
+                model,
+                problem,
+                &mut u,
+                (from, lambda),
+                pert,
+                (&newton, &stepping, !stage.enabled()),
+                &mut session,
+            )
+            .map_err(level_error)?;
+        }
+        let mut contact = None;
+        if stage.active() || stage.overlaps(model, &u) {
+            u = start;
+            let (level, summary) = stage
+                .solve(
+                    scene,
+                    model,
+                    &mut u,
+                    (from, lambda),
+                    pert,
+                    (&newton, &stepping),
+                )
+                .map_err(level_error)?;
+            solved.attempts.extend(level.first.attempts);
+            solved.perturbed = level.first.perturbed;
+            solved.pivots = level.first.negative_pivots;
+            contact = Some(summary);
+        }
         if solved.perturbed {
             out.perturbed_at = Some(value);
         }
         out.solve_s += t.elapsed().as_secs_f64();
         let t = Instant::now();
-        let front = front_table(scene, model, problem, &u)?;
+        let mut front = front_table(scene, model, problem, &u)?;
+        let closed = stage.closed_upper(model);
+        let states = respect_contact(&mut front, &model.front, |a, _| closed.contains(&a));
         out.vcct_s += t.elapsed().as_secs_f64();
         let (centre, peak) = deflections(model, &u);
-        if !plate && peak < -0.01 * model.h {
+        if !plate && !stage.enabled() && peak < -0.01 * model.h {
             return Err(Error::BuckledIntoBase {
                 index: k,
                 strain: value,
@@ -347,6 +373,8 @@ fn sweep(
             });
         }
         let mut level = LevelResult::new(value, centre, peak, &solved.attempts, &front, u.clone());
+        level.set_face_states(&states);
+        level.contact = contact;
         level.set_negative_pivots(solved.pivots);
         level.convergence.full_newton_fallback = solved.fallback;
         level.convergence.bifurcation = solved.attempts.iter().find_map(|a| {
@@ -369,6 +397,7 @@ fn sweep(
 }
 
 /// One level as [`solve_level`] left it.
+#[derive(Default)]
 struct Solved {
     /// Every increment tried.
     attempts: Vec<IncrementReport>,
@@ -381,14 +410,15 @@ struct Solved {
 }
 
 /// One level from `from` to `to` by [`solve_level`]; with a kept tangent (BFGS) redone by full
-/// Newton from the same start if BFGS fails or lands on the branch buckled into the base.
+/// Newton from the same start if BFGS fails or, when `inward_redo` (contact off), lands on the
+/// branch buckled into the base.
 fn solve_or_redo(
     model: &Model,
     problem: &mut StructuralProblem,
     u: &mut Vec<f64>,
     (from, lambda): (f64, f64),
     pert: &[(usize, f64)],
-    (newton, stepping): (&NewtonSettings, &Stepping),
+    (newton, stepping, inward_redo): (&NewtonSettings, &Stepping, bool),
     session: &mut PathSolver,
 ) -> Result<Solved, Error> {
     let plate = model.kind == ModelKind::Plate;
@@ -399,7 +429,8 @@ fn solve_or_redo(
     // across to the branch buckled into the base (seen on the reference scene at −0.003);
     // full Newton follows the outward branch, so the level is redone with it — also when
     // BFGS does not converge at all.
-    let inward = |u: &[f64]| !plate && deflections(model, u).1 < -0.01 * model.h;
+    // With contact (`auto`/`on`) the inward branch is corrected by the contact stage instead.
+    let inward = |u: &[f64]| inward_redo && !plate && deflections(model, u).1 < -0.01 * model.h;
     let redo = newton.keep_tangent && first.as_ref().map_or(true, |_| inward(u));
     let (mut attempts, mut perturbed, mut pivots) = match first {
         Err(_) if redo => (Vec::new(), false, None),

@@ -73,6 +73,7 @@ pub(crate) fn scene(s: &Scene) -> Result<(), Error> {
     mesh_controls(s)?;
     layup(s)?;
     loads(s)?;
+    crate::contact::check(&s.contact)?;
     let a = &s.analysis;
     if let Some(t) = a.tolerance_n {
         positive("analysis.tolerance_n", t)?;

@@ -25,6 +25,9 @@ pub enum Error {
     /// VCCT failed (degenerate front, bad input).
     #[error(transparent)]
     Vcct(#[from] nonlin3d_vcct::VcctError),
+    /// Crack-face contact failed (a cycle, too many passes).
+    #[error(transparent)]
+    Contact(#[from] nonlin3d_contact::ContactError),
     /// A scene that cannot be parsed or describes an impossible model; names the field.
     #[error("scene: {0}")]
     Scene(String),

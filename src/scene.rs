@@ -40,6 +40,9 @@ pub struct Scene {
     /// A growth criterion to evaluate along the front (optional).
     #[serde(default)]
     pub criterion: Option<CriterionSpec>,
+    /// Crack-face contact (default: `auto`).
+    #[serde(default)]
+    pub contact: crate::contact::ContactOptions,
 }
 
 /// Planform of an embedded or edge delamination.
