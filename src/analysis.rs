@@ -353,6 +353,8 @@ fn sweep(
             solved.attempts.extend(level.first.attempts);
             solved.perturbed = level.first.perturbed;
             solved.pivots = level.first.negative_pivots;
+            // With BFGS the contact loop runs with full Newton (src/contact.rs).
+            solved.fallback |= newton.keep_tangent;
             contact = Some(summary);
         }
         if solved.perturbed {

@@ -99,6 +99,8 @@ fn cli_writes_the_contact_record() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
+    // The terminal table carries the contact column.
+    assert!(String::from_utf8_lossy(&out.stdout).contains("contact: pairs closed"));
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("out/results.json")).unwrap())
             .unwrap();
@@ -129,4 +131,13 @@ fn a_negative_tolerance_is_refused_by_name() {
     );
     let e = Scene::from_toml(&text).unwrap_err();
     assert!(e.to_string().contains("contact.tolerance_mm"), "{e}");
+}
+
+#[test]
+fn the_thesis_external_force_also_removes_the_overlap() {
+    let mut s = scene(&SWEEP, CrackFacesName::On);
+    s.contact.mode = nonlin3d::contact::ContactModeName::Thesis;
+    let r = run(&s);
+    assert!(r.levels.iter().all(|l| l.overlapped() == 0));
+    assert!(r.levels.last().unwrap().contact.unwrap().pairs_closed > 0);
 }
