@@ -4,6 +4,7 @@
 //! Each stage is callable alone: [`build_model`], [`build_problem`], [`solve_level`],
 //! [`front_table`]; [`run`] (or [`Analysis::run`]) strings them together and times them.
 
+use crate::contact::ContactStage;
 use crate::model::Value;
 pub use crate::model::{Model, ModelKind, build_model, perturbation_force, perturbation_loads};
 use crate::scene::{ForceKinematics, Geometry, NewtonName, Scene, SolverName};
@@ -16,7 +17,7 @@ use nonlin3d_mesh::names::{CENTER_TOP, CRACK_LOWER, CRACK_UPPER};
 pub use nonlin3d_newton::solve_level;
 use nonlin3d_newton::{IncrementReport, NewtonSettings, PathSolver, Stepping, StructuralProblem};
 use nonlin3d_solver::SolverKind;
-use nonlin3d_vcct::{FrontRelease, cells_above, release_rates};
+use nonlin3d_vcct::{FrontRelease, cells_above, release_rates, respect_contact};
 use std::time::Instant;
 
 /// The load factors of the levels: strains (or loads) divided by the largest in magnitude,
@@ -316,6 +317,7 @@ fn sweep(
         solve_s: 0.0,
         vcct_s: 0.0,
     };
+    let mut stage = ContactStage::new(scene);
     let mut from = 0.0;
     for (k, (&lambda, &value)) in factors.iter().zip(values).enumerate() {
         let t = Instant::now();
@@ -330,40 +332,71 @@ fn sweep(
             value,
             source: Box::new(e),
         };
-        // Buckled into the base: judged on the full field (recovered with a superelement).
+        // Buckled into the base: judged on the full field (recovered with a superelement); with
+        // contact (`auto`/`on`) the contact stage corrects that branch instead.
+        let redo_inward = !stage.enabled();
         let mut inward = |u: &[f64]| {
-            !plate
+            redo_inward
+                && !plate
                 && match sub.as_deref_mut() {
                     Some(s) => s.recover(u, lambda).map(|f| deflections(model, &f).1),
                     None => Ok(deflections(model, u).1),
                 }
                 .is_ok_and(|peak| peak < -0.01 * model.h)
         };
-        let solved = solve_or_redo(
-            &mut inward,
-            problem,
-            &mut u,
-            (from, lambda),
-            pert,
-            (&newton, &stepping),
-            &mut session,
-        )
-        .map_err(level_error)?;
+        let start = u.clone();
+        let mut solved = Solved::default();
+        if !stage.active() {
+            solved = solve_or_redo(
+                &mut inward,
+                problem,
+                &mut u,
+                (from, lambda),
+                pert,
+                (&newton, &stepping),
+                &mut session,
+            )
+            .map_err(level_error)?;
+        }
+        // (Contact and substructuring together are refused by the scene checks: the contact
+        // stage works on the full model's DOFs.)
+        let mut contact = None;
+        if stage.active() || stage.overlaps(model, &u) {
+            u = start;
+            let (level, summary) = stage
+                .solve(
+                    scene,
+                    model,
+                    &mut u,
+                    (from, lambda),
+                    pert,
+                    (&newton, &stepping),
+                )
+                .map_err(level_error)?;
+            solved.attempts.extend(level.first.attempts);
+            solved.perturbed = level.first.perturbed;
+            solved.pivots = level.first.negative_pivots;
+            // With BFGS the contact loop runs with full Newton (src/contact.rs).
+            solved.fallback |= newton.keep_tangent;
+            contact = Some(summary);
+        }
         if solved.perturbed {
             out.perturbed_at = Some(value);
         }
         out.solve_s += t.elapsed().as_secs_f64();
         let t = Instant::now();
-        let (front, full) = match sub.as_deref_mut() {
+        let (mut front, full) = match sub.as_deref_mut() {
             Some(s) => {
                 let full = s.recover(&u, lambda)?;
                 (s.front_table(scene, model, &full)?, full)
             }
             None => (front_table(scene, model, problem, &u)?, u.clone()),
         };
+        let closed = stage.closed_upper(model);
+        let states = respect_contact(&mut front, &model.front, |a, _| closed.contains(&a));
         out.vcct_s += t.elapsed().as_secs_f64();
         let (centre, peak) = deflections(model, &full);
-        if !plate && peak < -0.01 * model.h {
+        if !plate && !stage.enabled() && peak < -0.01 * model.h {
             return Err(Error::BuckledIntoBase {
                 index: k,
                 strain: value,
@@ -371,6 +404,8 @@ fn sweep(
             });
         }
         let mut level = LevelResult::new(value, centre, peak, &solved.attempts, &front, full);
+        level.set_face_states(&states);
+        level.contact = contact;
         level.set_negative_pivots(solved.pivots);
         level.convergence.full_newton_fallback = solved.fallback;
         level.convergence.bifurcation = solved.attempts.iter().find_map(|a| {
@@ -393,6 +428,7 @@ fn sweep(
 }
 
 /// One level as [`solve_level`] left it.
+#[derive(Default)]
 struct Solved {
     /// Every increment tried.
     attempts: Vec<IncrementReport>,
@@ -406,7 +442,7 @@ struct Solved {
 
 /// One level from `from` to `to` by [`solve_level`]; with a kept tangent (BFGS) redone by full
 /// Newton from the same start if BFGS fails or lands on the branch buckled into the base
-/// (`inward` of the converged state).
+/// (`inward` of the converged state; always false with contact `auto`/`on`).
 fn solve_or_redo(
     inward: &mut dyn FnMut(&[f64]) -> bool,
     problem: &mut StructuralProblem,

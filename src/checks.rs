@@ -73,6 +73,7 @@ pub(crate) fn scene(s: &Scene) -> Result<(), Error> {
     mesh_controls(s)?;
     layup(s)?;
     loads(s)?;
+    crate::contact::check(&s.contact)?;
     let a = &s.analysis;
     if let Some(t) = a.tolerance_n {
         positive("analysis.tolerance_n", t)?;
@@ -124,7 +125,21 @@ fn substructure(s: &Scene) -> Result<(), Error> {
              has an offset ℓ"
         )),
         _ => Ok(()),
+    }?;
+    // The contact stage works on the full model's DOFs; with a superelement the Newton problem
+    // holds the nonlinear region's only.
+    if sub.partition != PartitionName::None
+        && s.contact.crack_faces != crate::contact::CrackFacesName::Off
+    {
+        return bad(format!(
+            "substructure.partition = \"{}\" with contact.crack_faces = \"{}\": crack-face \
+             contact in a substructured model is not available yet; set [contact] crack_faces = \
+             \"off\" (overlapping faces are then reported as overlapped) or partition = \"none\"",
+            sub.partition.name(),
+            s.contact.crack_faces.name()
+        ));
     }
+    Ok(())
 }
 
 /// An orthotropic material's moduli within [`MAX_MODULUS_RATIO`] of each other (their signs

@@ -28,6 +28,9 @@ pub enum Error {
     /// Substructuring failed (empty region, singular interior: which DOF).
     #[error(transparent)]
     Substructure(#[from] nonlin3d_substructure::SubstructureError),
+    /// Crack-face contact failed (a cycle, too many passes).
+    #[error(transparent)]
+    Contact(#[from] nonlin3d_contact::ContactError),
     /// A scene that cannot be parsed or describes an impossible model; names the field.
     #[error("scene: {0}")]
     Scene(String),

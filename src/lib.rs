@@ -37,6 +37,7 @@ pub mod analysis;
 mod atomic;
 pub mod budget;
 mod checks;
+pub mod contact;
 pub mod deck;
 pub mod eigen_check;
 pub mod export;

@@ -128,7 +128,9 @@ pub fn write_all(results: &mut Results, dir: &Path) -> Result<(), Error> {
 
 /// The short table: per level the applied value, the centre deflection, the largest crack-face
 /// separation, the largest G_I and G_II over the points whose faces are open and where, the
-/// count of overlapped points, and the Newton iterations; a note when any point overlaps.
+/// count of overlapped points, and the Newton iterations; a note when any point overlaps; when
+/// crack-face contact acted, per level the pairs closed, the active-set passes and the largest
+/// contact force.
 pub fn table(results: &Results) -> String {
     let mut s = String::new();
     let head = if results.quantity == "strain" {
@@ -140,6 +142,13 @@ pub fn table(results: &Results) -> String {
         s,
         "{head:>9} | w centre top (mm) | max face separation (mm) | G_I max (J/m²) at S (mm) | G_II max (J/m²) at S (mm) | overlapped | stable | iterations"
     );
+    // The contact column only when contact acted at some level (a run without contact prints
+    // the table it always did).
+    let contact = results.levels.iter().any(|l| l.contact.is_some());
+    if contact {
+        s.pop();
+        s.push_str(" | contact: pairs closed, passes, max force (N)\n");
+    }
     let cell = |row: Option<&crate::results::FrontRow>, g: fn(&crate::results::FrontRow) -> f64| {
         row.map_or(format!("{:>24}", "— (no open point)"), |r| {
             format!("{:>13.2} at {:>7.2}", g(r), r.s_mm)
@@ -160,6 +169,13 @@ pub fn table(results: &Results) -> String {
             stability_word(l),
             l.convergence.iterations
         );
+        if contact {
+            s.pop();
+            let c = l.contact.map_or("—".to_string(), |c| {
+                format!("{}, {}, {:.3}", c.pairs_closed, c.passes, c.max_force_n)
+            });
+            let _ = writeln!(s, " | {c:>12}");
+        }
     }
     if results.levels.iter().any(|l| l.overlapped() > 0) {
         let _ = writeln!(

@@ -14,6 +14,9 @@ pub enum Faces {
     /// Passing through each other (opening < 0): contact would act there, which this analysis
     /// does not model (thesis §2.7), so G at the point is not physical.
     Overlapped,
+    /// Held in contact (the pair behind the point is closed, `[contact]`, §2.7): G_I = 0,
+    /// G_II and G_III from the contact-consistent nodal forces.
+    Closed,
 }
 
 impl Faces {
@@ -22,6 +25,7 @@ impl Faces {
         match self {
             Self::Open => "open",
             Self::Overlapped => "overlapped",
+            Self::Closed => "closed",
         }
     }
 }
@@ -88,9 +92,10 @@ impl FrontRow {
         }
     }
 
-    /// Whether the faces behind this point are apart, so that its G values are physical.
+    /// Whether this point's G values are physical: the faces behind it are apart, or held in
+    /// contact (not overlapped).
     pub fn is_open(&self) -> bool {
-        self.faces == Faces::Open
+        self.faces != Faces::Overlapped
     }
 
     /// Back to SI (for criteria).
@@ -172,6 +177,9 @@ pub struct LevelResult {
     pub convergence: Convergence,
     /// The front table.
     pub front: Vec<FrontRow>,
+    /// What crack-face contact did at this level (absent when it did not act).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub contact: Option<crate::contact::ContactSummary>,
     /// Nodal displacements (node-major, m): for VTU output, not serialised.
     #[serde(skip)]
     pub displacements: Vec<f64>,
@@ -211,6 +219,7 @@ impl LevelResult {
                     .count(),
             },
             front: front.iter().map(FrontRow::new).collect(),
+            contact: None,
             displacements,
         }
     }
@@ -222,6 +231,16 @@ impl LevelResult {
             .iter()
             .filter(|r| r.is_open())
             .max_by(|a, b| g(a).total_cmp(&g(b)))
+    }
+
+    /// Marks the front points that contact holds closed (the states of
+    /// [`nonlin3d_vcct::respect_contact`], one per row in order).
+    pub fn set_face_states(&mut self, states: &[nonlin3d_vcct::FaceState]) {
+        for (row, s) in self.front.iter_mut().zip(states) {
+            if *s == nonlin3d_vcct::FaceState::Closed {
+                row.faces = Faces::Closed;
+            }
+        }
     }
 
     /// Records the negative pivots of the tangent at the converged state and whether it is

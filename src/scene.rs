@@ -45,6 +45,9 @@ pub struct Scene {
     /// Substructuring (thesis §2.6, §4.5): which cells are condensed into a superelement.
     #[serde(default)]
     pub substructure: SubstructureOptions,
+    /// Crack-face contact (default: `auto`).
+    #[serde(default)]
+    pub contact: crate::contact::ContactOptions,
 }
 
 /// Planform of an embedded or edge delamination.

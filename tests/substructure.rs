@@ -17,8 +17,10 @@ fn parse(strains: &str, partition: &str, extra: &str) -> Result<Scene, nonlin3d:
     let text = DEFAULT_SCENE
         .replace("slices = 8", "slices = 4")
         .replace("[-0.001, -0.002, -0.003, -0.004, -0.005]", strains);
+    // Contact is not available with a superelement (refused, `contact_with_a_superelement_is_refused`),
+    // and the unsubstructured model is compared without it too.
     Scene::from_toml(&format!(
-        "{text}\n[substructure]\npartition = \"{partition}\"\n{extra}"
+        "{text}\n[contact]\ncrack_faces = \"off\"\n[substructure]\npartition = \"{partition}\"\n{extra}"
     ))
 }
 
@@ -78,6 +80,27 @@ fn linear_level_matches_the_monolithic_model() {
     println!("ε = −1e-5: max |Δu|/max|u| = {du:.2e}, max |ΔG| = {dg:.2e} J/m² (G₀ = {g0:.1e})");
     assert!(du < 10.0 * eps, "displacements differ by {du:e}");
     assert!(dg < eps * g0, "G differs by {dg:e} J/m²");
+}
+
+/// Contact (default `auto`) and a superelement together are refused by name, not run without
+/// contact.
+#[test]
+fn contact_with_a_superelement_is_refused() {
+    let text = DEFAULT_SCENE.replace("slices = 8", "slices = 4");
+    for partition in ["thesis", "sublaminate"] {
+        let e = Scene::from_toml(&format!(
+            "{text}\n[substructure]\npartition = \"{partition}\"\n"
+        ))
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains(&format!("substructure.partition = \"{partition}\""))
+                && e.contains("contact.crack_faces = \"auto\""),
+            "{e}"
+        );
+    }
+    let none = format!("{text}\n[substructure]\npartition = \"none\"\n");
+    assert!(Scene::from_toml(&none).is_ok());
 }
 
 /// A key read must have its effect: ℓ given with a partition that has none is refused, and

@@ -19,6 +19,17 @@ pub enum PartitionName {
     Sublaminate,
 }
 
+impl PartitionName {
+    /// The name as written in a scene.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::None => "none",
+            Self::Thesis => "thesis",
+            Self::Sublaminate => "sublaminate",
+        }
+    }
+}
+
 /// Substructuring options.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
 #[serde(deny_unknown_fields)]

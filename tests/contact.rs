@@ -1,0 +1,143 @@
+//! Crack-face contact through the scene's `[contact]` section (thesis §2.7): the 30 mm circle
+//! (§5.1) coarsened to slices = 4, whose faces overlap without contact from ε = −0.003 on.
+
+use nonlin3d::contact::CrackFacesName;
+use nonlin3d::results::{Faces, Results};
+use nonlin3d::scene::Scene;
+use std::path::Path;
+
+/// The reference scene at slices = 4 with the given strains and `crack_faces`.
+fn scene(strains: &[f64], faces: CrackFacesName) -> Scene {
+    let path =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/scenes/fig_5_1_3_circle_30mm.toml");
+    let mut s = Scene::from_toml(&std::fs::read_to_string(path).unwrap()).unwrap();
+    s.mesh.slices = Some(4);
+    s.loads.strains = strains.to_vec();
+    s.contact.crack_faces = faces;
+    s
+}
+
+fn run(s: &Scene) -> Results {
+    nonlin3d::analysis::run(s, &mut |_| Ok(())).unwrap()
+}
+
+/// G along the front of every level, as bits.
+fn bits(r: &Results) -> Vec<[u64; 4]> {
+    r.levels
+        .iter()
+        .flat_map(|l| l.front.iter())
+        .map(|f| {
+            [
+                f.g_i.to_bits(),
+                f.g_ii.to_bits(),
+                f.g_iii.to_bits(),
+                f.g_t.to_bits(),
+            ]
+        })
+        .collect()
+}
+
+const SWEEP: [f64; 5] = [-0.001, -0.002, -0.003, -0.004, -0.005];
+
+#[test]
+fn contact_removes_the_overlap_and_closed_points_have_no_mode_i() {
+    let off = run(&scene(&SWEEP, CrackFacesName::Off));
+    // The case: without contact, front points overlap at the last level.
+    assert!(off.levels.last().unwrap().overlapped() > 0);
+    for faces in [CrackFacesName::Auto, CrackFacesName::On] {
+        let on = run(&scene(&SWEEP, faces));
+        for l in &on.levels {
+            assert_eq!(l.overlapped(), 0, "{faces:?} at ε = {}", l.value);
+            // Closed points: G_I is set to 0 exactly (vcct::respect_contact).
+            for f in l.front.iter().filter(|f| f.faces == Faces::Closed) {
+                assert_eq!(f.g_i, 0.0);
+            }
+            // Overlap left after the loop: within the tolerance 1e-6 mm plus the Newton
+            // drift of a held pair (the tie holds it with the normal of the previous pass),
+            // a few tolerances at most.
+            if let Some(c) = l.contact {
+                assert!(c.max_penetration_mm < 1e-5, "{c:?}");
+                assert!(c.max_force_n >= 0.0);
+            }
+        }
+        let last = on.levels.last().unwrap().contact.unwrap();
+        assert!(last.pairs_closed > 0 && last.passes > 0, "{last:?}");
+    }
+}
+
+#[test]
+fn auto_leaves_levels_without_overlap_alone() {
+    // ε up to −0.002: the sublaminate buckles outward, no pair overlaps at slices = 4 before
+    // the perturbation's level; auto must give the bits of off.
+    let strains = [-0.001];
+    let off = run(&scene(&strains, CrackFacesName::Off));
+    let auto = run(&scene(&strains, CrackFacesName::Auto));
+    assert!(auto.levels.iter().all(|l| l.contact.is_none()));
+    assert_eq!(bits(&off), bits(&auto));
+}
+
+#[test]
+fn cli_writes_the_contact_record() {
+    let dir = std::env::temp_dir().join(format!("nonlin3d-contact-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let text = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/scenes/fig_5_1_3_circle_30mm.toml"),
+    )
+    .unwrap()
+    .replace("slices = 8", "slices = 4")
+        + "\n[contact]\ncrack_faces = \"auto\"\ntolerance_mm = 1e-6\n";
+    let path = dir.join("scene.toml");
+    std::fs::write(&path, text).unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_nonlin3d"))
+        .args(["run", "--quiet", "--out"])
+        .arg(dir.join("out"))
+        .arg(&path)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    // The terminal table carries the contact column.
+    assert!(String::from_utf8_lossy(&out.stdout).contains("contact: pairs closed"));
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("out/results.json")).unwrap())
+            .unwrap();
+    let last = &json["levels"][4];
+    for key in [
+        "passes",
+        "pairs_closed",
+        "max_force_n",
+        "max_penetration_mm",
+    ] {
+        assert!(last["contact"][key].is_number(), "{key}: {last}");
+    }
+    assert!(
+        last["front"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .all(|f| f["faces"] != "overlapped")
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_negative_tolerance_is_refused_by_name() {
+    let text = format!(
+        "{}\n[contact]\ntolerance_mm = -1.0\n",
+        include_str!("../examples/scenes/fig_5_1_3_circle_30mm.toml")
+    );
+    let e = Scene::from_toml(&text).unwrap_err();
+    assert!(e.to_string().contains("contact.tolerance_mm"), "{e}");
+}
+
+#[test]
+fn the_thesis_external_force_also_removes_the_overlap() {
+    let mut s = scene(&SWEEP, CrackFacesName::On);
+    s.contact.mode = nonlin3d::contact::ContactModeName::Thesis;
+    let r = run(&s);
+    assert!(r.levels.iter().all(|l| l.overlapped() == 0));
+    assert!(r.levels.last().unwrap().contact.unwrap().pairs_closed > 0);
+}
