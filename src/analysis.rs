@@ -5,130 +5,17 @@
 //! [`front_table`]; [`run`] (or [`Analysis::run`]) strings them together and times them.
 
 use crate::contact::ContactStage;
-use crate::model::Value;
 pub use crate::model::{Model, ModelKind, build_model, perturbation_force, perturbation_loads};
-use crate::scene::{ForceKinematics, Geometry, NewtonName, Scene, SolverName};
+pub use crate::problem::{build_problem, constraints, load_factors, settings};
+use crate::scene::{ForceKinematics, Scene};
 use crate::substructure::Substructured;
 use crate::{Error, results::*};
-use nonlin3d_assembly::{Assembler, Constraints};
 use nonlin3d_element::Kinematics;
-use nonlin3d_laminate::ShearCoupling;
 use nonlin3d_mesh::names::{CENTER_TOP, CRACK_LOWER, CRACK_UPPER};
 pub use nonlin3d_newton::solve_level;
 use nonlin3d_newton::{IncrementReport, NewtonSettings, PathSolver, Stepping, StructuralProblem};
-use nonlin3d_solver::SolverKind;
 use nonlin3d_vcct::{FrontRelease, cells_above, release_rates, respect_contact};
 use std::time::Instant;
-
-/// The load factors of the levels: strains (or loads) divided by the largest in magnitude,
-/// and that reference value.
-pub fn load_factors(scene: &Scene) -> (Vec<f64>, f64) {
-    let values = if matches!(scene.geometry, Geometry::Plate { .. }) {
-        &scene.loads.transverse_n
-    } else {
-        &scene.loads.strains
-    };
-    let reference = values
-        .iter()
-        .copied()
-        .max_by(|a, b| a.abs().total_cmp(&b.abs()))
-        .unwrap_or(1.0);
-    (values.iter().map(|v| v / reference).collect(), reference)
-}
-
-/// The constraints and load of a model (§3.2) from its [`Model::supports`] and
-/// [`Model::central_load`], at load factor λ = 1: held components 0, the end displacement
-/// u = x_end·ε_ref (ε_ref the scene's largest strain), the plate's load P_ref/4 split over the
-/// `center_top` nodes; `reference` is ε_ref (or P_ref, N), as [`load_factors`] gives it.
-pub fn constraints(model: &Model, reference: f64) -> Result<Constraints, Error> {
-    let mut c = Constraints::new(3 * model.mesh.nodes.len());
-    for s in model.supports()? {
-        let nodes = model.nodes_of(&s.nodes)?;
-        match s.value {
-            Value::Zero => c.fix_nodes(nodes, s.axis.offset())?,
-            Value::Strain { length } => {
-                for &n in nodes {
-                    c.prescribe(3 * n + s.axis.offset(), length * reference)?;
-                }
-            }
-        }
-    }
-    if let Some(load) = model.central_load() {
-        let nodes = model.node_set(load.set)?;
-        let share = 1.0 / nodes.len() as f64;
-        for &n in nodes {
-            c.add_load(3 * n + 2, load.fraction * reference * share)?;
-        }
-    }
-    Ok(c)
-}
-
-/// The assembler and constraints of a model (§3.2): supports, the prescribed end
-/// displacement u = x_end·ε_ref·λ (or the plate's load P_ref·λ/4 on the quarter model), as
-/// [`constraints`] gives them.
-pub fn build_problem(scene: &Scene, model: &Model) -> Result<StructuralProblem, Error> {
-    let rule = scene.analysis.integration.rule();
-    let assembler = Assembler::new(
-        &model.mesh,
-        &model.materials,
-        ShearCoupling::Exact,
-        rule,
-        rule,
-        Kinematics::Nonlinear,
-    )?;
-    let (_, reference) = load_factors(scene);
-    let c = constraints(model, reference)?;
-    Ok(StructuralProblem::new(assembler, c)?)
-}
-
-/// Newton and stepping settings of a scene. Convergence: the relative residual criterion of
-/// [`NewtonSettings::default`] (‖r‖∞ ≤ 1e-8·F), or with `analysis.tolerance_n` that absolute
-/// tolerance in N alone (relative tolerance 0), as given.
-pub fn settings(scene: &Scene) -> (NewtonSettings, Stepping) {
-    let a = &scene.analysis;
-    let base = NewtonSettings::default();
-    let newton = NewtonSettings {
-        force_tolerance: a.tolerance_n.unwrap_or(0.0),
-        relative_tolerance: match a.tolerance_n {
-            Some(_) => 0.0,
-            None => base.relative_tolerance,
-        },
-        refactor_every: match a.newton {
-            NewtonName::Full => 1,
-            NewtonName::Modified => a.refactor_every,
-            NewtonName::Bfgs => usize::MAX,
-        },
-        max_iterations: match a.newton {
-            NewtonName::Full => 25,
-            NewtonName::Modified | NewtonName::Bfgs => 60,
-        },
-        // BFGS on a tangent kept across increments (the fastest strategy on the plate,
-        // docs/PERFORMANCE.md): refactor when an iteration leaves ‖r‖∞ above twice the
-        // previous; no line search (it rejects BFGS's first overshooting directions).
-        keep_tangent: a.newton == NewtonName::Bfgs,
-        quasi_newton: if a.newton == NewtonName::Bfgs { 20 } else { 0 },
-        line_search: a.newton != NewtonName::Bfgs,
-        refactor_ratio: if a.newton == NewtonName::Bfgs {
-            2.0
-        } else {
-            0.5
-        },
-        solver: match (a.solver, a.threads) {
-            (SolverName::Profile, _) => SolverKind::Profile,
-            (SolverName::Faer, 1) => SolverKind::FaerLdlt,
-            (SolverName::Faer, 0) => SolverKind::FaerLdltThreads(rayon::current_num_threads()),
-            (SolverName::Faer, n) => SolverKind::FaerLdltThreads(n),
-        },
-        ..NewtonSettings::default()
-    };
-    let stepping = Stepping {
-        initial: a.max_increment,
-        max: a.max_increment,
-        max_attempts: a.max_attempts,
-        ..Stepping::default()
-    };
-    (newton, stepping)
-}
 
 /// G along the front at state `u`.
 pub fn front_table(

@@ -73,7 +73,7 @@ pub(crate) fn scene(s: &Scene) -> Result<(), Error> {
     mesh_controls(s)?;
     layup(s)?;
     loads(s)?;
-    crate::contact::check(&s.contact)?;
+    crate::scene::check_contact(&s.contact)?;
     let a = &s.analysis;
     if let Some(t) = a.tolerance_n {
         positive("analysis.tolerance_n", t)?;
@@ -129,7 +129,7 @@ fn substructure(s: &Scene) -> Result<(), Error> {
     // The contact stage works on the full model's DOFs; with a superelement the Newton problem
     // holds the nonlinear region's only.
     if sub.partition != PartitionName::None
-        && s.contact.crack_faces != crate::contact::CrackFacesName::Off
+        && s.contact.crack_faces != crate::scene::CrackFacesName::Off
     {
         return bad(format!(
             "substructure.partition = \"{}\" with contact.crack_faces = \"{}\": crack-face \

@@ -3,10 +3,10 @@
 //! CalculiX can run the analysis unchanged (§3.2 protocol as deck steps).
 
 use crate::Error;
-use crate::analysis::load_factors;
 use crate::model::{
     Model, Nodes, Support, Value, build_model, perturbation_force, perturbation_loads,
 };
+use crate::problem::load_factors;
 use crate::scene::Scene;
 use nonlin3d_mesh::inp::{
     InpBoundary, InpCload, InpDeck, InpElastic, InpMaterial, InpStep, inp_string,
@@ -138,7 +138,7 @@ pub fn deck_of(scene: &Scene, model: &Model) -> Result<String, Error> {
 #[allow(clippy::unwrap_used)]
 mod tests {
     use super::*;
-    use crate::analysis::constraints;
+    use crate::problem::constraints;
     use nonlin3d_mesh::{InpModel, NodeRef, read_inp};
     use std::collections::BTreeMap;
 

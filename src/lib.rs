@@ -45,6 +45,7 @@ pub mod fields;
 pub mod model;
 pub mod output;
 pub mod plot;
+mod problem;
 pub mod report;
 pub mod results;
 pub mod scene;

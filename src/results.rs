@@ -179,7 +179,7 @@ pub struct LevelResult {
     pub front: Vec<FrontRow>,
     /// What crack-face contact did at this level (absent when it did not act).
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub contact: Option<crate::contact::ContactSummary>,
+    pub contact: Option<ContactSummary>,
     /// Nodal displacements (node-major, m): for VTU output, not serialised.
     #[serde(skip)]
     pub displacements: Vec<f64>,
@@ -370,4 +370,17 @@ pub struct Results {
     /// The model (mesh and front), for VTU output; not serialised.
     #[serde(skip)]
     pub model_data: Option<Model>,
+}
+
+/// What contact did at one level (results.json `contact`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct ContactSummary {
+    /// Active-set passes (re-solves after the first solve).
+    pub passes: usize,
+    /// Pairs closed at the converged state.
+    pub pairs_closed: usize,
+    /// Largest compressive contact force over the pairs, N.
+    pub max_force_n: f64,
+    /// Largest overlap of any pair after the loop, mm (0: none).
+    pub max_penetration_mm: f64,
 }

@@ -12,6 +12,9 @@ use serde::{Deserialize, Serialize};
 
 mod analysis;
 pub use analysis::{AnalysisOptions, ForceKinematics, NewtonName, RuleName, SolverName};
+mod contact;
+pub(crate) use contact::check as check_contact;
+pub use contact::{ContactModeName, ContactOptions, CrackFacesName, DEFAULT_TOLERANCE_MM};
 mod substructure;
 pub use substructure::{PartitionName, SubstructureOptions};
 
@@ -47,7 +50,7 @@ pub struct Scene {
     pub substructure: SubstructureOptions,
     /// Crack-face contact (default: `auto`).
     #[serde(default)]
-    pub contact: crate::contact::ContactOptions,
+    pub contact: ContactOptions,
 }
 
 /// Planform of an embedded or edge delamination.

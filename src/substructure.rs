@@ -13,8 +13,8 @@
 //! nonlinear cell's those the scene's `analysis.vcct_forces` asks for.
 
 use crate::Error;
-use crate::analysis::{constraints, load_factors};
 use crate::model::Model;
+use crate::problem::{constraints, load_factors};
 use crate::scene::{ForceKinematics, PartitionName, Scene};
 use nonlin3d_assembly::Assembler;
 use nonlin3d_element::Kinematics;
