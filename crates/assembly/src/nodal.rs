@@ -255,11 +255,7 @@ pub fn nodal_fields<M: Copy + Into<Material>>(
             ..
         } = &mut kinds[k];
         let x = mesh.cell_coordinates(c);
-        let d: Vec<[f64; 3]> = cell
-            .nodes
-            .iter()
-            .map(|&n| [u[3 * n], u[3 * n + 1], u[3 * n + 2]])
-            .collect();
+        let d = mesh.cell_displacements(c, u);
         evaluate(table, &x, &d, &material, rules.kinematics, false, ws, eo)
             .map_err(|e| e.at_element(c))?;
         for (a, &n) in cell.nodes.iter().enumerate() {

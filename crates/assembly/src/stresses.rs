@@ -70,11 +70,7 @@ pub fn station_stresses<M: Copy + Into<Material>>(
         };
         let (_, table, ws, eo) = &mut tables[k];
         let x = mesh.cell_coordinates(c);
-        let d: Vec<[f64; 3]> = cell
-            .nodes
-            .iter()
-            .map(|&n| [u[3 * n], u[3 * n + 1], u[3 * n + 2]])
-            .collect();
+        let d = mesh.cell_displacements(c, u);
         evaluate(table, &x, &d, &material, rules.kinematics, false, ws, eo)
             .map_err(|e| e.at_element(c))?;
         let mut cell_out = Vec::with_capacity(table.stations().len());

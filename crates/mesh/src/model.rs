@@ -266,6 +266,16 @@ impl Mesh {
         self.cells[c].nodes.iter().map(|&n| self.nodes[n]).collect()
     }
 
+    /// Displacements of the nodes of cell `c` from the node-major vector `u` (u, v, w per node;
+    /// `u` holds 3 values per node of the mesh).
+    pub fn cell_displacements(&self, c: usize, u: &[f64]) -> Vec<[f64; 3]> {
+        self.cells[c]
+            .nodes
+            .iter()
+            .map(|&n| [u[3 * n], u[3 * n + 1], u[3 * n + 2]])
+            .collect()
+    }
+
     /// Total volume, Σ over cells of ∫ det J (3×3×3 Gauss, exact for these isoparametric maps
     /// up to degree 5 per direction: exact for Hex8 and for Hex20 with straight edges).
     pub fn volume(&self) -> Result<f64, MeshError> {
