@@ -187,10 +187,18 @@ fn blocks(k: &SymmetricMatrix, s: &Split) -> Result<Blocks, SubstructureError> {
         }
     }
     let pattern = Arc::new(SymmetricPattern::from_lower_columns(ni, &columns)?);
-    let mut kii = SymmetricMatrix::zeros(pattern);
-    for (a, b, v) in ii {
-        kii.add(a, b, v)?;
-    }
+    // K's columns hold their rows ascending with the diagonal, and the interior numbering
+    // follows the linear one, so the values came in the pattern's order (no search per entry);
+    // the slow path only if the pattern had to add a diagonal.
+    let kii = if pattern.nnz_lower() == ii.len() {
+        SymmetricMatrix::from_values(pattern, ii.into_iter().map(|(_, _, v)| v).collect())?
+    } else {
+        let mut kii = SymmetricMatrix::zeros(pattern);
+        for (a, b, v) in ii {
+            kii.add(a, b, v)?;
+        }
+        kii
+    };
     Ok(Blocks { kii, kib, kbb })
 }
 
