@@ -126,6 +126,13 @@ fn substructure(s: &Scene) -> Result<(), Error> {
         )),
         _ => Ok(()),
     }?;
+    if sub.write_matrix && sub.partition == PartitionName::None {
+        return bad(
+            "substructure.write_matrix = true with partition = \"none\": there is no \
+             superelement to write; choose partition = \"thesis\" or \"sublaminate\""
+                .into(),
+        );
+    }
     // The contact stage works on the full model's DOFs; with a superelement the Newton problem
     // holds the nonlinear region's only.
     if sub.partition != PartitionName::None

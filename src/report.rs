@@ -121,6 +121,17 @@ pub fn write_all(results: &mut Results, dir: &Path) -> Result<(), Error> {
     atomically(&dir.join("deflection.svg"), |tmp| {
         crate::plot::deflection_plot(results, tmp)
     })?;
+    // `[substructure] write_matrix = true`: K_red as CalculiX's .mtx.
+    let matrices = results
+        .model
+        .substructure
+        .iter()
+        .flat_map(|s| &s.superelements);
+    for e in matrices {
+        if let (Some(file), Some(text)) = (&e.matrix_file, &e.mtx) {
+            write_atomic(&dir.join(file), text.as_bytes())?;
+        }
+    }
     results.timings.output_s = t.elapsed().as_secs_f64();
     let json = serde_json::to_string_pretty(results)?;
     write_atomic(&dir.join("results.json"), json.as_bytes())

@@ -21,7 +21,10 @@ use nonlin3d_element::Kinematics;
 use nonlin3d_laminate::ShearCoupling;
 use nonlin3d_mesh::{Partition as Cells, nonlinear_region};
 use nonlin3d_newton::StructuralProblem;
-use nonlin3d_substructure::{CondenseSettings, Partition, Recovery, condense};
+use nonlin3d_substructure::{CondenseSettings, Partition, Recovery, condense, mtx_text};
+
+/// The file `[substructure] write_matrix = true` writes K_red to, in the output folder.
+pub const MATRIX_FILE: &str = "superelement.mtx";
 use nonlin3d_vcct::{FrontRelease, cells_above, release_rates};
 use serde::Serialize;
 
@@ -42,6 +45,13 @@ pub struct SuperelementSummary {
     pub condensation_s: f64,
     /// max |K_red − K_redᵀ| / max |K_red| before symmetrising.
     pub asymmetry: f64,
+    /// The file K_red was written to (`[substructure] write_matrix = true`), in the output
+    /// folder.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub matrix_file: Option<String>,
+    /// K_red as CalculiX's `.mtx` text (N/m), written by the output stage.
+    #[serde(skip)]
+    pub mtx: Option<String>,
 }
 
 /// What substructuring did, for the CLI and results.json.
@@ -115,6 +125,9 @@ pub fn build(
         ..CondenseSettings::default()
     };
     let done = condense(&partition, &build(partition.linear_mesh())?, &c, &settings)?;
+    let mtx = options
+        .write_matrix
+        .then(|| mtx_text(&partition, &done.superelement, 1.0));
     let problem = StructuralProblem::with_contributions(
         build(partition.nonlinear_mesh())?,
         vec![Box::new(done.superelement)],
@@ -143,6 +156,8 @@ pub fn build(
             seconds: r.seconds,
             condensation_s: r.seconds.iter().sum(),
             asymmetry: r.asymmetry,
+            matrix_file: mtx.as_ref().map(|_| MATRIX_FILE.into()),
+            mtx,
         }],
     };
     let full = build(&model.mesh)?;

@@ -41,4 +41,9 @@ pub struct SubstructureOptions {
     /// only; default the sublaminate thickness h, as in the thesis, §3.2).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub offset_mm: Option<f64>,
+    /// Write the superelement's condensed stiffness K_red as `superelement.mtx` in the output
+    /// folder, in the text CalculiX's `*SUBSTRUCTURE MATRIX OUTPUT` writes (N/m; node ids the
+    /// mesh's + 1, as in `nonlin3d export`'s decks; docs/DECKS.md). Needs a partition.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub write_matrix: bool,
 }

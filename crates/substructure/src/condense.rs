@@ -14,7 +14,8 @@ use crate::partition::values_at_0_and_1;
 use crate::{Partition, Recovery, SubstructureError, Superelement};
 use nonlin3d_assembly::{Assembler, Constraints};
 use nonlin3d_solver::{
-    FaerMode, FaerSolver, LinearSolver, SolverError, SymmetricMatrix, SymmetricPattern,
+    FaerMode, FaerOrdering, FaerSolver, LinearSolver, SolverError, SymmetricMatrix,
+    SymmetricPattern,
 };
 use std::sync::Arc;
 use std::time::Instant;
@@ -27,6 +28,8 @@ pub struct CondenseSettings {
     pub block: usize,
     /// Threads of the factorisation's numeric phase (1 = sequential).
     pub threads: usize,
+    /// The fill-reducing ordering of K_ii.
+    pub ordering: FaerOrdering,
 }
 
 impl Default for CondenseSettings {
@@ -35,6 +38,7 @@ impl Default for CondenseSettings {
         Self {
             block: 64,
             threads: 1,
+            ordering: FaerOrdering::Auto,
         }
     }
 }
@@ -207,9 +211,11 @@ fn factorise(
     kii: &SymmetricMatrix,
     s: &Split,
     partition: &Partition,
-    threads: usize,
+    settings: &CondenseSettings,
 ) -> Result<(FaerSolver, usize), SubstructureError> {
-    let mut solver = FaerSolver::new(FaerMode::Ldlt).with_threads(threads);
+    let mut solver = FaerSolver::new(FaerMode::Ldlt)
+        .with_threads(settings.threads)
+        .with_ordering(settings.ordering);
     let analysis = solver.analyze(kii.pattern())?;
     let full = |k: usize| {
         let d = s.interior[k];
@@ -267,7 +273,7 @@ pub fn condense(
     linear.assemble(&vec![0.0; n], Some(&mut k))?;
     let assembled = clock.elapsed().as_secs_f64();
     let b = blocks(&k, &s)?;
-    let (mut solver, factor_entries) = factorise(&b.kii, &s, partition, settings.threads)?;
+    let (mut solver, factor_entries) = factorise(&b.kii, &s, partition, settings)?;
     let factored = clock.elapsed().as_secs_f64();
     let (ni, nb) = (s.interior.len(), s.boundary.len());
 
@@ -428,7 +434,10 @@ mod tests {
         }
         let a = assembler(p.linear_mesh(), Kinematics::Linear);
         let k = |block: usize| {
-            let s = CondenseSettings { block, threads: 1 };
+            let s = CondenseSettings {
+                block,
+                ..CondenseSettings::default()
+            };
             let done = condense(&p, &a, &c, &s).unwrap();
             (
                 done.superelement.stiffness().to_vec(),

@@ -26,6 +26,7 @@
 //! | [`condense`], [`CondenseSettings`], [`Condensed`], [`CondensationReport`] | K_red and f_c by one factorisation of K_ii and blocked multi-RHS solves |
 //! | [`Superelement`], [`CondensedLoad`] | K_red and f_c(λ) as a contribution on the nonlinear sub-mesh's DOFs |
 //! | [`Recovery`], [`Recovered`] | u_i from u_b; the region's nodal forces K u and reactions, in the full mesh's numbering |
+//! | [`mtx_text`] | K_red as the `.mtx` text CalculiX's `*SUBSTRUCTURE MATRIX OUTPUT` writes |
 //! | [`SubstructureError`] | typed errors: empty region, no interface, singular interior (the DOF) |
 //!
 //! ```
@@ -54,12 +55,14 @@
 
 mod condense;
 mod error;
+mod mtx;
 mod partition;
 mod recover;
 mod superelement;
 
 pub use condense::{CondensationReport, CondenseSettings, Condensed, condense};
 pub use error::SubstructureError;
+pub use mtx::mtx_text;
 pub use partition::{INTERFACE, Partition, Region};
 pub use recover::{Recovered, Recovery};
 pub use superelement::{CondensedLoad, Superelement};

@@ -104,7 +104,7 @@ fn recovered_forces_on_the_interface_are_the_superelement_forces() {
         &c,
         &CondenseSettings {
             block: 7,
-            threads: 1,
+            ..CondenseSettings::default()
         },
     )
     .unwrap();
