@@ -14,7 +14,7 @@
 
 use crate::model::Model;
 use crate::problem::build_problem;
-pub use crate::results::ContactSummary;
+pub use crate::results::{ContactPass, ContactSummary};
 pub use crate::scene::{ContactModeName, ContactOptions, CrackFacesName, DEFAULT_TOLERANCE_MM};
 use crate::{Error, Scene};
 use nonlin3d_contact::{Contact, ContactLevel, ContactSettings, Mode};
@@ -101,13 +101,7 @@ impl ContactStage {
         );
         self.engaged = Some(e);
         let level = level?;
-        let s = &level.state;
-        let summary = ContactSummary {
-            passes: level.passes.len(),
-            pairs_closed: s.active.iter().filter(|&&a| a).count(),
-            max_force_n: s.forces.iter().copied().fold(0.0, f64::max),
-            max_penetration_mm: max_overlap(model, u) * 1e3,
-        };
+        let summary = summary(&level);
         Ok((level, summary))
     }
 
@@ -151,6 +145,33 @@ impl ContactStage {
             .filter(|(_, a)| *a)
             .map(|(&n, _)| n)
             .collect()
+    }
+}
+
+/// The results.json record of a level: counts, the largest force, pressure and overlap (the
+/// gaps along the contact normals, as the loop tests them), iterations and times per pass.
+fn summary(level: &ContactLevel) -> ContactSummary {
+    let s = &level.state;
+    let max = |v: &[f64]| v.iter().copied().fold(0.0, f64::max);
+    ContactSummary {
+        passes: level.passes.len(),
+        pairs_closed: s.active.iter().filter(|&&a| a).count(),
+        max_force_n: max(&s.forces),
+        max_pressure_mpa: max(&s.pressures) * 1e-6,
+        max_penetration_mm: s.penetration() * 1e3,
+        iterations: level.newton_iterations(),
+        first_s: level.first_seconds,
+        pass_log: level
+            .passes
+            .iter()
+            .map(|p| ContactPass {
+                closed: p.closed.len(),
+                opened: p.opened.len(),
+                refresh: p.refresh,
+                iterations: p.iterations,
+                seconds: p.seconds,
+            })
+            .collect(),
     }
 }
 

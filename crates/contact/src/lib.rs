@@ -39,10 +39,12 @@ mod active;
 mod driver;
 mod error;
 mod pairs;
+mod recover;
 mod tie;
 
 pub use active::{Change, Tolerances, update};
 pub use driver::{Contact, ContactLevel, ContactSettings, ContactState, Mode, PassReport};
 pub use error::ContactError;
 pub use pairs::{CrackFaces, Pair};
+pub use recover::ALPHA;
 pub use tie::{candidate_tie, contact_force, contact_tie, slave_component};
