@@ -376,6 +376,57 @@ impl Contact {
             session,
         )?;
         let first_seconds = t.elapsed().as_secs_f64();
+        self.passes(
+            problem,
+            u,
+            (&start, from, to),
+            (first, first_seconds),
+            newton,
+            stepping,
+            session,
+        )
+    }
+
+    /// The passes of a level whose first solve was made elsewhere: `u` is a converged state at
+    /// `to` with the current set (typically a solve without contact whose faces overlap, which
+    /// `auto` would otherwise repeat with the loop from the level's start), `start` the state
+    /// at `from` to follow again from if a re-solve fails, `first` what that solve reported
+    /// (kept in the result; its time is `first_seconds`). The passes as in
+    /// [`solve_level`](Self::solve_level).
+    #[allow(clippy::too_many_arguments)]
+    pub fn continue_level(
+        &mut self,
+        problem: &mut StructuralProblem,
+        u: &mut Vec<f64>,
+        (start, from, to): (&[f64], f64, f64),
+        (first, first_seconds): (LevelReport, f64),
+        newton: &NewtonSettings,
+        stepping: &Stepping,
+        session: &mut PathSolver,
+    ) -> Result<ContactLevel, ContactError> {
+        self.passes(
+            problem,
+            u,
+            (start, from, to),
+            (first, first_seconds),
+            newton,
+            stepping,
+            session,
+        )
+    }
+
+    /// The loop of passes after the first solve (module docs).
+    #[allow(clippy::too_many_arguments)]
+    fn passes(
+        &mut self,
+        problem: &mut StructuralProblem,
+        u: &mut Vec<f64>,
+        (start, from, to): (&[f64], f64, f64),
+        (first, first_seconds): (LevelReport, f64),
+        newton: &NewtonSettings,
+        stepping: &Stepping,
+        session: &mut PathSolver,
+    ) -> Result<ContactLevel, ContactError> {
         let mut passes = Vec::new();
         let mut seen = vec![self.active()];
         loop {
@@ -409,7 +460,7 @@ impl Contact {
             }
             self.install(problem, u, &next)?;
             let (iterations, redone) =
-                self.resolve(problem, u, (&start, from, to), newton, stepping, session)?;
+                self.resolve(problem, u, (start, from, to), newton, stepping, session)?;
             passes.push(PassReport {
                 closed: change.added,
                 opened: change.released,
