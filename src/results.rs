@@ -387,9 +387,11 @@ pub struct ContactSummary {
     /// Largest overlap −g of any pair after the loop, along the contact normal, mm (0: none);
     /// at most the contact tolerance.
     pub max_penetration_mm: f64,
-    /// Newton iterations of the level: the first solve and every pass.
+    /// Newton iterations of the level's contact loop: the first solve (path following with the
+    /// previous level's set) and every pass; on the level where `auto` engages, the passes only
+    /// (the first solve is the one without contact, in `convergence.iterations`).
     pub iterations: usize,
-    /// Wall time of the first solve (path following with the previous level's set), s.
+    /// Wall time of the first solve, s (where `auto` engages: of the solve without contact).
     pub first_s: f64,
     /// Each pass in order.
     pub pass_log: Vec<ContactPass>,
