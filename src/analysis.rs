@@ -13,7 +13,9 @@ use crate::{Error, results::*};
 use nonlin3d_element::Kinematics;
 use nonlin3d_mesh::names::{CENTER_TOP, CRACK_LOWER, CRACK_UPPER};
 pub use nonlin3d_newton::solve_level;
-use nonlin3d_newton::{IncrementReport, NewtonSettings, PathSolver, Stepping, StructuralProblem};
+use nonlin3d_newton::{
+    IncrementReport, LevelReport, NewtonSettings, PathSolver, Stepping, StructuralProblem,
+};
 use nonlin3d_vcct::{FrontRelease, cells_above, release_rates, respect_contact};
 use std::time::Instant;
 
@@ -249,14 +251,23 @@ fn sweep(
         // stage works on the full model's DOFs.)
         let mut contact = None;
         if stage.active() || stage.overlaps(model, &u) {
-            u = start;
+            // `auto` engaging here continues from the overlapping state (src/contact.rs).
+            let plain = (!stage.active()).then(|| {
+                let first = LevelReport {
+                    attempts: Vec::new(),
+                    perturbed: solved.perturbed,
+                    negative_pivots: solved.pivots,
+                };
+                (first, t.elapsed().as_secs_f64())
+            });
             let (level, summary) = stage
                 .solve(
                     scene,
                     model,
                     &mut u,
-                    (from, lambda),
+                    (&start, from, lambda),
                     pert,
+                    plain,
                     (&newton, &stepping),
                 )
                 .map_err(level_error)?;

@@ -5,21 +5,22 @@
 //!   "buckled into the base" error stay);
 //! - `on`: every level is solved by the active-set loop from the first level on;
 //! - `auto` (default): a level is solved without contact; if any crack-face pair then overlaps
-//!   by more than the tolerance, the level is redone from its start with the active-set loop,
-//!   and so are all later levels (the set may open again there). A level without overlap is
-//!   therefore solved exactly as with `off`.
+//!   by more than the tolerance, the active-set loop starts from that overlapping state (the
+//!   overlapping pairs close and the level is re-solved at the same load; followed again from
+//!   its start only if that fails), and all later levels are solved by the loop (the set may
+//!   open again there). A level without overlap is therefore solved exactly as with `off`.
 //!
 //! The contact system (all candidate pairs reserved in its pattern) is built on first use,
 //! beside the level loop's own system, with its own solver session.
 
 use crate::model::Model;
 use crate::problem::build_problem;
-pub use crate::results::ContactSummary;
+pub use crate::results::{ContactPass, ContactSummary};
 pub use crate::scene::{ContactModeName, ContactOptions, CrackFacesName, DEFAULT_TOLERANCE_MM};
 use crate::{Error, Scene};
 use nonlin3d_contact::{Contact, ContactLevel, ContactSettings, Mode};
 use nonlin3d_mesh::names::{CRACK_LOWER, CRACK_UPPER};
-use nonlin3d_newton::{NewtonSettings, PathSolver, Stepping, StructuralProblem};
+use nonlin3d_newton::{LevelReport, NewtonSettings, PathSolver, Stepping, StructuralProblem};
 
 /// The contact system, built on first use.
 struct Engaged {
@@ -59,15 +60,21 @@ impl ContactStage {
         self.enabled() && max_overlap(model, u) > self.options.tolerance() * 1e-3
     }
 
-    /// Solves one level with the contact loop, building the contact system on first use.
+    /// Solves one level with the contact loop, building the contact system on first use. `u`
+    /// is the level's start (`on`, or `auto` once engaged: path following with the previous
+    /// level's set) or, on the level where `auto` engages, the converged state without
+    /// contact whose faces overlap: the passes then start from it (the overlapping pairs
+    /// close, Newton at the same λ) instead of following the level again from `start`, and
+    /// `plain` (what that solve reported, its time) stands for the first solve.
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn solve(
         &mut self,
         scene: &Scene,
         model: &Model,
         u: &mut Vec<f64>,
-        (from, to): (f64, f64),
+        (start, from, to): (&[f64], f64, f64),
         perturbation: &[(usize, f64)],
+        plain: Option<(LevelReport, f64)>,
         (newton, stepping): (&NewtonSettings, &Stepping),
     ) -> Result<(ContactLevel, ContactSummary), Error> {
         // The active-set loop changes the constraints between passes, which a tangent kept
@@ -89,25 +96,30 @@ impl ContactStage {
             Some(e) => e,
             None => self.engage(scene, model, newton)?,
         };
-        let level = e.contact.solve_level(
-            &mut e.problem,
-            u,
-            from,
-            to,
-            perturbation,
-            newton,
-            stepping,
-            &mut e.session,
-        );
+        let level = match plain {
+            Some(first) => e.contact.continue_level(
+                &mut e.problem,
+                u,
+                (start, from, to),
+                first,
+                newton,
+                stepping,
+                &mut e.session,
+            ),
+            None => e.contact.solve_level(
+                &mut e.problem,
+                u,
+                from,
+                to,
+                perturbation,
+                newton,
+                stepping,
+                &mut e.session,
+            ),
+        };
         self.engaged = Some(e);
         let level = level?;
-        let s = &level.state;
-        let summary = ContactSummary {
-            passes: level.passes.len(),
-            pairs_closed: s.active.iter().filter(|&&a| a).count(),
-            max_force_n: s.forces.iter().copied().fold(0.0, f64::max),
-            max_penetration_mm: max_overlap(model, u) * 1e3,
-        };
+        let summary = summary(&level);
         Ok((level, summary))
     }
 
@@ -151,6 +163,33 @@ impl ContactStage {
             .filter(|(_, a)| *a)
             .map(|(&n, _)| n)
             .collect()
+    }
+}
+
+/// The results.json record of a level: counts, the largest force, pressure and overlap (the
+/// gaps along the contact normals, as the loop tests them), iterations and times per pass.
+fn summary(level: &ContactLevel) -> ContactSummary {
+    let s = &level.state;
+    let max = |v: &[f64]| v.iter().copied().fold(0.0, f64::max);
+    ContactSummary {
+        passes: level.passes.len(),
+        pairs_closed: s.active.iter().filter(|&&a| a).count(),
+        max_force_n: max(&s.forces),
+        max_pressure_mpa: max(&s.pressures) * 1e-6,
+        max_penetration_mm: s.penetration() * 1e3,
+        iterations: level.newton_iterations(),
+        first_s: level.first_seconds,
+        pass_log: level
+            .passes
+            .iter()
+            .map(|p| ContactPass {
+                closed: p.closed.len(),
+                opened: p.opened.len(),
+                refresh: p.refresh,
+                iterations: p.iterations,
+                seconds: p.seconds,
+            })
+            .collect(),
     }
 }
 

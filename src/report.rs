@@ -140,8 +140,8 @@ pub fn write_all(results: &mut Results, dir: &Path) -> Result<(), Error> {
 /// The short table: per level the applied value, the centre deflection, the largest crack-face
 /// separation, the largest G_I and G_II over the points whose faces are open and where, the
 /// count of overlapped points, and the Newton iterations; a note when any point overlaps; when
-/// crack-face contact acted, per level the pairs closed, the active-set passes and the largest
-/// contact force.
+/// crack-face contact acted, per level the pairs closed, the active-set passes (of which
+/// refreshes of the normals), the level's Newton iterations and the largest contact pressure.
 pub fn table(results: &Results) -> String {
     let mut s = String::new();
     let head = if results.quantity == "strain" {
@@ -158,7 +158,7 @@ pub fn table(results: &Results) -> String {
     let contact = results.levels.iter().any(|l| l.contact.is_some());
     if contact {
         s.pop();
-        s.push_str(" | contact: pairs closed, passes, max force (N)\n");
+        s.push_str(" | contact: pairs closed, passes (refreshes), iterations, max p (MPa)\n");
     }
     let cell = |row: Option<&crate::results::FrontRow>, g: fn(&crate::results::FrontRow) -> f64| {
         row.map_or(format!("{:>24}", "— (no open point)"), |r| {
@@ -182,8 +182,12 @@ pub fn table(results: &Results) -> String {
         );
         if contact {
             s.pop();
-            let c = l.contact.map_or("—".to_string(), |c| {
-                format!("{}, {}, {:.3}", c.pairs_closed, c.passes, c.max_force_n)
+            let c = l.contact.as_ref().map_or("—".to_string(), |c| {
+                let refreshes = c.pass_log.iter().filter(|p| p.refresh).count();
+                format!(
+                    "{}, {} ({refreshes}), {}, {:.2}",
+                    c.pairs_closed, c.passes, c.iterations, c.max_pressure_mpa
+                )
             });
             let _ = writeln!(s, " | {c:>12}");
         }

@@ -373,14 +373,41 @@ pub struct Results {
 }
 
 /// What contact did at one level (results.json `contact`).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ContactSummary {
-    /// Active-set passes (re-solves after the first solve).
+    /// Active-set passes (re-solves after the first solve), refreshes of the normals included.
     pub passes: usize,
     /// Pairs closed at the converged state.
     pub pairs_closed: usize,
-    /// Largest compressive contact force over the pairs, N.
+    /// Largest compressive nodal contact force over the pairs, N.
     pub max_force_n: f64,
-    /// Largest overlap of any pair after the loop, mm (0: none).
+    /// Largest recovered contact pressure over the pairs, MPa (compressive positive; the
+    /// release test's quantity, exact for a uniform pressure on linear and quadratic faces).
+    pub max_pressure_mpa: f64,
+    /// Largest overlap −g of any pair after the loop, along the contact normal, mm (0: none);
+    /// at most the contact tolerance.
     pub max_penetration_mm: f64,
+    /// Newton iterations of the level's contact loop: the first solve (path following with the
+    /// previous level's set) and every pass; on the level where `auto` engages, the passes only
+    /// (the first solve is the one without contact, in `convergence.iterations`).
+    pub iterations: usize,
+    /// Wall time of the first solve, s (where `auto` engages: of the solve without contact).
+    pub first_s: f64,
+    /// Each pass in order.
+    pub pass_log: Vec<ContactPass>,
+}
+
+/// One pass of the active-set loop (results.json `contact.pass_log`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ContactPass {
+    /// Pairs the pass closed.
+    pub closed: usize,
+    /// Pairs the pass opened.
+    pub opened: usize,
+    /// Same set held again with the current normals (the held gaps overlapped along them).
+    pub refresh: bool,
+    /// Newton iterations of the re-solve.
+    pub iterations: usize,
+    /// Wall time, s.
+    pub seconds: f64,
 }

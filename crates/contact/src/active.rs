@@ -2,7 +2,9 @@
 //! gaps and contact forces of the last solution in, the change of the set out.
 //!
 //! An inactive pair whose gap is below −tol_g (overlap) is added; an active pair whose contact
-//! force is below −tol_f (tensile: the faces pull on each other) is released. An added pair is
+//! force is below −tol_f (tensile: the faces pull on each other) is released. The driver passes
+//! the recovered forces f̂ (`recover`), whose sign is that of the pressure on linear and
+//! quadratic faces alike. An added pair is
 //! inactive and a released one active, so no pair is both. The thesis alternates the two checks
 //! (overlap first, then tension, each after a solution); here both are read from the same
 //! solution, which needs no more passes when the set is right and fewer when it is not.

@@ -17,6 +17,7 @@ use nonlin3d_newton::{
     LevelReport, NewtonSettings, NonlinearProblem, PathSolver, Stepping, StructuralProblem,
     follow_path_with, solve_level,
 };
+use std::time::Instant;
 
 /// How an active pair is held.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -67,8 +68,14 @@ pub struct ContactState {
     pub normals: Vec<[f64; 3]>,
     /// Gap of each pair, m (negative: overlap).
     pub gaps: Vec<f64>,
-    /// Contact force of each pair, N (compressive positive; 0 at open pairs).
+    /// Contact force of each pair, N (compressive positive; 0 at open pairs): the nodal force,
+    /// which on a quadratic face is tensile at the corners of a compressed patch.
     pub forces: Vec<f64>,
+    /// Recovered nodal contact forces f̂ = T f, N ([`CrackFaces::recovered`]): positive at every
+    /// node of a compressed face; the release test's quantity.
+    pub recovered: Vec<f64>,
+    /// Recovered contact pressure of each pair, Pa ([`CrackFaces::pressures`]).
+    pub pressures: Vec<f64>,
     /// Whether each pair is closed (in the active set).
     pub active: Vec<bool>,
     /// The force tolerance used (N).
@@ -76,6 +83,11 @@ pub struct ContactState {
 }
 
 impl ContactState {
+    /// The largest overlap −g over the pairs, m (0: none).
+    pub fn penetration(&self) -> f64 {
+        self.gaps.iter().fold(0.0, |m: f64, &g| m.max(-g))
+    }
+
     /// Σ p·n over the closed pairs: the total force the base exerts on the sublaminate (N).
     pub fn total_force(&self) -> [f64; 3] {
         let mut t = [0.0; 3];
@@ -95,11 +107,16 @@ pub struct PassReport {
     pub closed: Vec<usize>,
     /// Pairs opened.
     pub opened: Vec<usize>,
+    /// Whether the set stayed and was held again with the current normals (the deformed
+    /// gap of a held pair overlapped beyond the gap tolerance along them).
+    pub refresh: bool,
     /// Newton iterations of the re-solve.
     pub iterations: usize,
     /// Whether the re-solve at the level failed and the level was followed again from its start
     /// with the new set.
     pub redone: bool,
+    /// Wall time of the pass (install and re-solve), s.
+    pub seconds: f64,
 }
 
 /// What one level of [`Contact::solve_level`] did.
@@ -109,6 +126,8 @@ pub struct ContactLevel {
     pub lambda: f64,
     /// The first solve (path following to the level with the set of the previous level).
     pub first: LevelReport,
+    /// Wall time of the first solve, s.
+    pub first_seconds: f64,
     /// The passes that changed the set, in order.
     pub passes: Vec<PassReport>,
     /// Contact results at the converged state.
@@ -287,8 +306,6 @@ impl Contact {
         lambda: f64,
         newton: &NewtonSettings,
     ) -> Result<ContactState, ContactError> {
-        let normals = self.faces.normals(u)?;
-        let gaps = self.faces.gaps(u, &normals);
         let mut r = vec![0.0; problem.n()];
         let scale = problem.evaluate(u, lambda, &mut r, None)?;
         let reactions = problem.reactions();
@@ -298,9 +315,12 @@ impl Contact {
             .iter()
             .zip(&self.held)
             .map(|(&p, h)| h.map_or(0.0, |h| contact_force(reactions, p, h.normal, h.component)))
-            .collect();
-        // In External mode the normal of a closed pair is the direction it is held in.
-        let normals = normals
+            .collect::<Vec<f64>>();
+        // In External mode the normal of a closed pair is the direction it is held in (z), and
+        // its gap is measured along it.
+        let normals: Vec<[f64; 3]> = self
+            .faces
+            .normals(u)?
             .iter()
             .zip(&self.held)
             .map(|(&n, h)| match (self.settings.mode, h) {
@@ -308,9 +328,12 @@ impl Contact {
                 _ => n,
             })
             .collect();
+        let gaps = self.faces.gaps(u, &normals);
         Ok(ContactState {
             normals,
             gaps,
+            recovered: self.faces.recovered(&forces),
+            pressures: self.faces.pressures(&forces),
             forces,
             active: self.active(),
             force_tolerance: self
@@ -340,6 +363,7 @@ impl Contact {
         stepping: &Stepping,
         session: &mut PathSolver,
     ) -> Result<ContactLevel, ContactError> {
+        let t = Instant::now();
         let start = u.clone();
         let first = solve_level(
             problem,
@@ -351,6 +375,58 @@ impl Contact {
             stepping,
             session,
         )?;
+        let first_seconds = t.elapsed().as_secs_f64();
+        self.passes(
+            problem,
+            u,
+            (&start, from, to),
+            (first, first_seconds),
+            newton,
+            stepping,
+            session,
+        )
+    }
+
+    /// The passes of a level whose first solve was made elsewhere: `u` is a converged state at
+    /// `to` with the current set (typically a solve without contact whose faces overlap, which
+    /// `auto` would otherwise repeat with the loop from the level's start), `start` the state
+    /// at `from` to follow again from if a re-solve fails, `first` what that solve reported
+    /// (kept in the result; its time is `first_seconds`). The passes as in
+    /// [`solve_level`](Self::solve_level).
+    #[allow(clippy::too_many_arguments)]
+    pub fn continue_level(
+        &mut self,
+        problem: &mut StructuralProblem,
+        u: &mut Vec<f64>,
+        (start, from, to): (&[f64], f64, f64),
+        (first, first_seconds): (LevelReport, f64),
+        newton: &NewtonSettings,
+        stepping: &Stepping,
+        session: &mut PathSolver,
+    ) -> Result<ContactLevel, ContactError> {
+        self.passes(
+            problem,
+            u,
+            (start, from, to),
+            (first, first_seconds),
+            newton,
+            stepping,
+            session,
+        )
+    }
+
+    /// The loop of passes after the first solve (module docs).
+    #[allow(clippy::too_many_arguments)]
+    fn passes(
+        &mut self,
+        problem: &mut StructuralProblem,
+        u: &mut Vec<f64>,
+        (start, from, to): (&[f64], f64, f64),
+        (first, first_seconds): (LevelReport, f64),
+        newton: &NewtonSettings,
+        stepping: &Stepping,
+        session: &mut PathSolver,
+    ) -> Result<ContactLevel, ContactError> {
         let mut passes = Vec::new();
         let mut seen = vec![self.active()];
         loop {
@@ -359,27 +435,39 @@ impl Contact {
                 gap: self.settings.gap_tolerance,
                 force: state.force_tolerance,
             };
-            let change = update(&state.gaps, &state.forces, &state.active, tol);
-            if change.is_empty() {
+            let change = update(&state.gaps, &state.recovered, &state.active, tol);
+            // A held pair's gap is zero along the normal it was tied with; the re-solve turns
+            // the lower face, so along the current normal it may overlap: such a set is held
+            // again with the current normals (a refresh: same set, no cycle).
+            let refresh = change.is_empty() && state.penetration() > tol.gap;
+            if change.is_empty() && !refresh {
                 return Ok(ContactLevel {
                     lambda: to,
                     first,
+                    first_seconds,
                     passes,
                     state,
                 });
             }
+            let t = Instant::now();
             let mut next = state.active.clone();
             change.apply(&mut next);
-            self.check_progress(to, &seen, &next, passes.len(), &change)?;
-            seen.push(next.clone());
+            if refresh {
+                self.check_progress(to, &[], &next, passes.len(), &change)?;
+            } else {
+                self.check_progress(to, &seen, &next, passes.len(), &change)?;
+                seen.push(next.clone());
+            }
             self.install(problem, u, &next)?;
             let (iterations, redone) =
-                self.resolve(problem, u, (&start, from, to), newton, stepping, session)?;
+                self.resolve(problem, u, (start, from, to), newton, stepping, session)?;
             passes.push(PassReport {
                 closed: change.added,
                 opened: change.released,
+                refresh,
                 iterations,
                 redone,
+                seconds: t.elapsed().as_secs_f64(),
             });
         }
     }

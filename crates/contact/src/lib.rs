@@ -13,9 +13,14 @@
 //!   of largest |n_k|; its contact force is p = R_s/n_k, R_s the slave's reaction (the
 //!   residual f_int − f_ext the fold moves onto the masters: p·n on the upper node, −p·n on
 //!   the lower) — `tie`, [`contact_tie`], [`contact_force`];
+//! - the release test reads the forces recovered with a face basis of positive integrals,
+//!   f̂ = T f ([`CrackFaces::recovered`], [`CrackFaces::pressures`]): on quadratic faces the
+//!   nodal forces of a uniform pressure are tensile at the corners, f̂ is not — `recover`;
 //! - the active set changes by [`update`] (Fig. 2.7.2): inactive pairs with g < −tol_g close,
-//!   active pairs with p < −tol_f open; the set is re-solved at the same load until it does not
-//!   change, a repeated set being a cycle ([`ContactError::Cycle`]) — [`Contact::solve_level`];
+//!   active pairs with f̂ < −tol_f open; the set is re-solved at the same load until it does not
+//!   change, a repeated set being a cycle ([`ContactError::Cycle`]); a stable set whose held
+//!   pairs overlap along the current normals is held again with them (a refresh) —
+//!   [`Contact::solve_level`], [`Contact::continue_level`];
 //! - all candidate pairs are reserved in the pattern once ([`Contact::reserve`]) and the ties
 //!   are one replaced tie group, so a change of the set costs no new pattern and no new
 //!   symbolic analysis;
@@ -39,10 +44,12 @@ mod active;
 mod driver;
 mod error;
 mod pairs;
+mod recover;
 mod tie;
 
 pub use active::{Change, Tolerances, update};
 pub use driver::{Contact, ContactLevel, ContactSettings, ContactState, Mode, PassReport};
 pub use error::ContactError;
 pub use pairs::{CrackFaces, Pair};
+pub use recover::ALPHA;
 pub use tie::{candidate_tie, contact_force, contact_tie, slave_component};

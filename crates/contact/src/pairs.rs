@@ -29,12 +29,13 @@ impl std::fmt::Display for Pair {
     }
 }
 
-/// One facet of the lower face: its corners in cyclic order and the corners of its cell (for
-/// the outward side).
+/// One facet of the lower face: its corners in cyclic order, the corners of its cell (for
+/// the outward side), and its mid-edge nodes (quadratic cells) with the two corners of each.
 #[derive(Debug, Clone, PartialEq)]
-struct Facet {
-    corners: [usize; 4],
+pub(crate) struct Facet {
+    pub(crate) corners: [usize; 4],
     cell: Vec<usize>,
+    pub(crate) mids: Vec<(usize, [usize; 2])>,
 }
 
 /// The crack faces of a mesh: the pairs and the lower face's facets around each pair.
@@ -46,6 +47,19 @@ pub struct CrackFaces {
     around: Vec<Vec<usize>>,
     /// Reference coordinates (m).
     coords: Vec<[f64; 3]>,
+    /// The transformed basis of each pair's lower node ([`recover`](Self::recover)).
+    pub(crate) basis: Vec<Basis>,
+}
+
+/// A lower-face node's place in the transformed face basis N̂ (module `recover`).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub(crate) struct Basis {
+    /// Whether the node is a mid-edge node of its facets (quadratic faces).
+    pub(crate) mid: bool,
+    /// Pairs whose lower node is a mid-edge node next to this corner (on an edge from it).
+    pub(crate) next: Vec<usize>,
+    /// ∫ N̂_i dA over the reference facets around the node (m², > 0).
+    pub(crate) weight: f64,
 }
 
 impl CrackFaces {
@@ -108,11 +122,14 @@ impl CrackFaces {
                 reason: "on the lower crack face but on no face of a cell below it".into(),
             });
         }
+        let facets: Vec<Facet> = facets.into_iter().map(|(f, _)| f).collect();
+        let basis = crate::recover::bases(&facets, &index, &mesh.nodes, pairs.len());
         Ok(Self {
             pairs,
-            facets: facets.into_iter().map(|(f, _)| f).collect(),
+            facets,
             around,
             coords: mesh.nodes.clone(),
+            basis,
         })
     }
 
@@ -215,6 +232,24 @@ impl CrackFaces {
             .collect()
     }
 
+    /// The recovered nodal contact forces f̂ = T f (N, `recover`): ∫N̂_i p dA for a pressure p,
+    /// positive at every node of a compressed face, linear or quadratic; the release test's
+    /// quantity. `forces`: the nodal contact forces, one per pair.
+    pub fn recovered(&self, forces: &[f64]) -> Vec<f64> {
+        crate::recover::transformed(&self.basis, forces)
+    }
+
+    /// The contact pressure p̂_i = f̂_i / ∫N̂_i dA at each pair (Pa, compressive positive; the
+    /// reference face's area) from the nodal contact forces `forces` (N): exact for a uniform
+    /// pressure at every node.
+    pub fn pressures(&self, forces: &[f64]) -> Vec<f64> {
+        self.recovered(forces)
+            .iter()
+            .zip(&self.basis)
+            .map(|(f, b)| f / b.weight)
+            .collect()
+    }
+
     /// The reference coordinates of node `v` (m).
     pub fn position(&self, v: usize) -> [f64; 3] {
         self.coords[v]
@@ -271,11 +306,27 @@ fn lower_facets(mesh: &Mesh, up: &HashSet<usize>, lo: &HashSet<usize>) -> Vec<(F
                 let cyclic = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)];
                 let corners: Option<Vec<usize>> =
                     cyclic.iter().map(|&(a, b)| corner(a, b)).collect();
+                // A mid-edge node (reference index ≥ 8) has one in-face coordinate 0: its
+                // corners are the two with the other coordinate equal to its own.
+                let mids = on
+                    .iter()
+                    .filter(|&&i| i >= 8)
+                    .filter_map(|&i| {
+                        let (a, b) = (reference[i][p], reference[i][q]);
+                        let ends = if a == 0.0 {
+                            [corner(-1.0, b)?, corner(1.0, b)?]
+                        } else {
+                            [corner(a, -1.0)?, corner(a, 1.0)?]
+                        };
+                        Some((cell.nodes[i], ends))
+                    })
+                    .collect();
                 if let Some(c) = corners {
                     out.push((
                         Facet {
                             corners: [c[0], c[1], c[2], c[3]],
                             cell: cell.nodes[..8.min(cell.nodes.len())].to_vec(),
+                            mids,
                         },
                         nodes,
                     ));
@@ -300,6 +351,12 @@ fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
         a[2] * b[0] - a[0] * b[2],
         a[0] * b[1] - a[1] * b[0],
     ]
+}
+
+/// |a × b|.
+pub(crate) fn cross_norm(a: [f64; 3], b: [f64; 3]) -> f64 {
+    let c = cross(a, b);
+    dot(c, c).sqrt()
 }
 
 /// n/|n|, None for a zero or non-finite vector.
