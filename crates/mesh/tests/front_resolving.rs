@@ -196,3 +196,41 @@ fn a_homogeneous_strain_is_reproduced_across_the_grading_and_the_crack() {
         .fold(0.0f64, f64::max);
     assert!(worst <= 1e-6 * scale, "worst {worst} against {scale}");
 }
+
+/// With ply layers (chapter 7) the layers stay one per ply and only the rings are graded: the
+/// model builds, Δa = e, and every sublaminate layer is one ply thick; the thin film and the edge
+/// model take the same grading.
+#[test]
+fn ply_layers_keep_their_plies_and_take_the_radial_grading() {
+    let p = EmbeddedParams {
+        plies: Some(nonlin3d_mesh::PlyLayout {
+            ply_thickness: 0.1e-3,
+            sublaminate: vec![0.0, 90.0, 90.0, 0.0],
+            base_below: vec![45.0],
+        }),
+        ..graded(0.1e-3)
+    };
+    let (m, front) = embedded_delamination_with_front(&p).unwrap();
+    assert!(
+        front
+            .points
+            .iter()
+            .filter(|fp| fp.corner)
+            .all(|fp| (fp.delta_a - 0.1e-3).abs() < 1e-12)
+    );
+    let top = p.base + p.h;
+    let mut z: Vec<f64> = m
+        .nodes
+        .iter()
+        .map(|x| x[2])
+        .filter(|&z| z > p.base - 1e-9)
+        .collect();
+    z.sort_by(f64::total_cmp);
+    z.dedup_by(|a, b| (*a - *b).abs() < 1e-12);
+    // Four plies, Hex20: 9 distinct z from H to H + h, 0.05 mm apart.
+    assert_eq!(z.len(), 9, "{z:?}");
+    assert!(z.windows(2).all(|w| (w[1] - w[0] - 0.05e-3).abs() < 1e-12));
+    assert!((z[8] - top).abs() < 1e-12);
+    assert!(nonlin3d_mesh::thin_film(&graded(0.1e-3)).is_ok());
+    assert!(nonlin3d_mesh::edge_delamination(&graded(0.1e-3)).is_ok());
+}
