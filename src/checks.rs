@@ -287,6 +287,20 @@ fn mesh_controls(s: &Scene) -> Result<(), Error> {
             "mesh.slices = {n}: must be even (the centre's O-grid takes slices/2 cells a side)"
         ));
     }
+    if let Some(e) = c.front_element_mm {
+        if through {
+            return bad(format!(
+                "mesh.front_element_mm = {e}: the front-resolving grading is built for embedded, \
+                 edge and plate models; through-width models take inside, outside and \
+                 front_grading"
+            ));
+        }
+        if !(e.is_finite() && e > 0.0) {
+            return bad(format!(
+                "mesh.front_element_mm = {e}: must be positive (the element size at the front, mm)"
+            ));
+        }
+    }
     if let Some(g) = c.front_grading
         && !(g.is_finite() && g > 0.0)
     {
@@ -499,6 +513,24 @@ mod tests {
         assert!(m.contains("max(a_mm, b_mm)"), "{m}");
         assert!(m.contains("58.8"), "{m}");
         assert!(!m.contains("transition·"), "{m}");
+    }
+
+    #[test]
+    fn a_front_element_is_positive_and_not_for_through_width_models() {
+        let mut s = reference();
+        s.mesh.front_element_mm = Some(-0.1);
+        assert!(message(&s).contains("mesh.front_element_mm = -0.1"));
+        s.mesh.front_element_mm = Some(0.1);
+        assert!(s.validate().is_ok());
+        s.geometry = crate::scene::Geometry::ThroughWidth {
+            a_mm: 15.0,
+            length_mm: 60.0,
+            width_mm: 5.0,
+            h_mm: 0.4,
+            base_mm: 4.0,
+        };
+        let m = message(&s);
+        assert!(m.contains("through-width"), "{m}");
     }
 
     #[test]

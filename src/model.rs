@@ -168,6 +168,7 @@ fn embedded_params(
             .unwrap_or_else(|| EmbeddedParams::radial_inside_for(a, b)),
         radial_outside: c.outside.unwrap_or(d.radial_outside),
         front_grading: c.front_grading.unwrap_or(d.front_grading),
+        front_element: c.front_element_mm.map(|e| e * mm).or(d.front_element),
         sub_layers: c.sub_layers.unwrap_or(d.sub_layers),
         base_layers: c.base_layers.unwrap_or(d.base_layers),
         map: match shape {

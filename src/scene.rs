@@ -286,6 +286,12 @@ pub struct MeshControls {
     /// Size of the element next to the front over the one farthest inside (< 1 refines).
     #[serde(default)]
     pub front_grading: Option<f64>,
+    /// Element size at the delamination front, mm (embedded, edge: issue 25's front-resolving
+    /// grading): the rings either side of the front and the layers either side of the
+    /// delamination plane start at this size and grow geometrically away from it, so the cells
+    /// at the front are square in the radial–thickness plane; `front_grading` is then unused.
+    #[serde(default)]
+    pub front_element_mm: Option<f64>,
     /// Elements through the sublaminate.
     #[serde(default)]
     pub sub_layers: Option<usize>,

@@ -33,6 +33,16 @@ pub fn graded_from_first(n: usize, length: f64, first: f64) -> Result<Vec<f64>, 
     graded_coordinates(n, length, q.powi(n as i32 - 1))
 }
 
+/// Node positions 0 = x_0 < … < x_n = length with geometric element sizes whose LAST element
+/// is `last` (at most length/n, so the sizes never shrink away from the end): the mirror image
+/// of [`graded_from_first`], for refining towards a front that lies at the end of the axis.
+pub fn graded_to_last(n: usize, length: f64, last: f64) -> Result<Vec<f64>, MeshError> {
+    let from_end = graded_from_first(n, length, last.min(length / n.max(1) as f64))?;
+    let mut x: Vec<f64> = from_end.iter().rev().map(|d| length - d).collect();
+    x[0] = 0.0;
+    Ok(x)
+}
+
 /// Node positions 0 = x_0 < … < x_n = length with geometric element sizes, last/first = `ratio`.
 pub fn graded_coordinates(n: usize, length: f64, ratio: f64) -> Result<Vec<f64>, MeshError> {
     if n == 0 {
@@ -118,5 +128,17 @@ mod tests {
             assert!(x.windows(2).all(|w| w[1] > w[0]));
         }
         assert!(graded_from_first(3, 1.0, 0.0).is_err());
+    }
+
+    #[test]
+    fn graded_to_last_ends_with_the_last_element_and_never_shrinks_backwards() {
+        let x = graded_to_last(6, 10.5, 0.1).unwrap();
+        assert_eq!((x[0], x[6]), (0.0, 10.5));
+        assert!((x[6] - x[5] - 0.1).abs() < 1e-12);
+        assert!(x.windows(3).all(|w| w[2] - w[1] < w[1] - w[0]));
+        // A last element longer than length/n gives uniform elements, not ones growing
+        // towards the end.
+        let u = graded_to_last(4, 1.0, 0.9).unwrap();
+        assert!(u.windows(2).all(|w| (w[1] - w[0] - 0.25).abs() < 1e-12));
     }
 }

@@ -9,6 +9,7 @@
 
 use super::EmbeddedParams;
 use crate::MeshError;
+use crate::generators::grading::graded_to_last;
 use crate::generators::{graded_coordinates, graded_from_first};
 
 /// Which elliptic map turns the front circle into the ellipse.
@@ -62,7 +63,10 @@ pub(super) fn front_radius(p: &EmbeddedParams) -> f64 {
 pub(super) fn radial_stations(p: &EmbeddedParams) -> Result<(Vec<f64>, usize), MeshError> {
     let r0 = front_radius(p);
     let rc = p.core_fraction * r0;
-    let inside = graded_coordinates(p.radial_inside, r0 - rc, p.front_grading)?;
+    let inside = match p.front_element {
+        Some(e) => graded_to_last(p.radial_inside, r0 - rc, e)?,
+        None => graded_coordinates(p.radial_inside, r0 - rc, p.front_grading)?,
+    };
     // The ring ahead of the front as wide as the one behind it (VCCT pairs them, §2.8).
     let behind = inside[inside.len() - 1] - inside[inside.len() - 2];
     let outside = graded_from_first(p.radial_outside, p.w - r0, behind)?;

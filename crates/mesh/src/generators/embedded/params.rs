@@ -2,7 +2,8 @@
 
 use super::EllipticMap;
 use crate::MeshError;
-use crate::generators::graded_coordinates;
+use crate::generators::grading::graded_to_last;
+use crate::generators::{graded_coordinates, graded_from_first};
 use nonlin3d_element::ElementKind;
 
 /// Parameters of [`embedded_delamination`](crate::embedded_delamination) (SI units).
@@ -30,6 +31,14 @@ pub struct EmbeddedParams {
     /// (< 1 refines towards the front). Outside, the first element is as long as the last one
     /// inside (the single-solution VCCT pairs them, §2.8) and the sizes grow geometrically.
     pub front_grading: f64,
+    /// Front-resolving grading (issue 25): the element size at the front, m. `Some(e)`: the
+    /// ring behind the front and the one ahead are e wide (the inside rings grow geometrically
+    /// towards the centre and `front_grading` is not used), the sublaminate layers grow
+    /// geometrically from e at z = H upwards and the base layers from e at z = H downwards
+    /// (`base_grading` not used), so the cells at the front are e × e in the radial–thickness
+    /// plane, where the VCCT's forces and openings (§2.8) are taken. A count too small to
+    /// reach e (n·e < length) gives uniform elements. `None`: the thesis's grading (§3.1).
+    pub front_element: Option<f64>,
     /// Core (first ring) radius as a fraction of the front circle's radius min(a, b).
     pub core_fraction: f64,
     /// Rings out to `transition`·min(a, b) (radii of the circular mesh, whose front circle has
@@ -106,6 +115,7 @@ impl EmbeddedParams {
             radial_inside: 4,
             radial_outside: 5,
             front_grading: 0.25,
+            front_element: None,
             core_fraction: 0.3,
             transition: 1.4,
             sub_layers: 1,
@@ -146,6 +156,18 @@ impl EmbeddedParams {
                 return bad(name, "at least one element".into());
             }
         }
+        if let Some(e) = self.front_element
+            && !(e.is_finite() && e > 0.0 && e < self.a.min(self.b) * (1.0 - self.core_fraction))
+        {
+            return bad(
+                "front_element",
+                format!(
+                    "{e} m must be positive and shorter than the distance from the core to the \
+                     front, {} m",
+                    self.a.min(self.b) * (1.0 - self.core_fraction)
+                ),
+            );
+        }
         if !(self.core_fraction > 0.0 && self.core_fraction < 1.0) {
             return bad(
                 "core_fraction",
@@ -185,8 +207,20 @@ impl EmbeddedParams {
     /// z stations and, per layer between them, (material, ply angle); and the index of z = H.
     pub(super) fn layers(&self) -> Result<Layers, MeshError> {
         let Some(pl) = &self.plies else {
-            let zb = graded_coordinates(self.base_layers, self.base, self.base_grading)?;
-            let zs = graded_coordinates(self.sub_layers, self.h, 1.0)?;
+            let (zb, zs) = match self.front_element {
+                Some(e) => (
+                    graded_to_last(self.base_layers, self.base, e)?,
+                    graded_from_first(
+                        self.sub_layers,
+                        self.h,
+                        e.min(self.h / self.sub_layers as f64),
+                    )?,
+                ),
+                None => (
+                    graded_coordinates(self.base_layers, self.base, self.base_grading)?,
+                    graded_coordinates(self.sub_layers, self.h, 1.0)?,
+                ),
+            };
             let mut z = zb.clone();
             z.extend(zs.iter().skip(1).map(|d| self.base + d));
             let layers = vec![(0, 0.0); z.len() - 1];
