@@ -156,6 +156,9 @@ pub struct ArcIncrement {
     pub rules_agree: bool,
     /// ‖r‖∞ at its end, N.
     pub residual: f64,
+    /// The stopping criterion it met, if any (the path ends with it; the observer is told
+    /// before, so that it knows the last increment).
+    pub stop: Option<ArcStop>,
 }
 
 /// The increments made and why the path stopped.
@@ -170,8 +173,8 @@ pub struct ArcReport {
 }
 
 /// What an iteration needs besides the problem: a solver and its tangent storage.
-struct Work<'a> {
-    problem: &'a mut dyn NonlinearProblem,
+struct Work<'a, P: NonlinearProblem + ?Sized> {
+    problem: &'a mut P,
     solver: Box<dyn LinearSolver>,
     k: SymmetricMatrix,
     r: Vec<f64>,
@@ -179,7 +182,7 @@ struct Work<'a> {
     load: Option<Vec<f64>>,
 }
 
-impl Work<'_> {
+impl<P: NonlinearProblem + ?Sized> Work<'_, P> {
     /// r and K_T at (u, λ) (K_T into `k`); the force scale.
     fn evaluate(&mut self, u: &[f64], lambda: f64) -> Result<f64, NewtonError> {
         self.problem
@@ -290,19 +293,19 @@ fn check(arc: &ArcLength) -> Result<(), NewtonError> {
 
 /// Follows the equilibrium path by arc length from the converged state `u` at `start`
 /// (updated to the last converged state), increment by increment (module docs), until a
-/// stopping criterion of `arc` or `observe` (told of every converged increment with its state;
-/// true stops) ends it. Each increment's start is factorised once (its inertia and δu_t), each
+/// stopping criterion of `arc` or `observe` (told of every converged increment with its state
+/// and the problem; true stops) ends it. Each increment's start is factorised once (its inertia and δu_t), each
 /// corrector iteration once (full Newton); the residual test is `settings`' (tolerances,
 /// `max_iterations`, solver); its line search and kept tangents are not used. A failed attempt
 /// (no convergence, divergence, a non-finite value, a singular tangent, no real root of the
 /// constraint) is cut back; below [`ArcLength::min`] it stops with [`NewtonError::ArcLength`].
-pub fn follow_arc_length(
-    problem: &mut dyn NonlinearProblem,
+pub fn follow_arc_length<P: NonlinearProblem + ?Sized>(
+    problem: &mut P,
     u: &mut Vec<f64>,
     start: f64,
     settings: &NewtonSettings,
     arc: &ArcLength,
-    observe: &mut dyn FnMut(&ArcIncrement, &[f64]) -> bool,
+    observe: &mut dyn FnMut(&ArcIncrement, &[f64], &mut P) -> bool,
 ) -> Result<ArcReport, NewtonError> {
     check(arc)?;
     let pattern = problem.pattern();
@@ -402,6 +405,15 @@ pub fn follow_arc_length(
         });
         *u = trial;
         lambda = trial_lambda;
+        let stop = if crossed {
+            Some(ArcStop::Displacement)
+        } else if arc.max_lpf.is_some_and(|m| lambda.abs() >= m) {
+            Some(ArcStop::MaxLpf)
+        } else if index >= arc.max_increments {
+            Some(ArcStop::Increments)
+        } else {
+            None
+        };
         let record = ArcIncrement {
             index,
             lambda,
@@ -412,23 +424,16 @@ pub fn follow_arc_length(
             negative_pivots: pivots,
             rules_agree: by_inertia == by_direction,
             residual,
+            stop,
         };
         previous = Some((du, dl, pivots, sign));
-        let stop = observe(&record, u);
+        let asked = observe(&record, u, &mut *w.problem);
         report.increments.push(record);
         // Crisfield 1981, eq. 17: s ← s·√(I_d/I), I at least 1, growth bounded.
         let ratio = (arc.target_iterations as f64 / iterations.max(1) as f64).sqrt();
         s = (s * ratio.min(arc.growth)).clamp(arc.min, arc.max);
-        if stop {
-            report.stop = ArcStop::Observer;
-            return Ok(report);
-        }
-        if crossed {
-            report.stop = ArcStop::Displacement;
-            return Ok(report);
-        }
-        if arc.max_lpf.is_some_and(|m| lambda.abs() >= m) {
-            report.stop = ArcStop::MaxLpf;
+        if let Some(stop) = stop.or(asked.then_some(ArcStop::Observer)) {
+            report.stop = stop;
             return Ok(report);
         }
     }
@@ -442,8 +447,8 @@ type Converged = (Vec<f64>, f64, usize, f64);
 /// corrector iterations on the constraint's quadratic until the residual test of `settings`
 /// passes. Ok(Err(why)) when the attempt failed in a way a shorter arc may cure; on success
 /// `w.k` holds the tangent at the converged state (the next increment's start).
-fn attempt(
-    w: &mut Work,
+fn attempt<P: NonlinearProblem + ?Sized>(
+    w: &mut Work<P>,
     from: &Start,
     s: f64,
     l2: f64,

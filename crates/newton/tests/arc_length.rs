@@ -94,7 +94,7 @@ fn run(spring: Option<f64>, arc: &ArcLength) -> (States, Vec<ArcIncrement>, ArcR
         0.0,
         &NewtonSettings::default(),
         arc,
-        &mut |inc, u| {
+        &mut |inc, u, _| {
             states.push((inc.lambda, u.to_vec()));
             false
         },
@@ -330,9 +330,14 @@ fn the_arc_length_adapts_and_cuts_back() {
         max_iterations: 2,
         ..NewtonSettings::default()
     };
-    let report = follow_arc_length(&mut problem, &mut u, 0.0, &settings, &arc, &mut |_, _| {
-        false
-    })
+    let report = follow_arc_length(
+        &mut problem,
+        &mut u,
+        0.0,
+        &settings,
+        &arc,
+        &mut |_, _, _| false,
+    )
     .unwrap();
     assert_eq!(report.stop, ArcStop::MaxLpf);
     assert!(report.increments.last().unwrap().lambda >= 0.95);
@@ -361,9 +366,14 @@ fn a_hopeless_arc_stops_with_a_located_error() {
     };
     let mut problem = Truss { spring: soft() };
     let mut u = vec![0.0; 2];
-    let e = follow_arc_length(&mut problem, &mut u, 0.0, &settings, &arc, &mut |_, _| {
-        false
-    })
+    let e = follow_arc_length(
+        &mut problem,
+        &mut u,
+        0.0,
+        &settings,
+        &arc,
+        &mut |_, _, _| false,
+    )
     .unwrap_err();
     let text = e.to_string();
     assert!(
@@ -431,7 +441,7 @@ fn arc_length_follows_prescribed_displacements_as_load_control_does() {
         0.0,
         &NewtonSettings::default(),
         &arc,
-        &mut |i, u| {
+        &mut |i, u, _| {
             states.push((i.lambda, u.to_vec()));
             false
         },

@@ -1,0 +1,129 @@
+//! Arc-length path following end to end: `*STATIC, RIKS` decks (the load proportionality
+//! factor per increment, the stopping criteria, agreement with a load-controlled step) and
+//! scenes with `[analysis] path = "arc-length"`.
+
+use nonlin3d::deck::{StepOptions, solve_deck};
+use nonlin3d::mesh::read_inp;
+use std::path::Path;
+
+/// The Hex20 cantilever of tests/decks (30×5×4 mm steel, 3 kN tip load, NLGEOM) with its
+/// `*STATIC` line replaced by `riks` (keyword and data line).
+fn cantilever(riks: &str) -> String {
+    let deck = std::fs::read_to_string("tests/decks/cantilever_nlgeom.inp").unwrap();
+    deck.replace("*STATIC\n0.1, 1.0, 1e-5, 1.0\n", riks)
+}
+
+/// The deck with every tip force scaled by `f` (a load-controlled step to λ·P_ref).
+fn scaled(deck: &str, f: f64) -> String {
+    deck.replace(
+        "-142.85714285714286",
+        &format!("{:e}", -142.85714285714286 * f),
+    )
+}
+
+/// u_z at node 71 (a tip node), m.
+fn tip(model: &nonlin3d::mesh::InpModel, d: &[[f64; 3]]) -> f64 {
+    let i = model.node_ids.iter().position(|&id| id == 71).unwrap();
+    d[i][2]
+}
+
+/// `*STATIC, RIKS` with λ_end = 1: every increment reports its LPF (rising here: the cantilever
+/// has no limit point), the first is Δl_in/l_period = 0.1 off by the path's curvature only, the
+/// step ends at the first increment with λ ≥ 1. A load-controlled step to the LPF reached
+/// (the forces scaled by it) gives the same tip deflection: both meet ‖r‖∞ ≤ 1e-8·F, so the
+/// displacements differ by about 1e-8·F/k_min ≤ 1e-8 × the largest displacement × the
+/// stiffness ratio of the mesh (≲ 1e2 for 6×2×2 Hex20): 1e-6 relative.
+#[test]
+fn a_riks_deck_reports_the_lpf_and_agrees_with_load_control() {
+    let riks = cantilever("*STATIC, RIKS\n0.1, 1.0, 1e-5, 0.5, 1.0\n");
+    let model = read_inp(&riks).unwrap();
+    let steps = solve_deck(&model, &StepOptions::default()).unwrap();
+    let incs = &steps[0].increments;
+    let lpf: Vec<f64> = incs.iter().map(|i| i.lpf.unwrap()).collect();
+    eprintln!(
+        "LPF {lpf:?}\narc {:?}\niterations {:?}",
+        incs.iter()
+            .map(|i| i.arc_length.unwrap())
+            .collect::<Vec<_>>(),
+        incs.iter().map(|i| i.iterations).collect::<Vec<_>>()
+    );
+    assert!((lpf[0] - 0.1).abs() < 0.01, "{}", lpf[0]);
+    assert!(lpf.windows(2).all(|w| w[1] > w[0]));
+    assert!(*lpf.last().unwrap() >= 1.0);
+    assert!(lpf[..lpf.len() - 1].iter().all(|&l| l < 1.0));
+    // The step time is the accumulated arc length.
+    let total: f64 = incs.iter().map(|i| i.arc_length.unwrap()).sum();
+    assert!((incs.last().unwrap().step_time - total).abs() <= 1e-12 * total);
+    let end = *lpf.last().unwrap();
+    let load = read_inp(&scaled(&cantilever("*STATIC\n0.1, 1.0, 1e-5, 1.0\n"), end)).unwrap();
+    let reference = solve_deck(&load, &StepOptions::default()).unwrap();
+    let (a, b) = (
+        tip(&model, &steps[0].displacements),
+        tip(&load, &reference[0].displacements),
+    );
+    eprintln!("tip u_z: Riks {a:e} m at LPF {end}, load control {b:e} m");
+    assert!((a - b).abs() <= 1e-6 * b.abs(), "{a} against {b}");
+}
+
+/// The monitored displacement ends the step at the increment that crosses it; INC= ends it
+/// after that many increments (a normal end, as in Abaqus).
+#[test]
+fn a_riks_step_stops_at_the_monitored_displacement_or_inc() {
+    let base = cantilever("*STATIC, RIKS\n0.1, 1.0, 1e-5, 0.2, 1.0\n");
+    let full = solve_deck(&read_inp(&base).unwrap(), &StepOptions::default()).unwrap();
+    let model = read_inp(&base).unwrap();
+    let half = 0.5 * tip(&model, &full[0].displacements);
+    let deck = cantilever(&format!(
+        "*STATIC, RIKS\n0.1, 1.0, 1e-5, 0.2, , 71, 3, {half:e}\n"
+    ));
+    let model = read_inp(&deck).unwrap();
+    let steps = solve_deck(&model, &StepOptions::default()).unwrap();
+    let end = tip(&model, &steps[0].displacements);
+    assert!(end <= half, "{end} {half}");
+    let lpf: Vec<f64> = steps[0].increments.iter().map(|i| i.lpf.unwrap()).collect();
+    assert!(*lpf.last().unwrap() < 1.0 && lpf.len() >= 2, "{lpf:?}");
+    let deck = cantilever("*STATIC, RIKS\n0.1, 1.0, 1e-5, 0.2, 1.0\n")
+        .replace("*STEP, NLGEOM", "*STEP, NLGEOM, INC=3");
+    let steps = solve_deck(&read_inp(&deck).unwrap(), &StepOptions::default()).unwrap();
+    assert_eq!(steps[0].increments.len(), 3);
+    assert!(steps[0].complete);
+}
+
+/// `nonlin3d solve` on a Riks deck: the LPF of every increment in summary.json and on the
+/// standard output, as Abaqus's status file lists it.
+#[test]
+fn the_solve_command_lists_the_lpf_by_increment() {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("riks");
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("riks.inp");
+    std::fs::write(
+        &path,
+        cantilever("*STATIC, RIKS\n0.25, 1.0, 1e-5, 0.5, 1.0\n"),
+    )
+    .unwrap();
+    let out = dir.join("out");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_nonlin3d"))
+        .arg("solve")
+        .arg(&path)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        o.status.success(),
+        "{stdout}{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let incs = summary["steps"][0]["increments"].as_array().unwrap();
+    assert!(incs.len() >= 2);
+    for (k, i) in incs.iter().enumerate() {
+        let lpf = i["lpf"].as_f64().unwrap();
+        assert!(
+            stdout.contains(&format!("increment {:3}: LPF {lpf:+.6e}", k + 1)),
+            "{stdout}"
+        );
+    }
+}
