@@ -29,7 +29,10 @@
 //! the last increment took, s ← s·√(I_d/I) (Crisfield 1981, eq. 17), and is cut back on failure.
 
 use crate::error::sig6;
-use crate::{NewtonError, NewtonSettings, NonlinearProblem, residual_tolerance};
+use crate::{IterationRecord, NewtonError, NewtonSettings, NonlinearProblem, residual_tolerance};
+
+mod level;
+pub use level::solve_level_arc;
 use nonlin3d_solver::{LinearSolver, SymmetricMatrix};
 
 /// The constraint on an increment's length.
@@ -156,6 +159,13 @@ pub struct ArcIncrement {
     pub rules_agree: bool,
     /// ‖r‖∞ at its end, N.
     pub residual: f64,
+    /// ‖r‖∞ at the predicted state, N.
+    pub initial_residual: f64,
+    /// The residual tolerance at its end, N ([`residual_tolerance`]).
+    pub tolerance: f64,
+    /// The corrector iterations: ‖r‖∞ after each, ‖δu‖∞, the negative pivots of its
+    /// factorisation (step 1: no line search).
+    pub records: Vec<IterationRecord>,
     /// The stopping criterion it met, if any (the path ends with it; the observer is told
     /// before, so that it knows the last increment).
     pub stop: Option<ArcStop>,
@@ -379,7 +389,7 @@ pub fn follow_arc_length<P: NonlinearProblem + ?Sized>(
             sign,
         };
         let mut cutbacks = 0;
-        let (trial, trial_lambda, iterations, residual) = loop {
+        let (trial, trial_lambda, records, initial_residual, tolerance) = loop {
             match attempt(&mut w, &from, s, l2, psi2, settings)? {
                 Ok(done) => break done,
                 Err(reason) => {
@@ -419,17 +429,21 @@ pub fn follow_arc_length<P: NonlinearProblem + ?Sized>(
             lambda,
             delta_lambda: dl,
             arc: s,
-            iterations,
+            iterations: records.len(),
             cutbacks,
             negative_pivots: pivots,
             rules_agree: by_inertia == by_direction,
-            residual,
+            residual: records.last().map_or(initial_residual, |r| r.residual),
+            initial_residual,
+            tolerance,
+            records,
             stop,
         };
         previous = Some((du, dl, pivots, sign));
         let asked = observe(&record, u, &mut *w.problem);
         report.increments.push(record);
         // Crisfield 1981, eq. 17: s ← s·√(I_d/I), I at least 1, growth bounded.
+        let iterations = report.increments.last().map_or(0, |i| i.iterations);
         let ratio = (arc.target_iterations as f64 / iterations.max(1) as f64).sqrt();
         s = (s * ratio.min(arc.growth)).clamp(arc.min, arc.max);
         if let Some(stop) = stop.or(asked.then_some(ArcStop::Observer)) {
@@ -440,8 +454,9 @@ pub fn follow_arc_length<P: NonlinearProblem + ?Sized>(
     Ok(report)
 }
 
-/// The converged end of an attempt: state, load factor, iterations, ‖r‖∞.
-type Converged = (Vec<f64>, f64, usize, f64);
+/// The converged end of an attempt: state, load factor, the iterations, the initial ‖r‖∞, the
+/// tolerance met.
+type Converged = (Vec<f64>, f64, Vec<IterationRecord>, f64, f64);
 
 /// One attempt at an increment of arc length `s` from `from`: the tangent predictor, then
 /// corrector iterations on the constraint's quadratic until the residual test of `settings`
@@ -463,18 +478,30 @@ fn attempt<P: NonlinearProblem + ?Sized>(
     let mut lambda = from.lambda + dl;
     w.problem.prescribe(&mut u, lambda);
     let mut first = None;
+    let mut records: Vec<IterationRecord> = Vec::new();
+    let (mut moved, mut pivots) = (0.0, None);
     for iteration in 0..=settings.max_iterations {
         let scale = w.evaluate(&u, lambda)?;
         let norm = norm_inf(&w.r);
+        if iteration > 0 {
+            records.push(IterationRecord {
+                residual: norm,
+                step: 1.0,
+                increment: moved,
+                negative_pivots: pivots,
+                bfgs_pairs: 0,
+            });
+        }
         if !norm.is_finite() || u.iter().any(|x| !x.is_finite()) {
             return Ok(Err(format!(
                 "a residual or displacement became NaN or infinite at iteration {iteration}"
             )));
         }
-        if norm <= residual_tolerance(settings, scale)? {
-            return Ok(Ok((u, lambda, iteration, norm)));
-        }
         let initial = *first.get_or_insert(norm);
+        let tolerance = residual_tolerance(settings, scale)?;
+        if norm <= tolerance {
+            return Ok(Ok((u, lambda, records, initial, tolerance)));
+        }
         if norm > 1e8 * initial {
             return Ok(Err(format!(
                 "diverged at iteration {iteration} (residual above 1e8 times its initial value)"
@@ -483,10 +510,13 @@ fn attempt<P: NonlinearProblem + ?Sized>(
         if iteration == settings.max_iterations {
             break;
         }
-        if let Err(why) = w.factorize() {
-            return Ok(Err(format!(
-                "singular tangent at iteration {iteration}: {why}"
-            )));
+        match w.factorize() {
+            Ok(p) => pivots = Some(p),
+            Err(why) => {
+                return Ok(Err(format!(
+                    "singular tangent at iteration {iteration}: {why}"
+                )));
+            }
         }
         let r = std::mem::take(&mut w.r);
         let solved = w.solve(&r);
@@ -502,10 +532,12 @@ fn attempt<P: NonlinearProblem + ?Sized>(
                 iteration + 1
             )));
         };
+        moved = 0.0;
         for (((x, d), a), b) in u.iter_mut().zip(du.iter_mut()).zip(&dr).zip(&dt) {
             let step = a + dlambda * b;
             *x += step;
             *d += step;
+            moved = f64::max(moved, step.abs());
         }
         dl += dlambda;
         lambda += dlambda;

@@ -472,3 +472,44 @@ fn arc_length_follows_prescribed_displacements_as_load_control_does() {
         assert!(diff <= 4e-12, "λ = {l}: {diff:e} m");
     }
 }
+
+impl nonlin3d_newton::DeadLoads for Truss {
+    fn set_dead_load(&mut self, _dof: usize, _value: f64) -> Result<(), NewtonError> {
+        Ok(())
+    }
+}
+
+/// A level above the limit load (λ = 1.05 > 1) by arc length: the path climbs to the limit
+/// point, turns, comes back through the unstable branch and the far stable one up to λ = 1.05,
+/// and Newton lands there: on the closed form (|1.05 − P(w)/P_max| ≤ [`ON_CURVE`]), on the far
+/// branch (w > 2h, where P(w) = 1.05·P_max has its only stable root), with no negative pivot;
+/// the increments went down in λ on the way (the two limit points were passed).
+#[test]
+fn a_level_past_the_limit_point_is_reached_through_it() {
+    let mut problem = Truss { spring: None };
+    let mut u = vec![0.0];
+    let mut session = nonlin3d_newton::PathSolver::new(&problem, Default::default()).unwrap();
+    let level = nonlin3d_newton::solve_level_arc(
+        &mut problem,
+        &mut u,
+        0.0,
+        1.05,
+        &[],
+        &NewtonSettings::default(),
+        &ArcLength {
+            initial: 0.1,
+            max: 0.2,
+            max_increments: 200,
+            ..ArcLength::default()
+        },
+        &Stepping::default(),
+        &mut session,
+    )
+    .unwrap();
+    assert!((1.05 - force(u[0]) / p_max()).abs() <= ON_CURVE);
+    assert!(u[0] > 2.0 * H, "{}", u[0]);
+    assert_eq!(level.negative_pivots, Some(0));
+    let lambdas: Vec<f64> = level.attempts.iter().map(|a| a.lambda).collect();
+    assert!(lambdas.windows(2).any(|w| w[1] < w[0]), "{lambdas:?}");
+    assert!(lambdas.iter().any(|&l| l < -0.9));
+}
