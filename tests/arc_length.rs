@@ -127,3 +127,66 @@ fn the_solve_command_lists_the_lpf_by_increment() {
         );
     }
 }
+
+/// The reference scene on 4 slices at two strains (about a second a run), `path` as given.
+fn coarse_scene(path: &str) -> nonlin3d::Scene {
+    let text = nonlin3d::scene::DEFAULT_SCENE
+        .replace("slices = 8", "slices = 4")
+        .replace(
+            "strains = [-0.001, -0.002, -0.003, -0.004, -0.005]",
+            "strains = [-0.001, -0.003]",
+        )
+        .replace("[analysis]", &format!("[analysis]\npath = \"{path}\""));
+    nonlin3d::Scene::from_toml(&text).unwrap()
+}
+
+/// `[analysis] path = "arc-length"` on the reference scene (its delamination buckles at a
+/// bifurcation, past which the perturbation protocol takes the buckled branch; no limit point
+/// under strain control): each level lands on the same state as load control. Both meet
+/// ‖r‖∞ ≤ 1e-8·F, which bounds the relative error of displacements and of the forces and
+/// displacements VCCT multiplies at about 1e-8 × the conditioning of the buckled state; 1e-5
+/// relative leaves room for that near-singular direction (G_T and the deflection).
+#[test]
+fn a_scene_by_arc_length_reproduces_load_control() {
+    let load = nonlin3d::Analysis::new(coarse_scene("load"))
+        .unwrap()
+        .run()
+        .unwrap();
+    let arc = nonlin3d::Analysis::new(coarse_scene("arc-length"))
+        .unwrap()
+        .run()
+        .unwrap();
+    assert_eq!(load.levels.len(), arc.levels.len());
+    let g = |l: &nonlin3d::results::LevelResult| l.front.iter().map(|r| r.g_t).fold(0.0, f64::max);
+    // Scales: the largest G_T and separation of the sweep (below buckling both are rounding).
+    let g_scale = load.levels.iter().map(g).fold(0.0, f64::max);
+    let w_scale = load
+        .levels
+        .iter()
+        .map(|l| l.max_face_separation_mm.abs())
+        .fold(0.0, f64::max);
+    for (a, b) in load.levels.iter().zip(&arc.levels) {
+        eprintln!(
+            "strain {}: G_T max {:e} / {:e} J/m², separation {:e} / {:e} mm, increments {} / {}, \
+             iterations {} / {}",
+            a.value,
+            g(a),
+            g(b),
+            a.max_face_separation_mm,
+            b.max_face_separation_mm,
+            a.convergence.increments,
+            b.convergence.increments,
+            a.convergence.iterations,
+            b.convergence.iterations,
+        );
+        assert_eq!(a.value, b.value);
+        assert!((g(a) - g(b)).abs() <= 1e-5 * g_scale, "{} {}", g(a), g(b));
+        assert!((a.max_face_separation_mm - b.max_face_separation_mm).abs() <= 1e-5 * w_scale);
+    }
+    assert!(arc.levels[1].max_face_separation_mm > 0.2);
+    // The arc length did run: the first level (λ from 0 to 1/3, below buckling) takes two
+    // load steps of at most 0.25 (0.25, then 1/12) by load control, and two arcs (λ ≈ 0.25,
+    // ≈ 0.5 past the level) plus the landing Newton solve at λ = 1/3 by arc length.
+    assert_eq!(load.levels[0].convergence.increments, 2);
+    assert_eq!(arc.levels[0].convergence.increments, 3);
+}
