@@ -190,3 +190,110 @@ fn a_scene_by_arc_length_reproduces_load_control() {
     assert_eq!(load.levels[0].convergence.increments, 2);
     assert_eq!(arc.levels[0].convergence.increments, 3);
 }
+
+/// A shallow pinned arch as a deck: span 100 mm, sinusoidal rise 2 mm, 1 × 1 mm section of
+/// steel, 40 × 2 C3D8 along the span and through the thickness, one through the width (held
+/// in y: plane strain), pinned at the mid-thickness nodes of both ends, a point load of 1 N
+/// per node on the two top nodes at mid-span; `procedure` is the `*STATIC` card and data
+/// line, `load` the force per node (N). Node ids: 1 + 6i + 3j + k (i along, j across, k up).
+fn arch(procedure: &str, load: f64) -> String {
+    let (span, rise, t, n) = (0.1, 0.002, 0.001, 40);
+    let id = |i: usize, j: usize, k: usize| 1 + 6 * i + 3 * j + k;
+    let mut d = String::from("*HEADING\nshallow pinned arch\n*NODE, NSET=NALL\n");
+    for i in 0..=n {
+        let x = span * i as f64 / n as f64;
+        let z0 = rise * (std::f64::consts::PI * x / span).sin();
+        for j in 0..2 {
+            for k in 0..3 {
+                let z = z0 + t * (k as f64 / 2.0 - 0.5);
+                d += &format!("{}, {x:e}, {:e}, {z:e}\n", id(i, j, k), 0.001 * j as f64);
+            }
+        }
+    }
+    d += "*ELEMENT, TYPE=C3D8, ELSET=ALL\n";
+    for i in 0..n {
+        for k in 0..2 {
+            let c = [
+                id(i, 0, k),
+                id(i + 1, 0, k),
+                id(i + 1, 1, k),
+                id(i, 1, k),
+                id(i, 0, k + 1),
+                id(i + 1, 0, k + 1),
+                id(i + 1, 1, k + 1),
+                id(i, 1, k + 1),
+            ];
+            let c: Vec<String> = c.iter().map(|v| v.to_string()).collect();
+            d += &format!("{}, {}\n", 1 + 2 * i + k, c.join(", "));
+        }
+    }
+    d += &format!(
+        "*NSET, NSET=PINS\n{}, {}, {}, {}\n*NSET, NSET=TOP\n{}, {}\n",
+        id(0, 0, 1),
+        id(0, 1, 1),
+        id(n, 0, 1),
+        id(n, 1, 1),
+        id(n / 2, 0, 2),
+        id(n / 2, 1, 2)
+    );
+    d += "*MATERIAL, NAME=STEEL\n*ELASTIC\n200e9, 0.3\n*SOLID SECTION, ELSET=ALL, MATERIAL=STEEL\n";
+    d += &format!(
+        "*STEP, NLGEOM, INC=100\n{procedure}*BOUNDARY\nPINS, 1, 1\nPINS, 3, 3\nNALL, 2, 2\n\
+         *CLOAD\nTOP, 3, {load:e}\n*END STEP\n"
+    );
+    d
+}
+
+/// The arch snaps through: by `*STATIC, RIKS` (Δl_in 0.5, Δl_max 2, stop when the top node
+/// at mid-span, id 123, has moved down 2.5 × the rise) the LPF rises to a limit point, falls
+/// to less than half of it on the unstable branch (the tangent has a negative pivot there),
+/// rises again on the inverted arch, and the step ends at the increment that crosses the
+/// monitored deflection. Below the limit point a load-controlled step to an increment's LPF
+/// lands on the same state (both within ‖r‖∞ ≤ 1e-8·F: 1e-6 relative, as for the cantilever).
+#[test]
+fn a_riks_deck_follows_a_shallow_arch_through_snap_through() {
+    let model = read_inp(&arch(
+        "*STATIC, RIKS\n0.5, 1., , 2., , 123, 3, -0.005\n",
+        -1.0,
+    ))
+    .unwrap();
+    let steps = solve_deck(&model, &StepOptions::default()).unwrap();
+    let incs = &steps[0].increments;
+    let lpf: Vec<f64> = incs.iter().map(|i| i.lpf.unwrap()).collect();
+    eprintln!("LPF {lpf:?}");
+    let top = |d: &[[f64; 3]]| d[model.node_ids.iter().position(|&i| i == 123).unwrap()][2];
+    let (peak, at) =
+        lpf.iter().enumerate().fold(
+            (f64::MIN, 0),
+            |m, (k, &l)| if l > m.0 && k < 20 { (l, k) } else { m },
+        );
+    let valley = lpf[at..].iter().copied().fold(f64::MAX, f64::min);
+    assert!(
+        at > 0 && valley < 0.5 * peak,
+        "peak {peak} at {at}, valley {valley}"
+    );
+    assert!(*lpf.last().unwrap() > peak, "{lpf:?}");
+    assert!(
+        incs.iter()
+            .any(|i| i.negative_pivots.is_some_and(|p| p > 0))
+    );
+    assert!(top(&steps[0].displacements) <= -0.005);
+    assert!(incs.len() < 100, "the monitor ended the step, not INC");
+    // Load control to the LPF of an increment below the limit point (the Riks step stopped
+    // there by λ_end, a hair below so that the same increment ends it).
+    let k = at / 2;
+    let riks = read_inp(&arch(
+        &format!("*STATIC, RIKS\n0.5, 1., , 2., {}\n", lpf[k] * (1.0 - 1e-12)),
+        -1.0,
+    ))
+    .unwrap();
+    let first = solve_deck(&riks, &StepOptions::default()).unwrap();
+    let load = read_inp(&arch("*STATIC\n0.25, 1.\n", -lpf[k])).unwrap();
+    let reference = solve_deck(&load, &StepOptions::default()).unwrap();
+    let (a, b) = (
+        top(&first[0].displacements),
+        top(&reference[0].displacements),
+    );
+    eprintln!("at LPF {}: Riks {a:e} m, load control {b:e} m", lpf[k]);
+    assert!((a - b).abs() <= 1e-6 * b.abs(), "{a} against {b}");
+}
