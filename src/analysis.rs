@@ -7,14 +7,15 @@
 use crate::contact::ContactStage;
 pub use crate::model::{Model, ModelKind, build_model, perturbation_force, perturbation_loads};
 pub use crate::problem::{build_problem, constraints, load_factors, settings};
-use crate::scene::{ForceKinematics, Scene};
+use crate::scene::{ForceKinematics, PathName, Scene};
 use crate::substructure::Substructured;
 use crate::{Error, results::*};
 use nonlin3d_element::Kinematics;
 use nonlin3d_mesh::names::{CENTER_TOP, CRACK_LOWER, CRACK_UPPER};
 pub use nonlin3d_newton::solve_level;
 use nonlin3d_newton::{
-    IncrementReport, LevelReport, NewtonSettings, PathSolver, Stepping, StructuralProblem,
+    ArcLength, IncrementReport, LevelReport, NewtonSettings, PathSolver, SignRule, Stepping,
+    StructuralProblem, solve_level_arc,
 };
 use nonlin3d_vcct::{FrontRelease, cells_above, release_rates, respect_contact};
 use std::time::Instant;
@@ -207,6 +208,16 @@ fn sweep(
         vcct_s: 0.0,
     };
     let mut stage = ContactStage::new(scene);
+    let arc = arc_length(scene);
+    // `on` solves every level in the contact loop (load control); `auto` only the levels
+    // whose faces overlap, the others by arc length.
+    if arc.is_some() && stage.active() {
+        return Err(Error::Scene(
+            "[analysis] path = \"arc-length\" with [contact] crack_faces = \"on\": the \
+             contact loop follows the path by load control; choose one"
+                .into(),
+        ));
+    }
     let mut from = 0.0;
     for (k, (&lambda, &value)) in factors.iter().zip(values).enumerate() {
         let t = Instant::now();
@@ -236,16 +247,36 @@ fn sweep(
         let start = u.clone();
         let mut solved = Solved::default();
         if !stage.active() {
-            solved = solve_or_redo(
-                &mut inward,
-                problem,
-                &mut u,
-                (from, lambda),
-                pert,
-                (&newton, &stepping),
-                &mut session,
-            )
-            .map_err(level_error)?;
+            solved = match &arc {
+                Some(arc) => solve_level_arc(
+                    problem,
+                    &mut u,
+                    from,
+                    lambda,
+                    pert,
+                    &newton,
+                    arc,
+                    &stepping,
+                    &mut session,
+                )
+                .map(|l| Solved {
+                    attempts: l.attempts,
+                    perturbed: l.perturbed,
+                    pivots: l.negative_pivots,
+                    fallback: false,
+                })
+                .map_err(|e| level_error(e.into()))?,
+                None => solve_or_redo(
+                    &mut inward,
+                    problem,
+                    &mut u,
+                    (from, lambda),
+                    pert,
+                    (&newton, &stepping),
+                    &mut session,
+                )
+                .map_err(level_error)?,
+            };
         }
         // (Contact and substructuring together are refused by the scene checks: the contact
         // stage works on the full model's DOFs.)
@@ -323,6 +354,24 @@ fn sweep(
         from = lambda;
     }
     Ok(out)
+}
+
+/// The arc-length control of a scene with `path = "arc-length"` (None for `load`): the first
+/// arc of a level moves the load factor by at most `max_increment` (the load path's largest
+/// step), arcs grow up to that (in units of the load factor at the level's start), at most
+/// `max_attempts` increments a level; the predictor's sign by the previous increment's
+/// direction, not det K_T's: the trivial path crosses a bifurcation (one eigenvalue through
+/// zero, λ still rising) where the inertia rule would turn back.
+pub fn arc_length(scene: &Scene) -> Option<ArcLength> {
+    let a = &scene.analysis;
+    (a.path == PathName::ArcLength).then(|| ArcLength {
+        initial: a.max_increment,
+        max: a.max_increment,
+        min: 1e-4 * a.max_increment,
+        max_increments: a.max_attempts.max(1),
+        sign: SignRule::Direction,
+        ..ArcLength::default()
+    })
 }
 
 /// One level as [`solve_level`] left it.

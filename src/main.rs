@@ -124,6 +124,17 @@ fn solve(
                 r.increments.len(),
                 if r.nlgeom { " (NLGEOM)" } else { "" }
             );
+            // A Riks step: the load proportionality factor by increment, as Abaqus's status
+            // file lists it.
+            for i in r.increments.iter().filter(|i| i.lpf.is_some()) {
+                println!(
+                    "  increment {:3}: LPF {:+.6e}, arc length {:.4e}, {} iterations",
+                    i.increment,
+                    i.lpf.unwrap_or_default(),
+                    i.arc_length.unwrap_or_default(),
+                    i.iterations
+                );
+            }
         }
         output.progress(p)
     });

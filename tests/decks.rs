@@ -291,9 +291,8 @@ fn the_solve_command_lists_outputs_and_unused_data() {
 }
 
 /// Refused through the command: a failing exit status and a message naming the line, the
-/// keyword and the parameter, for `*STATIC, RIKS` (the shallow-arch case of the issue: a
-/// load-controlled step would pass the limit point unreported), `*CLOAD, FOLLOWER` and an
-/// unknown parameter.
+/// keyword and the parameter, for a parameter `*STATIC, RIKS` does not take, `*CLOAD,
+/// FOLLOWER` and an unknown parameter.
 #[test]
 fn the_solve_command_refuses_by_line() {
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("refusals");
@@ -307,7 +306,11 @@ fn the_solve_command_refuses_by_line() {
     let line_of =
         |text: &str, start: &str| text.lines().position(|l| l.starts_with(start)).unwrap() + 1;
     for (from, to, what) in [
-        ("*STATIC, DIRECT", "*STATIC, RIKS", "*STATIC, RIKS"),
+        (
+            "*STATIC, DIRECT",
+            "*STATIC, RIKS, TIME RESET",
+            "*STATIC, TIME RESET",
+        ),
         (
             "*CLOAD, AMPLITUDE=UPDOWN",
             "*CLOAD, FOLLOWER",

@@ -16,6 +16,7 @@ mod drive;
 mod files;
 mod loads;
 mod output;
+mod riks;
 
 pub use check::check;
 pub use files::DeckOutput;
@@ -58,8 +59,14 @@ pub struct IncrementSummary {
     pub converged: bool,
     /// How it ended.
     pub termination: String,
-    /// Negative pivots of the last factorisation.
+    /// Negative pivots of the last factorisation (of a Riks increment: at its start).
     pub negative_pivots: Option<usize>,
+    /// `*STATIC, RIKS`: the load proportionality factor at the end of the increment.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub lpf: Option<f64>,
+    /// `*STATIC, RIKS`: the increment's arc length (the step time advances by it).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub arc_length: Option<f64>,
 }
 
 impl IncrementSummary {
@@ -75,6 +82,8 @@ impl IncrementSummary {
             converged: a.converged(),
             termination: a.termination.to_string(),
             negative_pivots: a.negative_pivots(),
+            lpf: None,
+            arc_length: None,
         }
     }
 }
@@ -191,23 +200,39 @@ pub fn solve_deck_with(
             outputs: output::tables(model, step),
         };
         let mut attempts = Vec::new();
-        let run = drive::run_step(
-            model,
-            k,
-            &history,
-            frame,
-            &mut problem,
-            &mut u,
-            options,
-            &mut attempts,
-            &mut |c| {
-                let (u, tried) = (c.u, c.attempts);
-                output::record(model, &mesh, &rules, step, frame, &mut current.outputs, c)?;
-                current.increments = tried.to_vec();
-                current.displacements = nodal(u);
-                observer(Progress::Increment(&current))
-            },
-        );
+        let mut record = |c: drive::Converged<'_>| {
+            let (u, tried) = (c.u, c.attempts);
+            output::record(model, &mesh, &rules, step, frame, &mut current.outputs, c)?;
+            current.increments = tried.to_vec();
+            current.displacements = nodal(u);
+            observer(Progress::Increment(&current))
+        };
+        let (problem_, u_) = (&mut problem, &mut u);
+        let run = match &step.procedure.riks {
+            Some(r) => riks::run_step(
+                model,
+                k,
+                &history,
+                frame,
+                problem_,
+                u_,
+                options,
+                r,
+                &mut attempts,
+                &mut record,
+            ),
+            None => drive::run_step(
+                model,
+                k,
+                &history,
+                frame,
+                problem_,
+                u_,
+                options,
+                &mut attempts,
+                &mut record,
+            ),
+        };
         current.increments = attempts;
         if let Err(e) = run {
             // The solve's error is the one to report; the observer's own (a file that could not

@@ -43,6 +43,18 @@ pub enum NewtonName {
     Bfgs,
 }
 
+/// How the path to each level is followed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum PathName {
+    /// Load (strain) control: increments of the load factor with cutback (the thesis's way).
+    #[default]
+    Load,
+    /// Arc length (Crisfield 1981/1983): the load factor is an unknown held to a length of
+    /// path, so limit points are passed; each level is then landed on by Newton at its value.
+    ArcLength,
+}
+
 /// Which strain–displacement relations give the VCCT forces (§2.8).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "kebab-case")]
@@ -77,6 +89,10 @@ pub struct AnalysisOptions {
     /// VCCT force kinematics.
     #[serde(default)]
     pub vcct_forces: ForceKinematics,
+    /// `load` (the default) or `arc-length` path following to each level; with `arc-length`
+    /// the first arc of a level moves the load factor by at most `max_increment`.
+    #[serde(default)]
+    pub path: PathName,
     /// Largest load increment as a fraction of the largest strain (or load).
     #[serde(default = "default_max_increment")]
     pub max_increment: f64,
@@ -124,6 +140,7 @@ impl Default for AnalysisOptions {
             integration: RuleName::Gauss2,
             tolerance_n: None,
             newton: NewtonName::Full,
+            path: PathName::Load,
             refactor_every: default_refactor(),
             vcct_forces: ForceKinematics::Nonlinear,
             max_increment: default_max_increment(),

@@ -44,7 +44,7 @@ pub use generators::{
 };
 pub use io::inp_read::{
     Amplitude, Controls, InpModel, NodeRef, NotUsed, OutputKind, OutputRequest, OutputVariable,
-    ReadBoundary, ReadCload, ReadStep, StaticData, Totals, read_inp, read_inp_file,
+    ReadBoundary, ReadCload, ReadStep, RiksData, StaticData, Totals, read_inp, read_inp_file,
 };
 pub use io::{inp, vtu};
 pub use model::{Cell, Imperfection, Mesh};

@@ -363,9 +363,47 @@ fn refusals_name_line_keyword_and_parameter() {
             "not supported",
         ),
         (
-            format!("{STEP}*END STEP\n").replace("*STATIC\n", "*STATIC, RIKS\n"),
-            "*STATIC, RIKS",
-            "Riks",
+            format!("{STEP}*END STEP\n").replace(
+                "*STATIC\n0.5, 1.\n",
+                "*STATIC, RIKS\n0.1, 1., , , 2., 70, 3, 0.5\n",
+            ),
+            "*STATIC data",
+            "node 70",
+        ),
+        (
+            format!("{STEP}*END STEP\n").replace(
+                "*STATIC\n0.5, 1.\n",
+                "*STATIC, RIKS\n0.1, 1., , , 2., 7, 3\n",
+            ),
+            "*STATIC data",
+            "go together",
+        ),
+        (
+            format!("{STEP}*END STEP\n")
+                .replace("*STATIC\n0.5, 1.\n", "*STATIC, RIKS\n0.1, 1., 0.2\n"),
+            "*STATIC data",
+            "out of order",
+        ),
+        (
+            format!("{STEP}*END STEP\n").replace("*STATIC\n", "*STATIC, RIKS, TIME RESET\n"),
+            "*STATIC, TIME RESET",
+            "not supported",
+        ),
+        (
+            format!("{STEP}*CLOAD, AMPLITUDE=A\nTOP, 3, 1.\n*END STEP\n")
+                .replace("*STEP", "*AMPLITUDE, NAME=A\n0, 0, 1, 1\n*STEP")
+                .replace("*STATIC\n", "*STATIC, RIKS\n"),
+            "*CLOAD data",
+            "load proportionality factor",
+        ),
+        (
+            format!("{STEP}*END STEP\n{STEP}*END STEP\n").replacen(
+                "*STATIC\n",
+                "*STATIC, RIKS\n",
+                1,
+            ),
+            "*STEP",
+            "after a *STATIC, RIKS step",
         ),
         (
             format!("{STEP}*CLOAD, FOLLOWER\nTOP, 3, 1.\n*END STEP\n"),
@@ -644,4 +682,31 @@ fn steps_inherit_as_calculix_does() {
     assert!(s[2].boundary_op_new && s[2].procedure.direct && s[2].max_increments == 7);
     assert_eq!(s[0].procedure.period, 1.0);
     assert_eq!(s[0].max_increments, 100);
+}
+
+/// `*STATIC, RIKS` is read with Abaqus's data line and defaults: Δl_in, l_period, Δl_min,
+/// Δl_max, λ_end and the monitored node (as a mesh index), DOF and value; without a line the
+/// defaults 1, 1, 1e-5, unbounded.
+#[test]
+fn riks_steps_are_read_with_abaqus_defaults() {
+    let riks = |line: &str| {
+        let deck = cube()
+            + &format!("{STEP}*END STEP\n")
+                .replace("*STATIC\n0.5, 1.\n", &format!("*STATIC, RIKS\n{line}"));
+        read_inp(&deck).unwrap().steps[0]
+            .procedure
+            .riks
+            .clone()
+            .unwrap()
+    };
+    let r = riks("0.05, 2., , 0.5, 3., 7, 3, -0.25\n");
+    assert_eq!(
+        (r.initial, r.period, r.min, r.max, r.max_lpf),
+        (0.05, 2.0, 2e-5, 0.5, Some(3.0))
+    );
+    assert_eq!(r.monitor, Some((6, 3, -0.25)));
+    assert!(!r.direct);
+    let d = riks("");
+    assert_eq!((d.initial, d.period, d.min), (1.0, 1.0, 1e-5));
+    assert!(d.max.is_infinite() && d.max_lpf.is_none() && d.monitor.is_none());
 }

@@ -48,6 +48,25 @@ pub enum NewtonError {
         /// How the last attempt ended.
         reason: String,
     },
+    /// An arc-length increment was cut back below the smallest arc length
+    /// ([`crate::ArcLength::min`]) and still did not converge.
+    #[error(
+        "arc-length increment {increment} from λ = {}: no convergence after {cutbacks} cutbacks \
+         (last arc length {}: {reason})",
+        sig6(*.lambda), sig6(*.arc)
+    )]
+    ArcLength {
+        /// The increment (1-based).
+        increment: usize,
+        /// The load factor it started from.
+        lambda: f64,
+        /// The last arc length tried.
+        arc: f64,
+        /// Cutbacks made.
+        cutbacks: usize,
+        /// Why the last attempt failed.
+        reason: String,
+    },
     /// Removing the perturbation load at the end of a perturbed step failed even in the
     /// smallest part ([`crate::perturbed_step`]).
     #[error(

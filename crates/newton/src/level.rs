@@ -11,14 +11,14 @@ use crate::{
 /// (imperfect) path is followed continuously onto the branch the perturbation favours (one
 /// increment can land on the wrong branch: seen on the 60 mm circle; eighths cost 17 % more
 /// time for the same answer on the reference models).
-const PERTURBED_INCREMENTS: f64 = 4.0;
+pub(crate) const PERTURBED_INCREMENTS: f64 = 4.0;
 
 /// The perturbed step's iteration limit, in multiples of the level's: just past the
 /// bifurcation the branch the force is removed onto is nearly flat (the amplitude's restoring
 /// stiffness vanishes with ε − ε_b) and Newton, its line search cutting most steps, closes in
 /// linearly: on the through-width example scene 56 iterations at 2.3 % past ε_b, about 5 at
 /// 80 % past.
-const PERTURBED_PATIENCE: usize = 4;
+pub(crate) const PERTURBED_PATIENCE: usize = 4;
 
 /// What [`solve_level`] did.
 #[derive(Debug, Clone, PartialEq)]

@@ -12,6 +12,8 @@
 //! | [`DeadLoads`], [`perturbed_path`], [`perturbed_step`] | the thesis's perturbation load (§3.2) as a dead load, converged with a level and then removed; any problem with dead loads |
 //! | [`solve_level`], [`LevelReport`] | one level of a sweep: to the level, the stability test there (§2.5) and, past a bifurcation, the perturbation protocol |
 //! | [`IncrementReport`], [`Termination`] | what happened, iteration by iteration, with the inertia |
+//! | [`ArcLength`], [`follow_arc_length`] | arc-length path following through limit points (Crisfield 1981/1983): cylindrical or spherical constraint, predictor sign from the inertia, arc length adapted to the iterations |
+//! | [`solve_level_arc`] | one level of a sweep by arc length, landed on the level by Newton, with the stability test and perturbation protocol |
 //! | [`Bifurcation`] | a rise of the negative-pivot count the inertia guard accepted as real ([`Stepping::inertia_guard`]) |
 #![deny(missing_docs)]
 #![cfg_attr(
@@ -19,6 +21,7 @@
     warn(clippy::unwrap_used, clippy::expect_used, clippy::panic)
 )]
 
+mod arclength;
 mod cache;
 mod error;
 mod guard;
@@ -30,6 +33,10 @@ mod problem;
 mod session;
 mod solve;
 
+pub use arclength::{
+    ArcConstraint, ArcIncrement, ArcLength, ArcReport, ArcStop, SignRule, follow_arc_length,
+    solve_level_arc,
+};
 pub use cache::TangentCache;
 pub use error::NewtonError;
 pub use level::{LevelReport, solve_level};

@@ -86,6 +86,30 @@ pub struct StaticData {
     pub time_reset: bool,
     /// `TOTAL TIME AT START=`.
     pub total_time_at_start: Option<f64>,
+    /// `*STATIC, RIKS`: an arc-length step (its data line; `initial` … `max` then unused).
+    pub riks: Option<RiksData>,
+}
+
+/// The data line of `*STATIC, RIKS` (Abaqus), with Abaqus's defaults applied. Arc lengths are
+/// in scaled load–displacement space: the first increment's load proportionality factor is
+/// `initial / period`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RiksData {
+    /// Initial arc length increment Δl_in (0 → the total arc length `period`).
+    pub initial: f64,
+    /// Total arc length scale factor l_period (0 → 1).
+    pub period: f64,
+    /// Smallest arc length increment (0 → min(Δl_in, 1e-5·l_period)).
+    pub min: f64,
+    /// Largest arc length increment (none → unbounded).
+    pub max: f64,
+    /// Maximum load proportionality factor λ_end: the step ends once |λ| reaches it.
+    pub max_lpf: Option<f64>,
+    /// Node (mesh index), DOF (1–3) and value of the displacement that ends the step once
+    /// crossed.
+    pub monitor: Option<(usize, u8, f64)>,
+    /// `DIRECT`: the arc length stays Δl_in, no cutback.
+    pub direct: bool,
 }
 
 impl Default for StaticData {
@@ -99,6 +123,7 @@ impl Default for StaticData {
             direct: false,
             time_reset: false,
             total_time_at_start: None,
+            riks: None,
         }
     }
 }
