@@ -145,6 +145,7 @@ pub fn run(
         },
         model_data: Some(model),
         warnings: Vec::new(),
+        provenance: None,
     };
     results.warnings = scene.warnings();
     results.warnings.extend(results.stability_warnings());

@@ -13,11 +13,18 @@
 //! | [`solve_level`], [`LevelReport`] | one level of a sweep: to the level, the stability test there (§2.5) and, past a bifurcation, the perturbation protocol |
 //! | [`IncrementReport`], [`Termination`] | what happened, iteration by iteration, with the inertia |
 //! | [`Bifurcation`] | a rise of the negative-pivot count the inertia guard accepted as real ([`Stepping::inertia_guard`]) |
+//! | [`TRACE_TARGET`] | the `tracing` target of the per-iteration and per-attempt events (the door for progress bars and logs; nothing is printed) |
 #![deny(missing_docs)]
 #![cfg_attr(
     not(test),
     warn(clippy::unwrap_used, clippy::expect_used, clippy::panic)
 )]
+
+/// The `tracing` target of Newton's events: an `iteration` event per iteration and an `attempt`
+/// event per attempt, inside a span `attempt` (fields in the doc of
+/// [`solve_increment_with`]). A subscriber turns them into a progress bar, a log or a
+/// convergence file; without one they cost a check per event.
+pub const TRACE_TARGET: &str = "nonlin3d_newton";
 
 mod cache;
 mod error;
