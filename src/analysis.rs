@@ -208,6 +208,8 @@ fn sweep(
     let mut stage = ContactStage::new(scene);
     let mut from = 0.0;
     for (k, (&lambda, &value)) in factors.iter().zip(values).enumerate() {
+        // Newton's `attempt` spans and events (crate::log) nest in it.
+        let _level = tracing::debug_span!("level", level = k + 1, value).entered();
         let t = Instant::now();
         let pert: &[(usize, f64)] = if out.perturbed_at.is_none() {
             &perturbation

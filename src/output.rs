@@ -18,9 +18,11 @@ use crate::fields::{write_level_vtu, write_pvds};
 use crate::log::{CONVERGENCE_FILE, STATUS_FILE, StatusFiles};
 use crate::model::Model;
 use crate::results::{LevelResult, ModelSummary, Provenance, Results, Timings};
+use std::collections::BTreeMap;
 use std::path::{Component, Path, PathBuf};
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
+use std::time::SystemTime;
 
 fn io(path: &Path) -> impl FnOnce(std::io::Error) -> Error + '_ {
     move |source| Error::Io {
@@ -71,6 +73,14 @@ pub const MANIFEST: &str = "manifest.json";
 pub struct Manifest {
     dir: PathBuf,
     ours: fn(&Path) -> bool,
+    /// The files left in the folder after the cleaning, with their modification times: the
+    /// user's, unless this run rewrites them.
+    before: BTreeMap<PathBuf, Option<SystemTime>>,
+}
+
+/// The modification time of `path`, if it can be read.
+fn modified(path: &Path) -> Option<SystemTime> {
+    std::fs::metadata(path).and_then(|m| m.modified()).ok()
 }
 
 /// Files in `dir` and in its immediate subfolders, relative to `dir`.
@@ -143,13 +153,22 @@ impl Manifest {
                 let _ = std::fs::remove_dir(path.parent().unwrap_or(dir));
             }
         }
+        let before = files_below(dir)
+            .into_iter()
+            .map(|p| {
+                let t = modified(&dir.join(&p));
+                (p, t)
+            })
+            .collect();
         Ok(Self {
             dir: dir.to_path_buf(),
             ours,
+            before,
         })
     }
 
-    /// Rewrites `manifest.json` with every file in the folder that is ours.
+    /// Rewrites `manifest.json` with every file in the folder that is ours: named as ours and
+    /// not a file that was there before this run and is unchanged (a user's).
     pub fn write(&self) -> Result<(), Error> {
         let files: Vec<String> = files_below(&self.dir)
             .into_iter()
@@ -157,6 +176,10 @@ impl Manifest {
                 (self.ours)(p)
                     && p != Path::new(MANIFEST)
                     && !p.to_string_lossy().ends_with(".partial")
+                    && self
+                        .before
+                        .get(p)
+                        .is_none_or(|&t| t != modified(&self.dir.join(p)))
             })
             .map(|p| p.to_string_lossy().into_owned())
             .collect();

@@ -53,7 +53,7 @@ impl Monitor {
         };
         bar.set_style(
             ProgressStyle::with_template(
-                "{spinner} {elapsed_precise} {bar:20} {prefix} {wide_msg}",
+                "{spinner} {elapsed_precise} {bar:12} {prefix} {wide_msg}",
             )
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
         );
@@ -142,7 +142,7 @@ impl Monitor {
         } = record.event
         {
             self.bar.set_message(format!(
-                "increment {} attempt {} iteration {iteration} ‖r‖ {residual:.2e} N",
+                "iteration {iteration} ‖r‖ {residual:.2e} N (increment {}, attempt {})",
                 record.increment, record.attempt
             ));
         }
