@@ -118,9 +118,9 @@ fn solve(
     use nonlin3d::deck::Progress;
     let t0 = Instant::now();
     nonlin3d::budget::install(None);
-    let input = nonlin3d::provenance::input_file(deck).map_err(Failure::Input)?;
     let model = nonlin3d::mesh::read_inp_file(deck)
         .map_err(|e| Failure::Input(nonlin3d::Error::from(e)))?;
+    let input = nonlin3d::provenance::input_file(deck).map_err(Failure::Input)?;
     let options = nonlin3d::deck::StepOptions {
         // An absolute tolerance replaces the relative one, as in a scene's tolerance_n.
         newton: match tolerance {
