@@ -148,6 +148,7 @@ pub fn run(
         },
         model_data: Some(model),
         warnings: Vec::new(),
+        provenance: None,
     };
     results.warnings = scene.warnings();
     results.warnings.extend(results.stability_warnings());
@@ -220,6 +221,8 @@ fn sweep(
     }
     let mut from = 0.0;
     for (k, (&lambda, &value)) in factors.iter().zip(values).enumerate() {
+        // Newton's `attempt` spans and events (crate::log) nest in it.
+        let _level = tracing::debug_span!("level", level = k + 1, value).entered();
         let t = Instant::now();
         let pert: &[(usize, f64)] = if out.perturbed_at.is_none() {
             &perturbation

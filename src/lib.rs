@@ -19,6 +19,7 @@
 //! | [`export`] | this crate | a scene as a CalculiX deck: the `nonlin3d export` command |
 //! | [`deck`] | this crate | solving an Abaqus/CalculiX deck: the `nonlin3d solve` command |
 //! | [`eigen_check`] | this crate | the element eigen-check (§2.5): `nonlin3d eigen-check` |
+//! | [`log`], [`provenance`] | this crate | Newton's iterations as data (a `tracing` layer), `status.sta` and `convergence.cvg`; program, input hash, resolved scene, solver, times and memory in results.json / summary.json |
 //! | [`budget`] | this crate | memory limits (`--max-memory`, available memory, RLIMIT_AS, cgroup) and a model's size before it is built |
 //!
 //! Substructuring and contact come as their own crates in later releases.
@@ -42,10 +43,12 @@ pub mod deck;
 pub mod eigen_check;
 pub mod export;
 pub mod fields;
+pub mod log;
 pub mod model;
 pub mod output;
 pub mod plot;
 mod problem;
+pub mod provenance;
 pub mod report;
 pub mod results;
 pub mod scene;

@@ -10,7 +10,13 @@
 //! - `nonlin3d solve DECK.inp --out DIR`: solves an Abaqus/CalculiX deck (the subset in
 //!   docs/DECKS.md; linear or NLGEOM static steps) and writes `DIR/displacements.csv`,
 //!   `DIR/step-K/displacements.csv`, the output requests per increment
-//!   (`DIR/step-K/node-print-SET.csv`, …) and `DIR/summary.json`.
+//!   (`DIR/step-K/node-print-SET.csv`, …) and `DIR/summary.json`; DIR defaults to
+//!   `nonlin3d-solve-out` (run's to `nonlin3d-out`).
+//! - Both write `status.sta` (a line per attempt) and `convergence.cvg` (a line per Newton
+//!   iteration) as they go, `manifest.json` (the files they wrote, removed by the next run into
+//!   the folder), and a `provenance` block in results.json / summary.json.
+//! - `-v`: one line per Newton iteration on stderr; `-q`: nothing but errors. The progress bar
+//!   is drawn on stderr only when it is a terminal.
 //!
 //! Exit status: 0 complete; 1 the analysis (or writing its results) failed; 2 bad input (scene,
 //! deck, arguments, an output folder that cannot be written); 130 interrupted by SIGINT, 143 by
@@ -18,10 +24,14 @@
 //! interrupted run leaves everything converged so far, with `"complete": false` in results.json
 //! (summary.json for `solve`).
 
+mod progress;
+
 use clap::{Parser, Subcommand};
 use nonlin3d::newton::NewtonSettings;
+use progress::{Monitor, Shared, Verbosity};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use std::time::Instant;
 
 #[derive(Parser)]
 #[command(
@@ -34,6 +44,23 @@ use std::process::ExitCode;
 struct Cli {
     #[command(subcommand)]
     command: Option<Command>,
+    /// One line per Newton iteration on stderr: increment, attempt, iteration, ‖r‖, ‖Δu‖,
+    /// negative pivots, time.
+    #[arg(short, long, global = true, conflicts_with = "quiet")]
+    verbose: bool,
+    /// Nothing but errors.
+    #[arg(short, long, global = true)]
+    quiet: bool,
+}
+
+impl Cli {
+    fn verbosity(&self) -> Verbosity {
+        match (self.quiet, self.verbose) {
+            (true, _) => Verbosity::Quiet,
+            (_, true) => Verbosity::Verbose,
+            _ => Verbosity::Normal,
+        }
+    }
 }
 
 #[derive(Subcommand)]
@@ -45,9 +72,6 @@ enum Command {
         /// Output directory.
         #[arg(long, default_value = "nonlin3d-out")]
         out: PathBuf,
-        /// No progress bar.
-        #[arg(long)]
-        quiet: bool,
         /// Memory the run may use (2GiB, 500MB, 1.5G); the machine's and the process's own
         /// limits apply as well.
         #[arg(long, value_parser = nonlin3d::budget::parse_size)]
@@ -71,7 +95,7 @@ enum Command {
         /// The deck.
         deck: PathBuf,
         /// Output directory.
-        #[arg(long, default_value = "nonlin3d-out")]
+        #[arg(long, default_value = "nonlin3d-solve-out")]
         out: PathBuf,
         /// Absolute residual tolerance in N instead of the default relative criterion
         /// (‖r‖∞ ≤ 1e-8 of the largest external or reaction force; docs/THEORY.md).
@@ -89,11 +113,14 @@ fn solve(
     out: &Path,
     tolerance: Option<f64>,
     increment: Option<f64>,
+    verbosity: Verbosity,
 ) -> Result<(), Failure> {
     use nonlin3d::deck::Progress;
+    let t0 = Instant::now();
     nonlin3d::budget::install(None);
     let model = nonlin3d::mesh::read_inp_file(deck)
         .map_err(|e| Failure::Input(nonlin3d::Error::from(e)))?;
+    let input = nonlin3d::provenance::input_file(deck).map_err(Failure::Input)?;
     let options = nonlin3d::deck::StepOptions {
         // An absolute tolerance replaces the relative one, as in a scene's tolerance_n.
         newton: match tolerance {
@@ -109,35 +136,55 @@ fn solve(
     // Bad input (no step, an inverted element, …) and an output folder that cannot be written
     // are found before anything is solved; each increment lands there as it converges.
     nonlin3d::deck::check(&model, &options).map_err(Failure::Input)?;
+    let mut provenance =
+        nonlin3d::provenance::Provenance::new(Some(input), None, options.newton.solver);
+    provenance.stage("read_and_check", t0.elapsed().as_secs_f64());
     let mut output = nonlin3d::deck::DeckOutput::create(out, &model).map_err(Failure::Input)?;
+    output.set_provenance(provenance).map_err(Failure::Run)?;
     stop_on_signals(output.interrupt_handle()).map_err(Failure::Run)?;
+    let monitor = watch(verbosity, "step", output.status_files());
+    let steps = model.steps.len();
+    lock(&monitor).units(steps);
     for n in &model.not_used {
-        println!("not used: {}, {}: {}", n.at, n.keyword, n.reason);
+        lock(&monitor).say(&format!("not used: {}, {}: {}", n.at, n.keyword, n.reason));
     }
     let outcome = nonlin3d::deck::solve_deck_with(&model, &options, &mut |p| {
-        if let Progress::Step(r) = p {
-            let iterations: usize = r.increments.iter().map(|i| i.iterations).sum();
-            let done = r.increments.iter().filter(|i| i.converged).count();
-            println!(
-                "step {}: {done} increments ({} attempts), {iterations} iterations{}",
-                r.step,
-                r.increments.len(),
-                if r.nlgeom { " (NLGEOM)" } else { "" }
-            );
-            // A Riks step: the load proportionality factor by increment, as Abaqus's status
-            // file lists it.
-            for i in r.increments.iter().filter(|i| i.lpf.is_some()) {
-                println!(
-                    "  increment {:3}: LPF {:+.6e}, arc length {:.4e}, {} iterations",
-                    i.increment,
-                    i.lpf.unwrap_or_default(),
-                    i.arc_length.unwrap_or_default(),
-                    i.iterations
-                );
+        let mut m = lock(&monitor);
+        match p {
+            Progress::Increment(r) => {
+                let last = r.increments.iter().rev().find(|i| i.converged);
+                let done = last.map_or(0.0, |i| i.step_time / r.period.max(f64::MIN_POSITIVE));
+                m.begin(r.step, done);
             }
+            Progress::Step(r) => {
+                let iterations: usize = r.increments.iter().map(|i| i.iterations).sum();
+                let done = r.increments.iter().filter(|i| i.converged).count();
+                m.say(&format!(
+                    "step {}: {done} increments ({} attempts), {iterations} iterations{}",
+                    r.step,
+                    r.increments.len(),
+                    if r.nlgeom { " (NLGEOM)" } else { "" }
+                ));
+                // A Riks step: the load proportionality factor by increment, as Abaqus's
+                // status file lists it.
+                for i in r.increments.iter().filter(|i| i.lpf.is_some()) {
+                    m.say(&format!(
+                        "  increment {:3}: LPF {:+.6e}, arc length {:.4e}, {} iterations",
+                        i.increment,
+                        i.lpf.unwrap_or_default(),
+                        i.arc_length.unwrap_or_default(),
+                        i.iterations
+                    ));
+                }
+                // The next step's events are numbered within it.
+                m.begin(r.step + 1, 0.0);
+            }
+            Progress::Failed(_) => {}
         }
+        drop(m);
         output.progress(p)
     });
+    let status_error = lock(&monitor).finish();
     let results = match outcome {
         Ok(r) => r,
         Err(e) => {
@@ -152,8 +199,31 @@ fn solve(
         }
     };
     output.finish(&results).map_err(Failure::Run)?;
-    println!("results in {}", out.display());
+    if let Some(e) = status_error {
+        return Err(Failure::Run(e));
+    }
+    lock(&monitor).say(&format!("results in {}", out.display()));
     Ok(())
+}
+
+/// The monitor of a command, fed with Newton's events through `tracing` and writing them to
+/// `files`.
+fn watch(verbosity: Verbosity, unit: &'static str, files: nonlin3d::log::StatusFiles) -> Shared {
+    use tracing_subscriber::layer::SubscriberExt;
+    let mut monitor = Monitor::new(verbosity, unit);
+    monitor.write_to(files);
+    let monitor = monitor.shared();
+    let subscriber = tracing_subscriber::registry().with(progress::layer(&monitor));
+    // Only fails if one is set already (a command runs once per process).
+    let _ = tracing::subscriber::set_global_default(subscriber);
+    monitor
+}
+
+/// The monitor, locked (a panic elsewhere while it was held leaves it usable).
+fn lock(monitor: &Shared) -> std::sync::MutexGuard<'_, Monitor> {
+    monitor
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner)
 }
 
 fn read_scene(path: Option<&Path>) -> Result<nonlin3d::Scene, nonlin3d::Error> {
@@ -244,15 +314,19 @@ fn stop_on_signals(_: nonlin3d::output::InterruptHandle) -> Result<(), nonlin3d:
 }
 
 fn run(
-    scene: Option<&Path>,
+    path: Option<&Path>,
     out: &Path,
-    quiet: bool,
+    verbosity: Verbosity,
     max_memory: Option<u64>,
 ) -> Result<(), Failure> {
-    use indicatif::{ProgressBar, ProgressStyle};
     use nonlin3d::analysis::Progress;
+    let t0 = Instant::now();
     nonlin3d::budget::install(max_memory);
-    let scene = read_scene(scene).map_err(Failure::Input)?;
+    let scene = read_scene(path).map_err(Failure::Input)?;
+    let input = path
+        .map(nonlin3d::provenance::input_file)
+        .transpose()
+        .map_err(Failure::Input)?;
     let quantity = if matches!(scene.geometry, nonlin3d::scene::Geometry::Plate { .. }) {
         "load_n"
     } else {
@@ -262,31 +336,31 @@ fn run(
     // it converges.
     let mut output =
         nonlin3d::output::RunOutput::create(out, &scene.title, quantity).map_err(Failure::Input)?;
-    stop_on_signals(output.interrupt_handle()).map_err(Failure::Run)?;
-    println!("{}", scene.title);
-    for w in scene.warnings() {
-        eprintln!("nonlin3d: warning: {w}");
-    }
-    let bar = if quiet {
-        ProgressBar::hidden()
-    } else {
-        ProgressBar::new(0)
-    };
-    bar.set_style(
-        ProgressStyle::with_template(
-            "{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} levels {msg}",
-        )
-        .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    let mut provenance = nonlin3d::provenance::Provenance::new(
+        input,
+        serde_json::to_value(&scene).ok(),
+        nonlin3d::analysis::settings(&scene).0.solver,
     );
-    bar.set_message("building the model");
+    provenance.stage("read", t0.elapsed().as_secs_f64());
+    output.set_provenance(provenance).map_err(Failure::Run)?;
+    stop_on_signals(output.interrupt_handle()).map_err(Failure::Run)?;
+    let monitor = watch(verbosity, "level", output.status_files());
+    lock(&monitor).say(&scene.title);
+    for w in scene.warnings() {
+        lock(&monitor).warn(&w);
+    }
+    lock(&monitor).message("building the model".into());
     let outcome = nonlin3d::analysis::run(&scene, &mut |p| match p {
         Progress::Built {
             model,
             dofs,
             levels,
         } => {
-            bar.set_length(levels as u64);
-            bar.set_message(format!("{} nodes, {dofs} DOFs", model.mesh.nodes.len()));
+            let mut m = lock(&monitor);
+            m.units(levels);
+            m.begin(1, 0.0);
+            m.message(format!("{} nodes, {dofs} DOFs", model.mesh.nodes.len()));
+            drop(m);
             output.built(model, dofs)
         }
         Progress::Level {
@@ -294,12 +368,14 @@ fn run(
             value,
             result,
         } => {
-            bar.set_position(index as u64 + 1);
-            bar.set_message(format!("level {value} converged"));
+            let mut m = lock(&monitor);
+            m.begin(index + 2, 0.0);
+            m.message(format!("level {} at {value} converged", index + 1));
+            drop(m);
             output.level(result)
         }
     });
-    bar.finish_and_clear();
+    let status_error = lock(&monitor).finish();
     let mut results = match outcome {
         Ok(r) => r,
         Err(e) => {
@@ -319,38 +395,50 @@ fn run(
         }
     };
     output.finish(&mut results).map_err(Failure::Run)?;
-    print!("{}", nonlin3d::report::table(&results));
-    println!("results in {}", out.display());
+    if let Some(e) = status_error {
+        return Err(Failure::Run(e));
+    }
+    let m = lock(&monitor);
+    m.say(nonlin3d::report::table(&results).trim_end());
+    m.say(&format!("results in {}", out.display()));
     Ok(())
 }
 
-fn export(scene: &Path, inp: &Path, max_memory: Option<u64>) -> Result<(), Failure> {
+fn export(
+    scene: &Path,
+    inp: &Path,
+    max_memory: Option<u64>,
+    verbosity: Verbosity,
+) -> Result<(), Failure> {
     nonlin3d::budget::install(max_memory);
     let scene = read_scene(Some(scene)).map_err(Failure::Input)?;
-    for w in scene.warnings() {
+    let loud = verbosity != Verbosity::Quiet;
+    for w in scene.warnings().iter().filter(|_| loud) {
         eprintln!("nonlin3d: warning: {w}");
     }
     let text = nonlin3d::export::deck(&scene).map_err(Failure::Input)?;
     nonlin3d::output::write_atomic(inp, text.as_bytes()).map_err(Failure::Run)?;
-    println!("wrote {}", inp.display());
+    if loud {
+        println!("wrote {}", inp.display());
+    }
     Ok(())
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    let verbosity = cli.verbosity();
     let result = match cli.command {
-        None => run(None, Path::new("nonlin3d-out"), false, None),
+        None => run(None, Path::new("nonlin3d-out"), verbosity, None),
         Some(Command::Run {
             scene,
             out,
-            quiet,
             max_memory,
-        }) => run(scene.as_deref(), &out, quiet, max_memory),
+        }) => run(scene.as_deref(), &out, verbosity, max_memory),
         Some(Command::Export {
             scene,
             inp,
             max_memory,
-        }) => export(&scene, &inp, max_memory),
+        }) => export(&scene, &inp, max_memory, verbosity),
         Some(Command::EigenCheck) => nonlin3d::eigen_check::run()
             .map(|rows| print!("{}", nonlin3d::eigen_check::report(&rows)))
             .map_err(Failure::Run),
@@ -359,7 +447,7 @@ fn main() -> ExitCode {
             out,
             tolerance,
             increment,
-        }) => solve(&deck, &out, tolerance, increment),
+        }) => solve(&deck, &out, tolerance, increment, verbosity),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -6,14 +6,23 @@
 //!
 //! A failed level, or a SIGINT/SIGTERM ([`RunOutput::interrupt_handle`]), leaves every level
 //! converged so far with `"complete": false` and `"stopped"` saying why.
+//!
+//! `manifest.json` lists every file the run wrote there ([`Manifest`]); the next run into the
+//! same folder removes those files first, and nothing else (a folder without a manifest, from
+//! an earlier version, is cleaned by our file names). `status.sta` and `convergence.cvg`
+//! ([`crate::log`]) grow a line per attempt and per Newton iteration as the run goes.
 
 use crate::Error;
 pub use crate::atomic::{atomically, write_atomic};
 use crate::fields::{write_level_vtu, write_pvds};
+use crate::log::{CONVERGENCE_FILE, STATUS_FILE, StatusFiles};
 use crate::model::Model;
-use crate::results::{LevelResult, ModelSummary, Results, Timings};
-use std::path::{Path, PathBuf};
+use crate::results::{LevelResult, ModelSummary, Provenance, Results, Timings};
+use std::collections::BTreeMap;
+use std::path::{Component, Path, PathBuf};
 use std::sync::{Arc, Mutex};
+use std::time::Instant;
+use std::time::SystemTime;
 
 fn io(path: &Path) -> impl FnOnce(std::io::Error) -> Error + '_ {
     move |source| Error::Io {
@@ -44,6 +53,143 @@ fn ours(name: &str) -> bool {
         || numbered("model_", ".vtu")
         || numbered("front_", ".vtu")
         || (name.starts_with('.') && name.ends_with(".partial"))
+        || name == STATUS_FILE
+        || name == CONVERGENCE_FILE
+}
+
+/// A run's files by path relative to its folder (for the [`Manifest`]).
+fn ours_relative(path: &Path) -> bool {
+    let mut parts = path.components();
+    matches!((parts.next(), parts.next()), (Some(Component::Normal(n)), None)
+        if ours(&n.to_string_lossy()))
+}
+
+/// The name of the manifest in an output folder.
+pub const MANIFEST: &str = "manifest.json";
+
+/// The files this program wrote in an output folder, listed in `manifest.json` (paths relative
+/// to the folder, one level of subfolders at most) and rewritten after every write.
+#[derive(Debug, Clone)]
+pub struct Manifest {
+    dir: PathBuf,
+    ours: fn(&Path) -> bool,
+    /// The files left in the folder after the cleaning, with their modification times: the
+    /// user's, unless this run rewrites them.
+    before: BTreeMap<PathBuf, Option<SystemTime>>,
+}
+
+/// The modification time of `path`, if it can be read.
+fn modified(path: &Path) -> Option<SystemTime> {
+    std::fs::metadata(path).and_then(|m| m.modified()).ok()
+}
+
+/// Files in `dir` and in its immediate subfolders, relative to `dir`.
+fn files_below(dir: &Path) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return out;
+    };
+    for e in entries.flatten() {
+        let Ok(kind) = e.file_type() else { continue };
+        let name = PathBuf::from(e.file_name());
+        if kind.is_file() {
+            out.push(name);
+        } else if kind.is_dir() {
+            for inner in std::fs::read_dir(e.path()).into_iter().flatten().flatten() {
+                if inner.file_type().is_ok_and(|t| t.is_file()) {
+                    out.push(name.join(inner.file_name()));
+                }
+            }
+        }
+    }
+    out.sort();
+    out
+}
+
+/// A path the manifest may name: relative, at most two plain components.
+fn inside(path: &Path) -> bool {
+    let parts: Vec<Component> = path.components().collect();
+    !parts.is_empty() && parts.len() <= 2 && parts.iter().all(|c| matches!(c, Component::Normal(_)))
+}
+
+impl Manifest {
+    /// Makes `dir` (and parents), checks that a file can be written there (before anything is
+    /// computed: an unwritable folder fails now, naming it), and removes the files an earlier
+    /// run listed in its manifest — or, with no manifest, the files whose names `ours` claims
+    /// (relative paths) — with the subfolders that leaves empty. A user's file (not listed) is
+    /// never touched when there is a manifest.
+    pub fn prepare(dir: &Path, ours: fn(&Path) -> bool) -> Result<Self, Error> {
+        std::fs::create_dir_all(dir).map_err(io(dir))?;
+        let probe = dir.join(".nonlin3d-write-test.partial");
+        std::fs::write(&probe, b"").map_err(io(&probe))?;
+        std::fs::remove_file(&probe).map_err(io(&probe))?;
+        let listed = dir.join(MANIFEST);
+        let stale: Vec<PathBuf> = match std::fs::read_to_string(&listed) {
+            Ok(text) => {
+                let v: serde_json::Value = serde_json::from_str(&text).unwrap_or_default();
+                v["files"]
+                    .as_array()
+                    .into_iter()
+                    .flatten()
+                    .filter_map(|f| f.as_str().map(PathBuf::from))
+                    .chain(std::iter::once(PathBuf::from(MANIFEST)))
+                    .collect()
+            }
+            Err(_) => files_below(dir).into_iter().filter(|p| ours(p)).collect(),
+        };
+        // Temporaries of a run killed mid-write are ours in any case.
+        let partial = files_below(dir).into_iter().filter(|p| {
+            p.file_name()
+                .is_some_and(|n| n.to_string_lossy().ends_with(".partial"))
+                && ours(p)
+        });
+        for rel in stale.into_iter().chain(partial).filter(|p| inside(p)) {
+            let path = dir.join(&rel);
+            if path.is_file() {
+                std::fs::remove_file(&path).map_err(io(&path))?;
+            }
+            if rel.components().count() == 2 {
+                // Kept if anything else is left in it.
+                let _ = std::fs::remove_dir(path.parent().unwrap_or(dir));
+            }
+        }
+        let before = files_below(dir)
+            .into_iter()
+            .map(|p| {
+                let t = modified(&dir.join(&p));
+                (p, t)
+            })
+            .collect();
+        Ok(Self {
+            dir: dir.to_path_buf(),
+            ours,
+            before,
+        })
+    }
+
+    /// Rewrites `manifest.json` with every file in the folder that is ours: named as ours and
+    /// not a file that was there before this run and is unchanged (a user's).
+    pub fn write(&self) -> Result<(), Error> {
+        let files: Vec<String> = files_below(&self.dir)
+            .into_iter()
+            .filter(|p| {
+                (self.ours)(p)
+                    && p != Path::new(MANIFEST)
+                    && !p.to_string_lossy().ends_with(".partial")
+                    && self
+                        .before
+                        .get(p)
+                        .is_none_or(|&t| t != modified(&self.dir.join(p)))
+            })
+            .map(|p| p.to_string_lossy().into_owned())
+            .collect();
+        let text = serde_json::to_string_pretty(&serde_json::json!({
+            "program": format!("nonlin3d {}", env!("CARGO_PKG_VERSION")),
+            "note": "files this program wrote here; the next run into this folder removes them",
+            "files": files,
+        }))?;
+        write_atomic(&self.dir.join(MANIFEST), text.as_bytes())
+    }
 }
 
 /// What the signal handler needs: the folder and the text of `results.json` as it would read
@@ -61,23 +207,18 @@ pub struct RunOutput {
     snapshot: Results,
     model: Option<Model>,
     pending: Arc<Mutex<Pending>>,
+    manifest: Manifest,
+    status: StatusFiles,
+    started: Instant,
 }
 
 impl RunOutput {
-    /// Creates `dir` (and parents), checks that it can be written before any analysis runs, and
-    /// removes the files of an earlier run there (only the names this program writes).
+    /// Creates `dir` (and parents), checks that it can be written before any analysis runs,
+    /// removes the files of an earlier run there ([`Manifest::prepare`]) and starts
+    /// `status.sta` and `convergence.cvg`.
     pub fn create(dir: &Path, title: &str, quantity: &str) -> Result<Self, Error> {
-        std::fs::create_dir_all(dir).map_err(io(dir))?;
-        let probe = dir.join(".nonlin3d-write-test.partial");
-        std::fs::write(&probe, b"").map_err(io(&probe))?;
-        std::fs::remove_file(&probe).map_err(io(&probe))?;
-        for entry in std::fs::read_dir(dir).map_err(io(dir))?.flatten() {
-            if entry.file_type().is_ok_and(|t| t.is_file())
-                && ours(&entry.file_name().to_string_lossy())
-            {
-                std::fs::remove_file(entry.path()).map_err(io(&entry.path()))?;
-            }
-        }
+        let manifest = Manifest::prepare(dir, ours_relative)?;
+        let status = StatusFiles::create(dir, "level")?;
         let snapshot = Results {
             title: title.into(),
             quantity: quantity.into(),
@@ -103,8 +244,9 @@ impl RunOutput {
             },
             model_data: None,
             warnings: Vec::new(),
+            provenance: None,
         };
-        let out = Self {
+        let mut out = Self {
             dir: dir.to_path_buf(),
             snapshot,
             model: None,
@@ -112,6 +254,9 @@ impl RunOutput {
                 path: dir.join("results.json"),
                 stopped_json: None,
             })),
+            manifest,
+            status,
+            started: Instant::now(),
         };
         out.write_json()?;
         Ok(out)
@@ -120,6 +265,19 @@ impl RunOutput {
     /// The folder.
     pub fn dir(&self) -> &Path {
         &self.dir
+    }
+
+    /// The folder's `status.sta` and `convergence.cvg`, for the caller to append Newton's
+    /// records to as they come ([`crate::log`]).
+    pub fn status_files(&self) -> StatusFiles {
+        self.status.clone()
+    }
+
+    /// Records where the run came from: written into every `results.json` from now on, its
+    /// total time and peak memory brought up to date at each write.
+    pub fn set_provenance(&mut self, provenance: Provenance) -> Result<(), Error> {
+        self.snapshot.provenance = Some(provenance);
+        self.write_json()
     }
 
     /// The model is built: its size goes into the snapshot and its mesh is kept for the VTU
@@ -162,11 +320,15 @@ impl RunOutput {
     pub fn finish(&mut self, results: &mut Results) -> Result<(), Error> {
         results.complete = true;
         results.stopped = None;
+        results.provenance = self.snapshot.provenance.take().map(|mut p| {
+            p.finish(self.started.elapsed().as_secs_f64());
+            p
+        });
         crate::report::write_all(results, &self.dir)?;
         if let Ok(mut p) = self.pending.lock() {
             p.stopped_json = None;
         }
-        Ok(())
+        self.manifest.write()
     }
 
     /// A handle for a signal handler: [`InterruptHandle::stop`] writes `results.json` as it
@@ -178,7 +340,10 @@ impl RunOutput {
     }
 
     /// Writes the snapshot's `results.json` and prepares its interrupted form.
-    fn write_json(&self) -> Result<(), Error> {
+    fn write_json(&mut self) -> Result<(), Error> {
+        if let Some(p) = &mut self.snapshot.provenance {
+            p.finish(self.started.elapsed().as_secs_f64());
+        }
         let mut value = serde_json::to_value(&self.snapshot)?;
         let now = serde_json::to_string_pretty(&value)?;
         if self.snapshot.stopped.is_none() {
@@ -188,7 +353,8 @@ impl RunOutput {
         let mut pending = self.pending.lock().map_err(|_| Error::OutputLock)?;
         write_atomic(&pending.path, now.as_bytes())?;
         pending.stopped_json = Some(stopped);
-        Ok(())
+        drop(pending);
+        self.manifest.write()
     }
 }
 

@@ -370,6 +370,48 @@ pub struct Results {
     /// The model (mesh and front), for VTU output; not serialised.
     #[serde(skip)]
     pub model_data: Option<Model>,
+    /// Where the results came from (set by the writer of the output folder).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub provenance: Option<Provenance>,
+}
+
+/// Where a result came from: results.json's and summary.json's `provenance`
+/// ([`crate::provenance`] fills it in).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Provenance {
+    /// `nonlin3d VERSION`.
+    pub program: String,
+    /// The command line as given.
+    pub command: Vec<String>,
+    /// The working folder the command ran in.
+    pub working_dir: String,
+    /// The input file (scene or deck) with its SHA-256; None for the built-in reference scene.
+    pub input: Option<InputFile>,
+    /// The scene as solved, every default filled in (None for a deck).
+    pub scene: Option<serde_json::Value>,
+    /// The linear solver.
+    pub solver: String,
+    /// Its fill-reducing ordering.
+    pub ordering: String,
+    /// Threads of the parallel assembly (rayon's pool).
+    pub threads: usize,
+    /// Start, seconds since 1970-01-01 UTC.
+    pub started_unix_s: u64,
+    /// Wall-clock seconds per stage (`total` from the start of the command to the last write).
+    pub wall_s: std::collections::BTreeMap<String, f64>,
+    /// Peak resident memory of the process so far (Linux `VmHWM`), bytes; None elsewhere.
+    pub peak_memory_bytes: Option<u64>,
+}
+
+/// An input file as read.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct InputFile {
+    /// The path as given on the command line.
+    pub path: String,
+    /// SHA-256 of its bytes, hex (`sha256sum FILE` prints the same).
+    pub sha256: String,
+    /// Its size, bytes.
+    pub bytes: u64,
 }
 
 /// What contact did at one level (results.json `contact`).

@@ -104,7 +104,7 @@ fn cli_writes_the_contact_record() {
     let path = dir.join("scene.toml");
     std::fs::write(&path, text).unwrap();
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_nonlin3d"))
-        .args(["run", "--quiet", "--out"])
+        .args(["run", "--out"])
         .arg(dir.join("out"))
         .arg(&path)
         .output()

@@ -31,7 +31,7 @@ fn run_writes_every_output() {
     std::fs::write(&scene, coarse_text()).unwrap();
     let out = dir.join("out");
     let status = Command::new(env!("CARGO_BIN_EXE_nonlin3d"))
-        .args(["run", "--quiet", "--out"])
+        .args(["run", "--out"])
         .arg(&out)
         .arg(&scene)
         .output()

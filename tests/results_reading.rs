@@ -35,7 +35,7 @@ fn overlapped_points_are_reported_as_not_physical_everywhere() {
     std::fs::write(&scene, overlapping_scene()).unwrap();
     let out = dir.join("out");
     let run = Command::new(env!("CARGO_BIN_EXE_nonlin3d"))
-        .args(["run", "--quiet", "--out"])
+        .args(["run", "--out"])
         .arg(&out)
         .arg(&scene)
         .output()
@@ -145,7 +145,7 @@ fn a_geometry_error_names_the_scene_fields_in_mm() {
     let scene = dir.join("scene.toml");
     std::fs::write(&scene, text).unwrap();
     let run = Command::new(env!("CARGO_BIN_EXE_nonlin3d"))
-        .args(["run", "--quiet", "--out"])
+        .args(["run", "--out"])
         .arg(dir.join("out"))
         .arg(&scene)
         .output()
@@ -174,7 +174,7 @@ fn unstable_levels_are_flagged_everywhere() {
     std::fs::write(&scene, text).unwrap();
     let out = dir.join("out");
     let run = Command::new(env!("CARGO_BIN_EXE_nonlin3d"))
-        .args(["run", "--quiet", "--out"])
+        .args(["run", "--out"])
         .arg(&out)
         .arg(&scene)
         .output()

@@ -2,7 +2,8 @@
 //! `nonlin3d run`'s (`crate::output::RunOutput`; docs/RELIABILITY.md, "Decks"):
 //!
 //! - the folder is made and tested before anything is solved, and the files an earlier solve
-//!   left there (only the names this program writes) are removed;
+//!   listed in its `manifest.json` are removed (`crate::output::Manifest`); `status.sta` and
+//!   `convergence.cvg` grow a line per attempt and per Newton iteration;
 //! - after every converged increment, the output tables that received rows and `summary.json`
 //!   (every step so far, the one in progress with `"complete": false`) are rewritten;
 //! - `step-K/displacements.csv` is written only when step K reaches the end of its period, so
@@ -21,7 +22,9 @@ use super::check::{Prepared, prepare};
 use super::{Progress, StepOptions, StepResult};
 use crate::Error;
 use crate::fields::{Units, state_vtu};
-use crate::output::{InterruptHandle, write_atomic};
+use crate::log::{CONVERGENCE_FILE, STATUS_FILE, StatusFiles};
+use crate::output::{InterruptHandle, Manifest, write_atomic};
+use crate::results::Provenance;
 use nonlin3d_assembly::StressRules;
 use nonlin3d_element::{IntegrationRule, Kinematics, Material};
 use nonlin3d_laminate::ShearCoupling;
@@ -49,11 +52,13 @@ fn ours_in_step(name: &str) -> bool {
 
 /// Names of the files a solve writes in its folder.
 fn ours(name: &str) -> bool {
-    matches!(name, "summary.json" | "displacements.csv" | "model.pvd")
-        || name
-            .strip_prefix("model_")
-            .and_then(|r| r.strip_suffix(".vtu"))
-            .is_some_and(|k| !k.is_empty() && k.bytes().all(|b| b.is_ascii_digit()))
+    matches!(
+        name,
+        "summary.json" | "displacements.csv" | "model.pvd" | STATUS_FILE | CONVERGENCE_FILE
+    ) || name
+        .strip_prefix("model_")
+        .and_then(|r| r.strip_suffix(".vtu"))
+        .is_some_and(|k| !k.is_empty() && k.bytes().all(|b| b.is_ascii_digit()))
         || (name.starts_with('.') && name.ends_with(".partial"))
 }
 
@@ -63,31 +68,17 @@ fn step_folder(name: &str) -> bool {
         .is_some_and(|k| !k.is_empty() && k.bytes().all(|b| b.is_ascii_digit()))
 }
 
-/// Removes the files of an earlier solve in `dir` (only our names; a `step-K` folder only if
-/// nothing else is left in it).
-fn remove_stale(dir: &Path) -> Result<(), Error> {
-    for entry in std::fs::read_dir(dir).map_err(io(dir))?.flatten() {
-        let name = entry.file_name().to_string_lossy().into_owned();
-        let path = entry.path();
-        let Ok(kind) = entry.file_type() else {
-            continue;
-        };
-        if kind.is_file() && ours(&name) {
-            std::fs::remove_file(&path).map_err(io(&path))?;
-        } else if kind.is_dir() && step_folder(&name) {
-            for inner in std::fs::read_dir(&path).map_err(io(&path))?.flatten() {
-                let p = inner.path();
-                if inner.file_type().is_ok_and(|t| t.is_file())
-                    && ours_in_step(&inner.file_name().to_string_lossy())
-                {
-                    std::fs::remove_file(&p).map_err(io(&p))?;
-                }
-            }
-            // Kept if the user put something there.
-            let _ = std::fs::remove_dir(&path);
-        }
+/// A solve's files by path relative to its folder (for the [`Manifest`]).
+fn ours_relative(path: &Path) -> bool {
+    let parts: Vec<String> = path
+        .components()
+        .map(|c| c.as_os_str().to_string_lossy().into_owned())
+        .collect();
+    match parts.as_slice() {
+        [name] => ours(name),
+        [folder, name] => step_folder(folder) && ours_in_step(name),
+        _ => false,
     }
-    Ok(())
 }
 
 /// `node,ux,uy,uz` by deck node id.
@@ -146,6 +137,12 @@ pub struct DeckOutput<'a> {
     /// last VTU written.
     vtu_steps: Vec<(f64, String)>,
     vtu_last: Option<(usize, usize)>,
+    manifest: Manifest,
+    status: StatusFiles,
+    provenance: Option<Provenance>,
+    /// When the folder was made, and the seconds spent writing since.
+    started: std::time::Instant,
+    output_s: f64,
 }
 
 impl<'a> DeckOutput<'a> {
@@ -153,17 +150,14 @@ impl<'a> DeckOutput<'a> {
     /// removes the files of an earlier solve there and writes a `summary.json` with no steps
     /// and `"complete": false`.
     pub fn create(dir: &Path, model: &'a InpModel) -> Result<Self, Error> {
-        std::fs::create_dir_all(dir).map_err(io(dir))?;
-        let probe = dir.join(".nonlin3d-write-test.partial");
-        std::fs::write(&probe, b"").map_err(io(&probe))?;
-        std::fs::remove_file(&probe).map_err(io(&probe))?;
-        remove_stale(dir)?;
+        let manifest = Manifest::prepare(dir, ours_relative)?;
+        let status = StatusFiles::create(dir, "step")?;
         let Prepared {
             mesh,
             materials,
             rule,
         } = prepare(model, &StepOptions::default())?;
-        let out = Self {
+        let mut out = Self {
             dir: dir.to_path_buf(),
             model,
             steps: Vec::new(),
@@ -177,6 +171,11 @@ impl<'a> DeckOutput<'a> {
             rule,
             vtu_steps: Vec::new(),
             vtu_last: None,
+            manifest,
+            status,
+            provenance: None,
+            started: std::time::Instant::now(),
+            output_s: 0.0,
         };
         out.publish(|| Ok(()))?;
         Ok(out)
@@ -185,6 +184,18 @@ impl<'a> DeckOutput<'a> {
     /// The folder.
     pub fn dir(&self) -> &Path {
         &self.dir
+    }
+
+    /// The folder's `status.sta` and `convergence.cvg` ([`crate::log`]).
+    pub fn status_files(&self) -> StatusFiles {
+        self.status.clone()
+    }
+
+    /// Records where the solve came from: in every `summary.json` from now on, with the
+    /// stage times (`solve`, `output`, `total`) and the peak memory brought up to date.
+    pub fn set_provenance(&mut self, provenance: Provenance) -> Result<(), Error> {
+        self.provenance = Some(provenance);
+        self.publish(|| Ok(()))
     }
 
     /// A handle for a signal handler: `stop` writes `summary.json` as it stands with
@@ -313,7 +324,14 @@ impl<'a> DeckOutput<'a> {
 
     /// Runs `write`, then writes `summary.json` as it stands and prepares its interrupted form
     /// (none once complete), under the signal handler's lock.
-    fn publish(&self, write: impl FnOnce() -> Result<(), Error>) -> Result<(), Error> {
+    fn publish(&mut self, write: impl FnOnce() -> Result<(), Error>) -> Result<(), Error> {
+        let t = std::time::Instant::now();
+        if let Some(p) = &mut self.provenance {
+            let total = self.started.elapsed().as_secs_f64();
+            p.stage("output", self.output_s);
+            p.stage("solve", total - self.output_s);
+            p.finish(total);
+        }
         let not_used: Vec<serde_json::Value> = self
             .model
             .not_used
@@ -326,6 +344,9 @@ impl<'a> DeckOutput<'a> {
             "steps": self.steps,
             "not_used": not_used,
         });
+        if let Some(p) = &self.provenance {
+            value["provenance"] = serde_json::to_value(p)?;
+        }
         let now = serde_json::to_string_pretty(&value)?;
         let stopped = if self.complete {
             None
@@ -335,7 +356,10 @@ impl<'a> DeckOutput<'a> {
             }
             Some(serde_json::to_string_pretty(&value)?)
         };
-        self.handle.publish(write, &now, stopped)
+        self.handle.publish(write, &now, stopped)?;
+        self.manifest.write()?;
+        self.output_s += t.elapsed().as_secs_f64();
+        Ok(())
     }
 }
 

@@ -152,6 +152,8 @@ pub fn solve_deck_with(
     let mut assemblers: BTreeMap<bool, Assembler> = BTreeMap::new();
     let mut start = 0.0;
     for (k, step) in model.steps.iter().enumerate() {
+        // Newton's `attempt` spans and events (crate::log) nest in it.
+        let _step = tracing::debug_span!("step", step = k + 1).entered();
         let kinematics = if step.nlgeom {
             Kinematics::Nonlinear
         } else {

@@ -15,11 +15,18 @@
 //! | [`ArcLength`], [`follow_arc_length`] | arc-length path following through limit points (Crisfield 1981/1983): cylindrical or spherical constraint, predictor sign from the inertia, arc length adapted to the iterations |
 //! | [`solve_level_arc`] | one level of a sweep by arc length, landed on the level by Newton, with the stability test and perturbation protocol |
 //! | [`Bifurcation`] | a rise of the negative-pivot count the inertia guard accepted as real ([`Stepping::inertia_guard`]) |
+//! | [`TRACE_TARGET`] | the `tracing` target of the per-iteration and per-attempt events (the door for progress bars and logs; nothing is printed) |
 #![deny(missing_docs)]
 #![cfg_attr(
     not(test),
     warn(clippy::unwrap_used, clippy::expect_used, clippy::panic)
 )]
+
+/// The `tracing` target of Newton's events: an `iteration` event per iteration and an `attempt`
+/// event per attempt, inside a span `attempt` (fields in the doc of
+/// [`solve_increment_with`]). A subscriber turns them into a progress bar, a log or a
+/// convergence file; without one they cost a check per event.
+pub const TRACE_TARGET: &str = "nonlin3d_newton";
 
 mod arclength;
 mod cache;

@@ -220,6 +220,12 @@ pub fn follow_path_with(
                     // Its factorisation belongs to the refused state: not the retry's tangent.
                     session.invalidate();
                     converged = false;
+                    tracing::debug!(
+                        target: crate::TRACE_TARGET,
+                        event = "refused",
+                        lambda = to,
+                        termination = %attempt.termination,
+                    );
                 }
             }
             let reason = attempt.termination.to_string();

@@ -242,6 +242,14 @@ pub fn solve_increment(
 /// increment too, until an iteration converges too slowly (`refactor_ratio`) or `refactor_every`
 /// iterations have used it. Each iteration: direction d = −K⁻¹r (or −Hr with BFGS pairs),
 /// backtracking line search on ‖r‖∞, then the convergence test.
+///
+/// Each attempt runs in a `tracing` span `attempt` (field `lambda`) and reports through
+/// `tracing` events (target [`TRACE_TARGET`](crate::TRACE_TARGET), nothing is printed): one `iteration`
+/// event per iteration (fields `lambda`, `iteration`, `residual` ‖r‖∞ in N, `correction`
+/// ‖αΔu‖∞, `step` α, `negative_pivots`, −1 when no factorisation was made, `tolerance`) and
+/// one `attempt` event at its end (`lambda`, `iterations`, `converged`, `termination`);
+/// path following adds a `refused` event (`lambda`, `termination`) for an attempt the inertia
+/// guard refuses.
 pub fn solve_increment_with(
     problem: &mut dyn NonlinearProblem,
     u: &mut [f64],
@@ -261,6 +269,33 @@ pub fn solve_increment_with(
 /// need). Each iteration: the tangent factorised when due ([`refactor`]), the direction, the
 /// line search ([`line_search`]), the BFGS pair, the convergence tests.
 pub(crate) fn iterate(
+    problem: &mut dyn NonlinearProblem,
+    u: &mut [f64],
+    lambda: f64,
+    settings: &NewtonSettings,
+    tangent: (
+        &mut dyn LinearSolver,
+        &mut SymmetricMatrix,
+        &mut TangentCache,
+    ),
+    iterate_once: bool,
+) -> Result<IncrementReport, NewtonError> {
+    let span = tracing::debug_span!(target: crate::TRACE_TARGET, "attempt", lambda);
+    let _entered = span.enter();
+    let report = iterations(problem, u, lambda, settings, tangent, iterate_once)?;
+    tracing::debug!(
+        target: crate::TRACE_TARGET,
+        event = "attempt",
+        lambda,
+        iterations = report.iterations.len(),
+        converged = report.converged(),
+        termination = %report.termination,
+    );
+    Ok(report)
+}
+
+/// The iterations of [`iterate`].
+fn iterations(
     problem: &mut dyn NonlinearProblem,
     u: &mut [f64],
     lambda: f64,
@@ -357,6 +392,17 @@ pub(crate) fn iterate(
             negative_pivots: pivots,
             bfgs_pairs,
         });
+        tracing::debug!(
+            target: crate::TRACE_TARGET,
+            event = "iteration",
+            lambda,
+            iteration = report.iterations.len(),
+            residual = norm,
+            correction = alpha * norm_inf(&du),
+            step = alpha,
+            negative_pivots = pivots.map_or(-1, |p| p as i64),
+            tolerance,
+        );
         if !norm.is_finite() || u.iter().any(|x| !x.is_finite()) {
             cache.invalidate();
             report.termination = Termination::NonFinite;
