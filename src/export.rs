@@ -9,7 +9,8 @@ use crate::model::{
 use crate::problem::load_factors;
 use crate::scene::Scene;
 use nonlin3d_mesh::inp::{
-    InpBoundary, InpCload, InpDeck, InpElastic, InpMaterial, InpStep, inp_string,
+    InpBoundary, InpCload, InpDeck, InpElastic, InpMaterial, InpStep, Penalty, add_crack_surfaces,
+    contact_cards, inp_string,
 };
 
 /// A support as a `*BOUNDARY` line at load factor `f` of the largest strain `reference`: the
@@ -39,6 +40,12 @@ fn boundary(support: &Support, f: f64, reference: f64) -> InpBoundary {
 /// with an odd number of elements across). A plate gets one step per load.
 /// Hex20 cells become C3D20R under the 2×2×2 rule (CalculiX's reduced rule is the same
 /// 2×2×2 Gauss rule) and C3D20 under 3×3×3.
+///
+/// With the scene's crack-face contact `auto` or `on` (thesis §2.7) and a mesh with crack
+/// faces, the deck also holds the faces as element surfaces and a frictionless node-to-surface
+/// `*CONTACT PAIR` (upper face's nodes against the lower face, [`contact_penalty`]), which
+/// CalculiX applies from the first step on (its contact acts wherever the faces meet, as
+/// `auto` does).
 pub fn deck(scene: &Scene) -> Result<String, Error> {
     let model = build_model(scene)?;
     deck_of(scene, &model)
@@ -122,16 +129,55 @@ pub fn deck_of(scene: &Scene, model: &Model) -> Result<String, Error> {
             }
         }
     }
-    let text = inp_string(&InpDeck {
+    let contact = scene.contact.enabled() && add_crack_surfaces(&mut mesh)?;
+    let mut text = inp_string(&InpDeck {
         heading: scene.title.clone(),
         mesh: &mesh,
         materials: &materials,
         steps,
     })?;
+    if contact {
+        let cards = contact_cards(&mesh, contact_penalty(model))?;
+        let at = text.find("*STEP").unwrap_or(text.len());
+        text.insert_str(at, &cards);
+    }
     Ok(match scene.analysis.integration {
         crate::scene::RuleName::Gauss2 => text.replace("TYPE=C3D20,", "TYPE=C3D20R,"),
         _ => text,
     })
+}
+
+/// CalculiX's penalty for the hard crack-face contact: K = 100·C₃₃/t (Pa/m), with C₃₃ the
+/// largest through-thickness stiffness of the materials and t the thinnest cell above the
+/// crack (the z extent of the cells holding an upper-face node), so that a contact pressure p
+/// closes the faces by p/K, 1 % of what it compresses that cell (p·t/C₃₃); σ∞ = 1e-6·C₃₃ (Pa),
+/// the small tension CalculiX's node-to-surface law keeps at large clearances.
+pub fn contact_penalty(model: &Model) -> Penalty {
+    let c33 = model
+        .materials
+        .iter()
+        .map(|s| s.c()[2][2])
+        .fold(0.0, f64::max);
+    let mesh = &model.mesh;
+    let upper: std::collections::HashSet<usize> = mesh
+        .node_sets
+        .get(nonlin3d_mesh::names::CRACK_UPPER)
+        .map(|s| s.iter().copied().collect())
+        .unwrap_or_default();
+    let t = mesh
+        .cells
+        .iter()
+        .filter(|c| c.nodes.iter().any(|v| upper.contains(v)))
+        .map(|c| {
+            let z = c.nodes.iter().map(|&v| mesh.nodes[v][2]);
+            z.clone().fold(f64::MIN, f64::max) - z.fold(f64::MAX, f64::min)
+        })
+        .fold(f64::INFINITY, f64::min);
+    let t = if t.is_finite() && t > 0.0 { t } else { model.h };
+    Penalty {
+        stiffness: 100.0 * c33 / t,
+        tension: 1e-6 * c33,
+    }
 }
 
 #[cfg(test)]

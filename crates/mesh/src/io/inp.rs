@@ -10,6 +10,13 @@
 
 use crate::{Mesh, MeshError};
 use nonlin3d_element::ElementKind;
+
+#[path = "inp_contact.rs"]
+mod contact;
+pub use contact::{
+    INTERACTION, LOWER_FACES, Penalty, UPPER_FACES, UPPER_NODES, add_crack_surfaces, contact_cards,
+    face_nodes, face_surface,
+};
 use nonlin3d_laminate::{Orthotropic, Stiffness};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
