@@ -12,12 +12,14 @@
 //! Venant–Kirchhoff), other steps the linear kernels (one Newton iteration solves them).
 
 mod check;
+mod contact;
 mod drive;
 mod files;
 mod loads;
 mod output;
 
 pub use check::check;
+pub use contact::IncrementContact;
 pub use files::DeckOutput;
 pub use output::{OutputTable, write_results};
 
@@ -60,6 +62,9 @@ pub struct IncrementSummary {
     pub termination: String,
     /// Negative pivots of the last factorisation.
     pub negative_pivots: Option<usize>,
+    /// The contact state at the end of a converged increment (decks with `*CONTACT PAIR`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub contact: Option<IncrementContact>,
 }
 
 impl IncrementSummary {
@@ -75,6 +80,7 @@ impl IncrementSummary {
             converged: a.converged(),
             termination: a.termination.to_string(),
             negative_pivots: a.negative_pivots(),
+            contact: None,
         }
     }
 }
@@ -102,6 +108,9 @@ pub struct StepResult {
     /// The step's output requests, filled at the increments they were due.
     #[serde(skip)]
     pub outputs: Vec<OutputTable>,
+    /// The slave nodes (mesh indices) of the contact pairs closed at the end of the step.
+    #[serde(skip)]
+    pub contact_closed: Vec<usize>,
 }
 
 /// What [`solve_deck_with`] reports as it goes.
@@ -137,6 +146,7 @@ pub fn solve_deck_with(
         rule,
     } = check::prepare(model, options)?;
     let n = 3 * mesh.nodes.len();
+    let mut contact = contact::DeckContact::new(model, &mesh)?;
     let mut u = vec![0.0; n];
     let mut history = loads::History::new(model);
     let mut results = Vec::new();
@@ -172,7 +182,10 @@ pub fn solve_deck_with(
             start,
         };
         history.begin_step(model, step, &u)?;
-        let mut problem = StructuralProblem::new(assembler, Constraints::new(n))?;
+        let mut problem = match &contact {
+            Some(c) => c.problem(assembler, n)?,
+            None => StructuralProblem::new(assembler, Constraints::new(n))?,
+        };
         let rules = StressRules {
             materials: &materials,
             coupling: ShearCoupling::Exact,
@@ -189,6 +202,7 @@ pub fn solve_deck_with(
             complete: false,
             displacements: Vec::new(),
             outputs: output::tables(model, step),
+            contact_closed: Vec::new(),
         };
         let mut attempts = Vec::new();
         let run = drive::run_step(
@@ -199,6 +213,7 @@ pub fn solve_deck_with(
             &mut problem,
             &mut u,
             options,
+            contact.as_mut(),
             &mut attempts,
             &mut |c| {
                 let (u, tried) = (c.u, c.attempts);
@@ -218,6 +233,7 @@ pub fn solve_deck_with(
         history.end_step(model, frame);
         current.complete = true;
         current.displacements = nodal(&u);
+        current.contact_closed = contact.as_ref().map(|c| c.closed()).unwrap_or_default();
         observer(Progress::Step(&current))?;
         results.push(current);
         assemblers.insert(step.nlgeom, problem.into_parts()?.0);
