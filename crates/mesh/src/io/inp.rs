@@ -14,8 +14,8 @@ use nonlin3d_element::ElementKind;
 #[path = "inp_contact.rs"]
 mod contact;
 pub use contact::{
-    INTERACTION, LOWER_FACES, Penalty, UPPER_FACES, UPPER_NODES, add_crack_surfaces, contact_cards,
-    face_nodes, face_surface,
+    INTERACTION, LOWER_FACES, Penalty, UPPER_FACES, add_crack_surfaces, contact_cards, face_nodes,
+    face_surface,
 };
 use nonlin3d_laminate::{Orthotropic, Stiffness};
 use std::collections::BTreeMap;

@@ -3,9 +3,13 @@
 //! `*SURFACE BEHAVIOR` and `*CONTACT PAIR` cards that make CalculiX hold them apart (thesis
 //! §2.7: frictionless contact of the node pairs of the two faces).
 //!
-//! The pair is node-to-surface: the slave is the upper face's node set as a node surface, the
-//! master the lower face's element faces (their nodes coincide with the slave nodes, so every
-//! slave node sits on a master node: the node-to-node pairs `nonlin3d solve` reads back).
+//! The pair is node-to-surface: the slave is the upper face's element faces, the master the
+//! lower face's (their nodes coincide, so every slave node sits on a master node: the
+//! node-to-node pairs `nonlin3d solve` reads back; the front's nodes, on both, are bonded).
+//! A slave given as a node surface (`TYPE=NODE` over `crack_upper`) was tried and dropped:
+//! CalculiX then let two pairs on the symmetry plane y = 0 of the 30 mm circle sink by 2.5 µm
+//! and closed three more pairs than the exact solution (docs/VALIDATION.md); with the face
+//! surface its closed set is nonlin3d's.
 //! `PRESSURE-OVERCLOSURE=HARD`: CalculiX 2.20 reduces it to its linear penalty
 //! (`surfacebehaviors.f`), whose stiffness K (Pa/m), tension at large clearance σ∞ (Pa) and
 //! c₀ it reads from the data line when one follows; without one it takes K = 50 × the first
@@ -21,8 +25,6 @@ use std::fmt::Write as _;
 pub const UPPER_FACES: &str = "crack_upper_faces";
 /// Name of the element-face surface of the lower crack face (the base's top): the master.
 pub const LOWER_FACES: &str = "crack_lower_faces";
-/// Name of the node surface of the upper crack face: the slave.
-pub const UPPER_NODES: &str = "crack_upper_nodes";
 /// Name of the surface interaction.
 pub const INTERACTION: &str = "crack_faces";
 
@@ -130,17 +132,15 @@ pub fn face_nodes(mesh: &Mesh, c: usize, f: u8) -> Vec<usize> {
         .collect()
 }
 
-/// The contact cards (model data, before the first `*STEP`): the slave node surface over the
-/// node set `crack_upper`, the interaction with its hard behaviour (and CalculiX's penalty as
-/// its data line), and the node-to-surface pair slave → [`LOWER_FACES`]. The mesh must hold
-/// `crack_upper` and the face set [`LOWER_FACES`] ([`add_crack_surfaces`]).
+/// The contact cards (model data, before the first `*STEP`): the interaction with its hard
+/// behaviour (and CalculiX's penalty as its data line), and the node-to-surface pair
+/// [`UPPER_FACES`] (slave) → [`LOWER_FACES`] (master). The mesh must hold both face sets
+/// ([`add_crack_surfaces`]).
 pub fn contact_cards(mesh: &Mesh, penalty: Penalty) -> Result<String, MeshError> {
-    if !mesh.node_sets.contains_key(CRACK_UPPER) || !mesh.face_sets.contains_key(LOWER_FACES) {
+    if !mesh.face_sets.contains_key(UPPER_FACES) || !mesh.face_sets.contains_key(LOWER_FACES) {
         return Err(MeshError::Parameter {
             name: "crack-face contact",
-            reason: format!(
-                "the mesh needs the node set {CRACK_UPPER} and the face set {LOWER_FACES}"
-            ),
+            reason: format!("the mesh needs the face sets {UPPER_FACES} and {LOWER_FACES}"),
         });
     }
     let positive = |v: f64| v > 0.0 && v.is_finite();
@@ -156,14 +156,13 @@ pub fn contact_cards(mesh: &Mesh, penalty: Penalty) -> Result<String, MeshError>
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "** Crack-face contact (frictionless): the upper face's nodes against the lower face.\n\
+        "** Crack-face contact (frictionless): the upper face against the lower face.\n\
          ** HARD: CalculiX 2.20 reads it as its linear penalty K (Pa/m), sigma_inf (Pa) from the\n\
          ** data line; nonlin3d solve holds the node pairs exactly and lists the line as not used.\n\
-         *SURFACE, NAME={UPPER_NODES}, TYPE=NODE\n{CRACK_UPPER}\n\
          *SURFACE INTERACTION, NAME={INTERACTION}\n\
          *SURFACE BEHAVIOR, PRESSURE-OVERCLOSURE=HARD\n{:.6e}, {:.6e}\n\
          *CONTACT PAIR, INTERACTION={INTERACTION}, TYPE=NODE TO SURFACE\n\
-         {UPPER_NODES}, {LOWER_FACES}",
+         {UPPER_FACES}, {LOWER_FACES}",
         penalty.stiffness, penalty.tension
     );
     Ok(s)
@@ -219,7 +218,7 @@ mod tests {
             },
         )
         .unwrap();
-        assert!(text.contains("*CONTACT PAIR, INTERACTION=crack_faces, TYPE=NODE TO SURFACE\ncrack_upper_nodes, crack_lower_faces"));
+        assert!(text.contains("*CONTACT PAIR, INTERACTION=crack_faces, TYPE=NODE TO SURFACE\ncrack_upper_faces, crack_lower_faces"));
         assert!(text.contains("PRESSURE-OVERCLOSURE=HARD\n1.000000e15, 1.000000e0"));
         // No crack sets: nothing to add.
         let mut plain = stacked();
