@@ -197,3 +197,64 @@ fn calculix_with_contact_agrees_with_nonlin3d_on_deflection_and_contact_extent()
     }
     assert!(ours.levels.last().unwrap().contact.unwrap().pairs_closed > 0);
 }
+
+/// The line (1-based) of the first line of `text` that starts with `prefix`.
+fn line_of(text: &str, prefix: &str) -> usize {
+    text.lines().position(|l| l.starts_with(prefix)).unwrap() + 1
+}
+
+/// `nonlin3d solve` on `deck` (written to a scratch file): its exit status and stderr.
+fn solve_cli(name: &str, deck: &str) -> (Option<i32>, String) {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("contact-{name}"));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join(format!("{name}.inp"));
+    std::fs::write(&path, deck).unwrap();
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_nonlin3d"))
+        .arg("solve")
+        .arg(&path)
+        .arg("--out")
+        .arg(dir.join("out"))
+        .output()
+        .unwrap();
+    (
+        o.status.code(),
+        String::from_utf8_lossy(&o.stderr).into_owned(),
+    )
+}
+
+/// What nonlin3d cannot hold exactly is refused by line through `nonlin3d solve` (exit 2, bad
+/// input), on the exported deck changed in one place: friction (μ = 0.3) after the surface
+/// behaviour, and one upper-face node moved up by 1 µm (the faces no longer match: its pair
+/// has no master node at its position).
+#[test]
+fn solve_refuses_friction_and_non_matching_faces_by_line() {
+    let s = scene();
+    let text = nonlin3d::export::deck(&s).unwrap();
+    // Friction: inserted after the behaviour's data line.
+    let behaviour = line_of(&text, "*SURFACE BEHAVIOR");
+    let mut lines: Vec<&str> = text.lines().collect();
+    lines.insert(behaviour + 1, "*FRICTION\n0.3");
+    let (code, err) = solve_cli("friction", &(lines.join("\n") + "\n"));
+    assert_eq!(code, Some(2), "{err}");
+    assert!(
+        err.contains(&format!("line {}, *FRICTION", behaviour + 2)) && err.contains("frictionless"),
+        "{err}"
+    );
+    // Non-matching: the first upper-face node 1 µm higher.
+    let model = nonlin3d::model::build_model(&s).unwrap();
+    let id = model.mesh.node_sets["crack_upper"][0] + 1;
+    let at = line_of(&text, &format!("{id}, "));
+    let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
+    let x = model.mesh.nodes[id - 1];
+    lines[at - 1] = format!("{id}, {:?}, {:?}, {:?}", x[0], x[1], x[2] + 1e-6);
+    let (code, err) = solve_cli("moved", &(lines.join("\n") + "\n"));
+    let pair = line_of(&text, "*CONTACT PAIR") + 1;
+    assert_eq!(code, Some(2), "{err}");
+    assert!(
+        err.contains(&format!("line {pair}, *CONTACT PAIR data"))
+            && err.contains(&format!("slave node {id} "))
+            && err.contains("matching faces"),
+        "{err}"
+    );
+}

@@ -376,8 +376,8 @@ impl Reader {
                     "*CONTACT PAIR data",
                     format!(
                         "slave node {} at ({:e}, {:e}, {:e}) has no master node at its position \
-                         (within {tol:.1e}): nonlin3d reads node-to-node contact on matching \
-                         faces only",
+                         (within {tol:.1e} in the deck's length unit): nonlin3d reads node-to-node \
+                         contact on matching faces only",
                         id(s),
                         p[0],
                         p[1],
