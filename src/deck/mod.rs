@@ -2,7 +2,8 @@
 //! linear or NLGEOM static steps, as the `nonlin3d solve` command does, with CalculiX's step
 //! semantics (module `loads`), time incrementation (module `drive`) and output requests
 //! (module `output`), after the checks a scene gets (module `check`: a step, positive element
-//! Jacobians, …). [`solve_deck_with`] reports each converged increment; [`DeckOutput`] writes
+//! Jacobians, …) and, with `*CONTACT PAIR`s, the contact active set at every increment (module
+//! `contact`, thesis §2.7). [`solve_deck_with`] reports each converged increment; [`DeckOutput`] writes
 //! the command's files from those reports as the solve goes (module `files`).
 //!
 //! C3D20 cells are integrated with 3×3×3 points, C3D20R and C3D8 with 2×2×2 (a deck mixing
