@@ -7,9 +7,10 @@ use crate::model::{
     Model, Nodes, Support, Value, build_model, perturbation_force, perturbation_loads,
 };
 use crate::problem::load_factors;
-use crate::scene::Scene;
+use crate::scene::{CrackFacesName, Scene};
 use nonlin3d_mesh::inp::{
-    InpBoundary, InpCload, InpDeck, InpElastic, InpMaterial, InpStep, inp_string,
+    InpBoundary, InpCload, InpDeck, InpElastic, InpMaterial, InpStep, Penalty, add_crack_surfaces,
+    contact_cards, inp_string,
 };
 
 /// A support as a `*BOUNDARY` line at load factor `f` of the largest strain `reference`: the
@@ -39,6 +40,15 @@ fn boundary(support: &Support, f: f64, reference: f64) -> InpBoundary {
 /// with an odd number of elements across). A plate gets one step per load.
 /// Hex20 cells become C3D20R under the 2×2×2 rule (CalculiX's reduced rule is the same
 /// 2×2×2 Gauss rule) and C3D20 under 3×3×3.
+///
+/// With the scene's crack-face contact `on` (thesis §2.7) and a mesh with crack faces, the
+/// deck also holds the faces as element surfaces and a frictionless node-to-surface
+/// `*CONTACT PAIR` (the upper face's element faces against the lower face's,
+/// [`contact_penalty`]), which CalculiX applies in every step. With `auto` (the default) no
+/// contact is written: CalculiX's penalty contact acts from the first increment, where
+/// `auto` acts only once the faces overlap, and it does not converge on the through-width
+/// strip (`fig_3_2_3_through_width.toml`: too many cutbacks at ε = −0.00046 of the first
+/// step, with K from 1e14 to 7e15 Pa/m and with `SMALL SLIDING`), which runs without it.
 pub fn deck(scene: &Scene) -> Result<String, Error> {
     let model = build_model(scene)?;
     deck_of(scene, &model)
@@ -122,16 +132,55 @@ pub fn deck_of(scene: &Scene, model: &Model) -> Result<String, Error> {
             }
         }
     }
-    let text = inp_string(&InpDeck {
+    let contact = scene.contact.crack_faces == CrackFacesName::On && add_crack_surfaces(&mut mesh)?;
+    let mut text = inp_string(&InpDeck {
         heading: scene.title.clone(),
         mesh: &mesh,
         materials: &materials,
         steps,
     })?;
+    if contact {
+        let cards = contact_cards(&mesh, contact_penalty(model))?;
+        let at = text.find("*STEP").unwrap_or(text.len());
+        text.insert_str(at, &cards);
+    }
     Ok(match scene.analysis.integration {
         crate::scene::RuleName::Gauss2 => text.replace("TYPE=C3D20,", "TYPE=C3D20R,"),
         _ => text,
     })
+}
+
+/// CalculiX's penalty for the hard crack-face contact: K = 100·C₃₃/t (Pa/m), with C₃₃ the
+/// largest through-thickness stiffness of the materials and t the thinnest cell above the
+/// crack (the z extent of the cells holding an upper-face node), so that a contact pressure p
+/// closes the faces by p/K, 1 % of what it compresses that cell (p·t/C₃₃); σ∞ = 1e-6·C₃₃ (Pa),
+/// the small tension CalculiX's node-to-surface law keeps at large clearances.
+pub fn contact_penalty(model: &Model) -> Penalty {
+    let c33 = model
+        .materials
+        .iter()
+        .map(|s| s.c()[2][2])
+        .fold(0.0, f64::max);
+    let mesh = &model.mesh;
+    let upper: std::collections::HashSet<usize> = mesh
+        .node_sets
+        .get(nonlin3d_mesh::names::CRACK_UPPER)
+        .map(|s| s.iter().copied().collect())
+        .unwrap_or_default();
+    let t = mesh
+        .cells
+        .iter()
+        .filter(|c| c.nodes.iter().any(|v| upper.contains(v)))
+        .map(|c| {
+            let z = c.nodes.iter().map(|&v| mesh.nodes[v][2]);
+            z.clone().fold(f64::MIN, f64::max) - z.fold(f64::MAX, f64::min)
+        })
+        .fold(f64::INFINITY, f64::min);
+    let t = if t.is_finite() && t > 0.0 { t } else { model.h };
+    Penalty {
+        stiffness: 100.0 * c33 / t,
+        tension: 1e-6 * c33,
+    }
 }
 
 #[cfg(test)]
@@ -235,5 +284,42 @@ mod tests {
     #[test]
     fn plate_deck_matches_constraints() {
         deck_matches_constraints(include_str!("../examples/scenes/fig_4_1_1_plate.toml"));
+    }
+
+    /// Contact `on`: the deck's `*CONTACT PAIR`, read back, pairs every upper crack-face node
+    /// with its partner of the mesh's paired sets, and nothing else (the front's nodes, on both
+    /// faces, are left out); `auto` and `off` write no contact.
+    #[test]
+    fn contact_on_writes_the_crack_face_pairs() {
+        let text = include_str!("../examples/scenes/fig_5_1_3_circle_30mm_contact.toml")
+            .replace("slices = 8", "slices = 4");
+        let scene = Scene::from_toml(&text).unwrap();
+        let model = build_model(&scene).unwrap();
+        let deck = read_inp(&deck_of(&scene, &model).unwrap()).unwrap();
+        assert_eq!(deck.contact.len(), 1);
+        let read: std::collections::BTreeSet<(usize, usize)> = deck.contact[0]
+            .slave
+            .iter()
+            .copied()
+            .zip(deck.contact[0].master.iter().copied())
+            .collect();
+        let sets = &model.mesh.node_sets;
+        let expected: std::collections::BTreeSet<(usize, usize)> = sets["crack_upper"]
+            .iter()
+            .copied()
+            .zip(sets["crack_lower"].iter().copied())
+            .collect();
+        assert!(!expected.is_empty());
+        assert_eq!(read, expected);
+        for faces in ["auto", "off"] {
+            let other = text.replace(
+                "crack_faces = \"on\"",
+                &format!("crack_faces = \"{faces}\""),
+            );
+            assert_ne!(other, text);
+            let scene = Scene::from_toml(&other).unwrap();
+            let written = deck_of(&scene, &model).unwrap();
+            assert!(!written.contains("*CONTACT PAIR"), "{faces}");
+        }
     }
 }

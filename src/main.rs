@@ -159,8 +159,20 @@ fn solve(
             Progress::Step(r) => {
                 let iterations: usize = r.increments.iter().map(|i| i.iterations).sum();
                 let done = r.increments.iter().filter(|i| i.converged).count();
+                let contact = r
+                    .increments
+                    .iter()
+                    .rev()
+                    .find_map(|i| i.contact.as_ref())
+                    .map(|c| {
+                        format!(
+                            "; contact: {} pairs closed, max force {:.4e}",
+                            c.pairs_closed, c.max_force
+                        )
+                    })
+                    .unwrap_or_default();
                 m.say(&format!(
-                    "step {}: {done} increments ({} attempts), {iterations} iterations{}",
+                    "step {}: {done} increments ({} attempts), {iterations} iterations{}{contact}",
                     r.step,
                     r.increments.len(),
                     if r.nlgeom { " (NLGEOM)" } else { "" }

@@ -12,6 +12,7 @@
 //! increment ends, so it is honoured however the increments fall (an elastic state does not
 //! depend on the path).
 
+use super::contact::{DeckContact, Settled};
 use super::loads::{Frame, History};
 use super::{IncrementSummary, StepOptions};
 use crate::Error;
@@ -81,6 +82,7 @@ pub(crate) fn run_step(
     problem: &mut StructuralProblem,
     u: &mut Vec<f64>,
     options: &StepOptions,
+    mut contact: Option<&mut DeckContact>,
     attempts: &mut Vec<IncrementSummary>,
     on_increment: &mut dyn FnMut(Converged<'_>) -> Result<(), Error>,
 ) -> Result<(), Error> {
@@ -116,19 +118,32 @@ pub(crate) fn run_step(
             dt
         };
         problem.set_constraints(history.constraints(model, frame, t, t + size)?)?;
+        if let Some(c) = contact.as_deref_mut() {
+            c.reinstall(problem, u, &mut session)?;
+        }
         let start = u.clone();
         let secant = previous
             .as_ref()
             .map(|(u_prev, d_prev)| (u_prev.as_slice(), size / d_prev));
         let report = predicted_increment(problem, u, 0.0, 1.0, secant, &settings, &mut session)?;
         let iterations = report.iterations.len();
-        let converged = report.converged();
-        attempts.push(IncrementSummary::of(
-            &report,
-            increment + 1,
-            t + size,
-            frame.start,
-        ));
+        let mut converged = report.converged();
+        let mut summary = IncrementSummary::of(&report, increment + 1, t + size, frame.start);
+        // Contact (thesis §2.7): the active-set passes at the converged state; a failure of
+        // theirs is a failed attempt, cut back as one.
+        let mut contact_failure = None;
+        if let (true, Some(c)) = (converged, contact.as_deref_mut()) {
+            match c.settle(problem, u, &start, &settings, &mut session)? {
+                Settled::Stable(s) => summary.contact = Some(s),
+                Settled::Failed(why) => {
+                    converged = false;
+                    summary.converged = false;
+                    summary.termination = why.clone();
+                    contact_failure = Some(why);
+                }
+            }
+        }
+        attempts.push(summary);
         if converged {
             increment += 1;
             if increment > step.max_increments {
@@ -160,9 +175,12 @@ pub(crate) fn run_step(
             dt = dt.max(p.min);
             easy_before = easy;
         } else {
-            let reason = match &report.termination {
-                Termination::MaxIterations => format!("no convergence in {iterations} iterations"),
-                other => other.to_string(),
+            let reason = match (&contact_failure, &report.termination) {
+                (Some(why), _) => why.clone(),
+                (None, Termination::MaxIterations) => {
+                    format!("no convergence in {iterations} iterations")
+                }
+                (None, other) => other.to_string(),
             };
             if p.direct || !step.nlgeom {
                 return Err(fail(format!(
@@ -180,6 +198,7 @@ pub(crate) fn run_step(
             cutbacks += 1;
             easy_before = false;
             let factor = match report.termination {
+                _ if contact_failure.is_some() => control.slow_cutback,
                 Termination::MaxIterations => control.slow_cutback,
                 _ => control.diverged_cutback,
             };

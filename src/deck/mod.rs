@@ -2,7 +2,8 @@
 //! linear or NLGEOM static steps, as the `nonlin3d solve` command does, with CalculiX's step
 //! semantics (module `loads`), time incrementation (module `drive`) and output requests
 //! (module `output`), after the checks a scene gets (module `check`: a step, positive element
-//! Jacobians, …). [`solve_deck_with`] reports each converged increment; [`DeckOutput`] writes
+//! Jacobians, …) and, with `*CONTACT PAIR`s, the contact active set at every increment (module
+//! `contact`, thesis §2.7). [`solve_deck_with`] reports each converged increment; [`DeckOutput`] writes
 //! the command's files from those reports as the solve goes (module `files`).
 //!
 //! C3D20 cells are integrated with 3×3×3 points, C3D20R and C3D8 with 2×2×2 (a deck mixing
@@ -12,6 +13,7 @@
 //! Venant–Kirchhoff), other steps the linear kernels (one Newton iteration solves them).
 
 mod check;
+mod contact;
 mod drive;
 mod files;
 mod loads;
@@ -19,6 +21,7 @@ mod output;
 mod riks;
 
 pub use check::check;
+pub use contact::IncrementContact;
 pub use files::DeckOutput;
 pub use output::{OutputTable, write_results};
 
@@ -67,6 +70,9 @@ pub struct IncrementSummary {
     /// `*STATIC, RIKS`: the increment's arc length (the step time advances by it).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub arc_length: Option<f64>,
+    /// The contact state at the end of a converged increment (decks with `*CONTACT PAIR`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub contact: Option<IncrementContact>,
 }
 
 impl IncrementSummary {
@@ -84,6 +90,7 @@ impl IncrementSummary {
             negative_pivots: a.negative_pivots(),
             lpf: None,
             arc_length: None,
+            contact: None,
         }
     }
 }
@@ -111,6 +118,9 @@ pub struct StepResult {
     /// The step's output requests, filled at the increments they were due.
     #[serde(skip)]
     pub outputs: Vec<OutputTable>,
+    /// The slave nodes (mesh indices) of the contact pairs closed at the end of the step.
+    #[serde(skip)]
+    pub contact_closed: Vec<usize>,
 }
 
 /// What [`solve_deck_with`] reports as it goes.
@@ -146,6 +156,7 @@ pub fn solve_deck_with(
         rule,
     } = check::prepare(model, options)?;
     let n = 3 * mesh.nodes.len();
+    let mut contact = contact::DeckContact::new(model, &mesh)?;
     let mut u = vec![0.0; n];
     let mut history = loads::History::new(model);
     let mut results = Vec::new();
@@ -183,7 +194,10 @@ pub fn solve_deck_with(
             start,
         };
         history.begin_step(model, step, &u)?;
-        let mut problem = StructuralProblem::new(assembler, Constraints::new(n))?;
+        let mut problem = match &contact {
+            Some(c) => c.problem(assembler, n)?,
+            None => StructuralProblem::new(assembler, Constraints::new(n))?,
+        };
         let rules = StressRules {
             materials: &materials,
             coupling: ShearCoupling::Exact,
@@ -200,6 +214,7 @@ pub fn solve_deck_with(
             complete: false,
             displacements: Vec::new(),
             outputs: output::tables(model, step),
+            contact_closed: Vec::new(),
         };
         let mut attempts = Vec::new();
         let mut record = |c: drive::Converged<'_>| {
@@ -210,8 +225,16 @@ pub fn solve_deck_with(
             observer(Progress::Increment(&current))
         };
         let (problem_, u_) = (&mut problem, &mut u);
-        let run = match &step.procedure.riks {
-            Some(r) => riks::run_step(
+        let run = match (&step.procedure.riks, contact.as_mut()) {
+            (Some(_), Some(_)) => Err(Error::Step {
+                step: k + 1,
+                line: step.line,
+                reason: "a *STATIC, RIKS step in a deck with *CONTACT PAIR: arc-length path \
+                         following does not hold the contact active set; use *STATIC without \
+                         RIKS"
+                    .into(),
+            }),
+            (Some(r), None) => riks::run_step(
                 model,
                 k,
                 &history,
@@ -223,7 +246,7 @@ pub fn solve_deck_with(
                 &mut attempts,
                 &mut record,
             ),
-            None => drive::run_step(
+            (None, contact_) => drive::run_step(
                 model,
                 k,
                 &history,
@@ -231,6 +254,7 @@ pub fn solve_deck_with(
                 problem_,
                 u_,
                 options,
+                contact_,
                 &mut attempts,
                 &mut record,
             ),
@@ -245,6 +269,7 @@ pub fn solve_deck_with(
         history.end_step(model, frame);
         current.complete = true;
         current.displacements = nodal(&u);
+        current.contact_closed = contact.as_ref().map(|c| c.closed()).unwrap_or_default();
         observer(Progress::Step(&current))?;
         results.push(current);
         assemblers.insert(step.nlgeom, problem.into_parts()?.0);

@@ -87,6 +87,7 @@ pub(crate) fn run_step(
             negative_pivots: Some(inc.negative_pivots),
             lpf: Some(inc.lambda),
             arc_length: Some(inc.arc * riks.period),
+            contact: None,
         });
         let told = on_increment(Converged {
             increment: inc.index,

@@ -43,8 +43,9 @@ pub use generators::{
     structured_box, thin_film, through_width_delamination,
 };
 pub use io::inp_read::{
-    Amplitude, Controls, InpModel, NodeRef, NotUsed, OutputKind, OutputRequest, OutputVariable,
-    ReadBoundary, ReadCload, ReadStep, RiksData, StaticData, Totals, read_inp, read_inp_file,
+    Amplitude, ContactPairs, Controls, InpModel, NodeRef, NotUsed, OutputKind, OutputRequest,
+    OutputVariable, ReadBoundary, ReadCload, ReadStep, RiksData, StaticData, Totals, read_inp,
+    read_inp_file,
 };
 pub use io::{inp, vtu};
 pub use model::{Cell, Imperfection, Mesh};

@@ -4,12 +4,21 @@
 //! sets, `*SURFACE, TYPE=ELEMENT` for its face sets, `*MATERIAL` with `*ELASTIC` (ISO,
 //! ENGINEERING CONSTANTS, ORTHO or ANISO), one `*ORIENTATION` (rectangular, rotated about z) per
 //! distinct ply angle, `*SOLID SECTION` per (material, ply angle) group, and `*STEP`s (optionally
-//! `NLGEOM`) with `*STATIC`, `*BOUNDARY`, `*CLOAD` and output requests. Node and element ids are
+//! `NLGEOM`) with `*STATIC`, `*BOUNDARY`, `*CLOAD` and output requests; crack-face contact
+//! (`*SURFACE INTERACTION`, `*SURFACE BEHAVIOR`, `*CONTACT PAIR`) by [`contact_cards`], which
+//! the caller places before the first step. Node and element ids are
 //! the mesh's indices + 1. CalculiX 2.20 runs the decks unchanged (tested when `ccx` is present;
 //! CI installs it).
 
 use crate::{Mesh, MeshError};
 use nonlin3d_element::ElementKind;
+
+#[path = "inp_contact.rs"]
+mod contact;
+pub use contact::{
+    INTERACTION, LOWER_FACES, Penalty, UPPER_FACES, add_crack_surfaces, contact_cards, face_nodes,
+    face_surface,
+};
 use nonlin3d_laminate::{Orthotropic, Stiffness};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;

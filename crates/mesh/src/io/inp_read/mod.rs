@@ -11,6 +11,7 @@
 //! [`read_inp`] reads text; [`read_inp_file`] reads a file and resolves `*INCLUDE, INPUT=` relative
 //! to the including file's folder.
 
+mod contact;
 mod lexer;
 mod model;
 mod output;
@@ -24,6 +25,8 @@ use lexer::{Keyword, Line, Loc, logical_lines};
 use nonlin3d_element::CylindricalAxes;
 use std::collections::{BTreeMap, HashMap};
 use std::path::Path;
+
+pub use contact::ContactPairs;
 
 /// Where a boundary condition or load applies.
 #[derive(Debug, Clone, PartialEq)]
@@ -320,6 +323,8 @@ pub struct InpModel {
     pub amplitudes: BTreeMap<String, Amplitude>,
     /// Keywords and parameters accepted but not used, in deck order.
     pub not_used: Vec<NotUsed>,
+    /// Frictionless contact: the node pairs of each `*CONTACT PAIR` data line (matching faces).
+    pub contact: Vec<ContactPairs>,
 }
 
 /// Reads a deck from text (`*INCLUDE` needs a file: use [`read_inp_file`]).
@@ -372,6 +377,8 @@ pub(crate) struct Reader {
     pub step: Option<step::StepState>,
     /// Carried from step to step as CalculiX does.
     pub carried: step::Carried,
+    /// Surfaces, interactions and contact pairs read so far.
+    pub contact: contact::ContactCards,
 }
 
 fn read_lines(lines: Vec<Line>) -> Result<InpModel, MeshError> {
@@ -392,7 +399,10 @@ fn read_lines(lines: Vec<Line>) -> Result<InpModel, MeshError> {
             end += 1;
         }
         let data = &lines[i + 1..end];
-        if !r.model_keyword(&kw, data)? && !r.step_keyword(&kw, data)? {
+        if !r.model_keyword(&kw, data)?
+            && !r.contact_keyword(&kw, data)?
+            && !r.step_keyword(&kw, data)?
+        {
             return Err(kw.error("keyword not supported (docs/DECKS.md lists what nonlin3d reads)"));
         }
         i = end;
@@ -470,6 +480,7 @@ impl Reader {
     fn finish(mut self) -> Result<InpModel, MeshError> {
         self.resolve_sections()?;
         self.check_set_uses()?;
+        self.resolve_contact()?;
         self.m.element_at = self.element_at.iter().map(ToString::to_string).collect();
         for set in self
             .m

@@ -25,7 +25,6 @@ const NOT_USED: &[(&str, &str)] = &[
     ("CONDUCTIVITY", "heat transfer only"),
     ("SPECIFIC HEAT", "heat transfer only"),
     ("PHYSICAL CONSTANTS", "not used by a mechanical step"),
-    ("SURFACE", "no surface load or contact refers to it"),
     ("PREPRINT", "echo of the input in CalculiX's .dat file"),
 ];
 
