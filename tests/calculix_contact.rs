@@ -87,7 +87,7 @@ fn export_then_solve_gives_the_contact_set_and_displacements_of_run() {
             "ε = {}: {diff:e} of {scale:e}",
             level.value
         );
-        let expected = level.contact.map_or(0, |c| c.pairs_closed);
+        let expected = level.contact.as_ref().map_or(0, |c| c.pairs_closed);
         assert_eq!(step.contact_closed.len(), expected, "ε = {}", level.value);
         let g = gaps(&faces, &level.displacements);
         for n in &step.contact_closed {
@@ -212,7 +212,7 @@ fn calculix_with_contact_agrees_with_nonlin3d_on_deflection_and_contact_extent()
             w_ours * 1e3,
             w_ccx * 1e3,
             w_ccx / w_ours - 1.0,
-            level.contact.map_or(0, |c| c.pairs_closed),
+            level.contact.as_ref().map_or(0, |c| c.pairs_closed),
             t_ours.len(),
             t_ccx.len(),
             penetration * 1e3
@@ -221,7 +221,7 @@ fn calculix_with_contact_agrees_with_nonlin3d_on_deflection_and_contact_extent()
         assert!(gt_diff <= 1e-2 * gt_max + 1e-9, "ε = {}", level.value);
         assert_eq!(t_ours, t_ccx, "ε = {}", level.value);
     }
-    assert!(ours.levels.last().unwrap().contact.unwrap().pairs_closed > 0);
+    assert!(ours.levels.last().unwrap().contact.as_ref().unwrap().pairs_closed > 0);
 }
 
 /// The line (1-based) of the first line of `text` that starts with `prefix`.
