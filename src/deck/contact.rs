@@ -7,7 +7,9 @@
 //! candidate pair is reserved in the pattern once, so a change of the set costs no new
 //! symbolic analysis. An increment converged by Newton is followed by passes: gaps and contact
 //! forces read, the set changed by [`update`] (pairs with g < −1e-9, in the deck's length unit,
-//! close; pairs whose force is tensile beyond the Newton tolerance open), the ties installed
+//! close; pairs whose recovered force f̂ — the release quantity of `run`'s contact, positive
+//! at every node of a compressed quadratic face (`nonlin3d_contact::CrackFaces::recovered`) —
+//! is tensile beyond the Newton tolerance open), the ties installed
 //! with the current normals and Newton re-run at the same step time, until the set does not
 //! change. A set seen before within the increment (a cycle) or more than
 //! [`MAX_PASSES`] passes fail the increment, which is then cut back as a non-converged one,
@@ -138,7 +140,7 @@ impl DeckContact {
                 gap: self.contact.settings().gap_tolerance,
                 force: state.force_tolerance,
             };
-            let change = update(&state.gaps, &state.forces, &state.active, tol);
+            let change = update(&state.gaps, &state.recovered, &state.active, tol);
             if change.is_empty() {
                 return Ok(Settled::Stable(IncrementContact {
                     pairs_closed: state.active.iter().filter(|&&a| a).count(),
