@@ -34,6 +34,11 @@ use std::process::ExitCode;
 struct Cli {
     #[command(subcommand)]
     command: Option<Command>,
+    /// Threads for assembly and the factorisation (default: all cores); the results are
+    /// bitwise identical for any count. Overrides a scene's `threads`.
+    #[arg(long, global = true,
+          value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(0..=1024))]
+    threads: Option<usize>,
 }
 
 #[derive(Subcommand)]
@@ -237,11 +242,15 @@ fn run(
     out: &Path,
     quiet: bool,
     max_memory: Option<u64>,
+    threads: Option<usize>,
 ) -> Result<(), Failure> {
     use indicatif::{ProgressBar, ProgressStyle};
     use nonlin3d::analysis::Progress;
     nonlin3d::budget::install(max_memory);
-    let scene = read_scene(scene).map_err(Failure::Input)?;
+    let mut scene = read_scene(scene).map_err(Failure::Input)?;
+    if let Some(n) = threads {
+        scene.analysis.threads = n;
+    }
     let quantity = if matches!(scene.geometry, nonlin3d::scene::Geometry::Plate { .. }) {
         "load_n"
     } else {
@@ -327,14 +336,23 @@ fn export(scene: &Path, inp: &Path, max_memory: Option<u64>) -> Result<(), Failu
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    // One rayon pool for assembly and the solver; 0 or none: all cores.
+    if let Some(n) = cli.threads.filter(|&n| n > 0)
+        && let Err(e) = rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build_global()
+    {
+        eprintln!("nonlin3d: --threads {n}: {e}");
+        return ExitCode::from(2);
+    }
     let result = match cli.command {
-        None => run(None, Path::new("nonlin3d-out"), false, None),
+        None => run(None, Path::new("nonlin3d-out"), false, None, cli.threads),
         Some(Command::Run {
             scene,
             out,
             quiet,
             max_memory,
-        }) => run(scene.as_deref(), &out, quiet, max_memory),
+        }) => run(scene.as_deref(), &out, quiet, max_memory, cli.threads),
         Some(Command::Export {
             scene,
             inp,

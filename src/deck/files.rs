@@ -325,6 +325,8 @@ impl<'a> DeckOutput<'a> {
             "stopped": self.stopped,
             "steps": self.steps,
             "not_used": not_used,
+            // The factorisation's and assembly's threads (the rayon pool, `--threads N`).
+            "threads": rayon::current_num_threads(),
         });
         let now = serde_json::to_string_pretty(&value)?;
         let stopped = if self.complete {

@@ -87,8 +87,8 @@ pub struct AnalysisOptions {
     /// Linear solver.
     #[serde(default)]
     pub solver: SolverName,
-    /// Threads for the factorisation with `solver = "faer"` (1: sequential, bitwise
-    /// reproducible; 0: all cores).
+    /// Threads for the factorisation with `solver = "faer"` (0, the default: all cores, or
+    /// `--threads N`; 1: sequential). Results are bitwise identical for any count.
     #[serde(default = "default_threads")]
     pub threads: usize,
 }
@@ -105,7 +105,7 @@ pub enum SolverName {
 }
 
 fn default_threads() -> usize {
-    1
+    0
 }
 
 fn default_refactor() -> usize {
