@@ -110,6 +110,7 @@ pub fn settings(scene: &Scene) -> (NewtonSettings, Stepping) {
             // 0: the rayon pool's threads (`--threads N`); the bits do not depend on it.
             (SolverName::Faer, 0) => SolverKind::FaerLdlt,
             (SolverName::Faer, n) => SolverKind::FaerLdltThreads(n),
+            (SolverName::FaerMixed, n) => SolverKind::FaerLdltMixed(n),
         },
         ..NewtonSettings::default()
     };

@@ -102,6 +102,8 @@ pub enum SolverName {
     Faer,
     /// The thesis's profile (skyline) LDLᵀ with RCM ordering.
     Profile,
+    /// `faer` with an f32 factor refined in f64 (falls back to f64 where f32 is not enough).
+    FaerMixed,
 }
 
 fn default_threads() -> usize {
