@@ -7,7 +7,11 @@
 //!
 //! Run: `cargo bench --bench solver_report` (add `-- quick` to stop at ~50 k DOF,
 //! `-- only=laminate` to run the cases whose name contains that text, `-- noprofile` to leave
-//! out the profile solver).
+//! out the profile solver, `-- noamd` to leave out faer with AMD, `-- mixed` to add faer ND
+//! with an f32 factor refined in f64, `-- rounds=N` to run every solver of a case N times in
+//! turn, so that ratios between solvers come from neighbouring runs on a busy machine).
+//! The last column is the normwise backward error ‖b − A x‖∞ / (‖A‖∞‖x‖∞ + ‖b‖∞) of the
+//! solve.
 
 #[path = "../tests/common/mod.rs"]
 mod common;
@@ -19,7 +23,7 @@ use nonlin3d::mesh::{
     through_width_delamination,
 };
 use nonlin3d::solver::{
-    FaerMode, FaerOrdering, FaerSolver, LinearSolver, ProfileLdlt, SymmetricMatrix,
+    FaerMode, FaerOrdering, FaerPrecision, FaerSolver, LinearSolver, ProfileLdlt, SymmetricMatrix,
 };
 use std::time::Instant;
 
@@ -118,14 +122,30 @@ struct Row {
     flops: f64,
     peak: f64,
     negative: usize,
+    backward_error: f64,
 }
 
-fn run(
-    case: &str,
-    k: &SymmetricMatrix,
-    mut s: Box<dyn LinearSolver>,
-    label: String,
-) -> Option<Row> {
+/// ‖b − A x‖∞ / (‖A‖∞‖x‖∞ + ‖b‖∞).
+fn backward_error(k: &SymmetricMatrix, x: &[f64], b: &[f64]) -> f64 {
+    let n = k.n();
+    let (cp, ri, v) = (k.pattern().col_ptr(), k.pattern().row_idx(), k.values());
+    let mut rows = vec![0.0f64; n];
+    for j in 0..n {
+        for p in cp[j]..cp[j + 1] {
+            rows[ri[p]] += v[p].abs();
+            if ri[p] != j {
+                rows[j] += v[p].abs();
+            }
+        }
+    }
+    let norm = |w: &[f64]| w.iter().fold(0.0f64, |m, a| m.max(a.abs()));
+    let mut ax = vec![0.0; n];
+    k.matvec(x, &mut ax).unwrap_or_else(|e| panic!("{e}"));
+    let r: Vec<f64> = ax.iter().zip(b).map(|(a, b)| b - a).collect();
+    norm(&r) / (norm(&rows) * norm(x) + norm(b))
+}
+
+fn run(case: &str, k: &SymmetricMatrix, s: &mut dyn LinearSolver, label: String) -> Option<Row> {
     let n = k.n();
     let before = current_mib();
     reset_peak();
@@ -142,6 +162,7 @@ fn run(
     let reps = if n < 20_000 { 15 } else { 1 };
     let (mut numeric, mut solve) = (f64::INFINITY, f64::INFINITY);
     let mut f = None;
+    let mut omega = 0.0;
     for _ in 0..reps {
         let t = Instant::now();
         f = Some(s.factorize(k).ok()?);
@@ -150,6 +171,7 @@ fn run(
         let t = Instant::now();
         s.solve_in_place(&mut b, 1).ok()?;
         solve = solve.min(t.elapsed().as_secs_f64());
+        omega = backward_error(k, &b, &vec![1.0; n]);
     }
     let f = f?;
     let peak = peak_mib() - before;
@@ -165,6 +187,7 @@ fn run(
         flops: f.flops,
         peak,
         negative: f.negative_pivots,
+        backward_error: omega,
     })
 }
 
@@ -177,9 +200,13 @@ fn main() {
     );
     println!();
     println!(
-        "| case | DOF | solver | symbolic ms | numeric ms (best of 15 below 20 k DOF) | solve ms | factor entries | nnz(L) | GFLOP | GFLOP/s | peak MiB | neg. pivots |"
+        "| case | DOF | solver | symbolic ms | numeric ms (best of 15 below 20 k DOF) | solve ms | factor entries | nnz(L) | GFLOP | GFLOP/s | peak MiB | neg. pivots | backward error |"
     );
-    println!("|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
+    println!("|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
+    let has = |flag: &str| std::env::args().any(|a| a == flag);
+    let rounds: usize = std::env::args()
+        .find_map(|a| a.strip_prefix("rounds=").and_then(|r| r.parse().ok()))
+        .unwrap_or(1);
     let mut boxes: Vec<(&str, [usize; 3], [f64; 3])> = vec![
         ("cube 2×2×1", [2, 2, 1], [2e-3, 2e-3, 1e-3]),
         ("cube 3×3×2", [3, 3, 2], [2e-3, 2e-3, 1e-3]),
@@ -248,6 +275,9 @@ fn main() {
             (FaerOrdering::Amd, "AMD"),
             (FaerOrdering::NestedDissection, "ND"),
         ] {
+            if ordering == FaerOrdering::Amd && has("noamd") {
+                continue;
+            }
             for threads in [1, 2] {
                 solvers.push((
                     Box::new(
@@ -270,10 +300,45 @@ fn main() {
                 (Box::new(ProfileLdlt::new()), "profile LDLᵀ (RCM)".into()),
             );
         }
-        for (s, label) in solvers {
-            if let Some(r) = run(case, &k, s, label) {
+        let mut mixed: Vec<(FaerSolver, String)> = Vec::new();
+        if has("mixed") {
+            for threads in [1, 2] {
+                let mut s = FaerSolver::new(FaerMode::Ldlt)
+                    .with_ordering(FaerOrdering::NestedDissection)
+                    .with_threads(threads);
+                s.precision = FaerPrecision::mixed();
+                mixed.push((
+                    s,
+                    format!(
+                        "faer LDLᵀ ND mixed f32/f64, {threads} thread{}",
+                        if threads > 1 { "s" } else { "" }
+                    ),
+                ));
+            }
+        }
+        for _ in 0..rounds {
+            let mut rows = Vec::new();
+            for (s, label) in &mut solvers {
+                rows.extend(run(case, &k, s.as_mut(), label.clone()));
+            }
+            for (s, label) in &mut mixed {
+                if let Some(mut r) = run(case, &k, s, label.clone()) {
+                    let m = s.mixed_stats();
+                    r.solver += &format!(
+                        " (f32 factors {}, f64 {}{}, refinement steps {})",
+                        m.single_factorizations,
+                        m.double_factorizations,
+                        m.last_fallback
+                            .map(|w| format!(": {w}"))
+                            .unwrap_or_default(),
+                        m.refinement_steps
+                    );
+                    rows.push(r);
+                }
+            }
+            for r in rows {
                 println!(
-                    "| {} | {} | {} | {:.3} | {:.3} | {:.3} | {} | {} | {:.2} | {:.1} | {:.0} | {} |",
+                    "| {} | {} | {} | {:.3} | {:.3} | {:.3} | {} | {} | {:.2} | {:.1} | {:.0} | {} | {:.1e} |",
                     r.case,
                     r.dofs,
                     r.solver,
@@ -285,7 +350,8 @@ fn main() {
                     r.flops / 1e9,
                     r.flops / r.numeric / 1e9,
                     r.peak,
-                    r.negative
+                    r.negative,
+                    r.backward_error
                 );
             }
         }

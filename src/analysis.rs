@@ -145,6 +145,10 @@ pub fn run(
             solve_s: sweep.solve_s,
             vcct_s: sweep.vcct_s,
             output_s: 0.0,
+            threads: match scene.analysis.threads {
+                0 => rayon::current_num_threads(),
+                n => n,
+            },
         },
         model_data: Some(model),
         warnings: Vec::new(),

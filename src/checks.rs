@@ -90,8 +90,8 @@ pub(crate) fn scene(s: &Scene) -> Result<(), Error> {
     // faer splits its work into this many pieces: 4294967297 ran for minutes (fuzz case 6866).
     if a.threads > MAX_THREADS {
         return bad(format!(
-            "analysis.threads = {}: at most {MAX_THREADS} (0: all cores, 1: sequential and \
-             bitwise reproducible)",
+            "analysis.threads = {}: at most {MAX_THREADS} (0: all cores, 1: sequential; \
+             the results do not depend on it)",
             a.threads
         ));
     }

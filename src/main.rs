@@ -51,6 +51,11 @@ struct Cli {
     /// Nothing but errors.
     #[arg(short, long, global = true)]
     quiet: bool,
+    /// Threads for assembly and the factorisation (default: all cores); the results are
+    /// bitwise identical for any count. Overrides a scene's `threads`.
+    #[arg(long, global = true,
+          value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(0..=1024))]
+    threads: Option<usize>,
 }
 
 impl Cli {
@@ -330,15 +335,19 @@ fn run(
     out: &Path,
     verbosity: Verbosity,
     max_memory: Option<u64>,
+    threads: Option<usize>,
 ) -> Result<(), Failure> {
     use nonlin3d::analysis::Progress;
     let t0 = Instant::now();
     nonlin3d::budget::install(max_memory);
-    let scene = read_scene(path).map_err(Failure::Input)?;
+    let mut scene = read_scene(path).map_err(Failure::Input)?;
     let input = path
         .map(nonlin3d::provenance::input_file)
         .transpose()
         .map_err(Failure::Input)?;
+    if let Some(n) = threads {
+        scene.analysis.threads = n;
+    }
     let quantity = if matches!(scene.geometry, nonlin3d::scene::Geometry::Plate { .. }) {
         "load_n"
     } else {
@@ -438,14 +447,23 @@ fn export(
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    // One rayon pool for assembly and the solver; 0 or none: all cores.
+    if let Some(n) = cli.threads.filter(|&n| n > 0)
+        && let Err(e) = rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build_global()
+    {
+        eprintln!("nonlin3d: --threads {n}: {e}");
+        return ExitCode::from(2);
+    }
     let verbosity = cli.verbosity();
     let result = match cli.command {
-        None => run(None, Path::new("nonlin3d-out"), verbosity, None),
+        None => run(None, Path::new("nonlin3d-out"), verbosity, None, cli.threads),
         Some(Command::Run {
             scene,
             out,
             max_memory,
-        }) => run(scene.as_deref(), &out, verbosity, max_memory),
+        }) => run(scene.as_deref(), &out, verbosity, max_memory, cli.threads),
         Some(Command::Export {
             scene,
             inp,

@@ -241,6 +241,7 @@ impl RunOutput {
                 solve_s: 0.0,
                 vcct_s: 0.0,
                 output_s: 0.0,
+                threads: rayon::current_num_threads(),
             },
             model_data: None,
             warnings: Vec::new(),

@@ -107,9 +107,10 @@ pub fn settings(scene: &Scene) -> (NewtonSettings, Stepping) {
         },
         solver: match (a.solver, a.threads) {
             (SolverName::Profile, _) => SolverKind::Profile,
-            (SolverName::Faer, 1) => SolverKind::FaerLdlt,
-            (SolverName::Faer, 0) => SolverKind::FaerLdltThreads(rayon::current_num_threads()),
+            // 0: the rayon pool's threads (`--threads N`); the bits do not depend on it.
+            (SolverName::Faer, 0) => SolverKind::FaerLdlt,
             (SolverName::Faer, n) => SolverKind::FaerLdltThreads(n),
+            (SolverName::FaerMixed, n) => SolverKind::FaerLdltMixed(n),
         },
         ..NewtonSettings::default()
     };

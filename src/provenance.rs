@@ -49,6 +49,10 @@ pub fn solver_names(kind: SolverKind) -> (String, String) {
         SolverKind::FaerLdlt => ("faer LDLᵀ".into(), AUTO.into()),
         SolverKind::FaerLlt => ("faer LLᵀ".into(), AUTO.into()),
         SolverKind::FaerLdltThreads(n) => (format!("faer LDLᵀ on {n} threads"), AUTO.into()),
+        SolverKind::FaerLdltMixed(n) => (
+            format!("faer LDLᵀ, f32 factor refined in f64, on {n} threads (0: all cores)"),
+            AUTO.into(),
+        ),
     }
 }
 

@@ -290,6 +290,9 @@ pub struct Timings {
     pub vcct_s: f64,
     /// Writing outputs (filled in by the writer).
     pub output_s: f64,
+    /// Threads of the factorisation (`analysis.threads`, 0 resolved to the rayon pool's,
+    /// which assembly uses); the results do not depend on it.
+    pub threads: usize,
 }
 
 /// Onset of growth by the scene's criterion.

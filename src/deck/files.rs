@@ -343,6 +343,8 @@ impl<'a> DeckOutput<'a> {
             "stopped": self.stopped,
             "steps": self.steps,
             "not_used": not_used,
+            // The factorisation's and assembly's threads (the rayon pool, `--threads N`).
+            "threads": rayon::current_num_threads(),
         });
         if let Some(p) = &self.provenance {
             value["provenance"] = serde_json::to_value(p)?;

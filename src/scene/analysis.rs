@@ -103,8 +103,8 @@ pub struct AnalysisOptions {
     /// Linear solver.
     #[serde(default)]
     pub solver: SolverName,
-    /// Threads for the factorisation with `solver = "faer"` (1: sequential, bitwise
-    /// reproducible; 0: all cores).
+    /// Threads for the factorisation with `solver = "faer"` (0, the default: all cores, or
+    /// `--threads N`; 1: sequential). Results are bitwise identical for any count.
     #[serde(default = "default_threads")]
     pub threads: usize,
 }
@@ -118,10 +118,12 @@ pub enum SolverName {
     Faer,
     /// The thesis's profile (skyline) LDLᵀ with RCM ordering.
     Profile,
+    /// `faer` with an f32 factor refined in f64 (falls back to f64 where f32 is not enough).
+    FaerMixed,
 }
 
 fn default_threads() -> usize {
-    1
+    0
 }
 
 fn default_refactor() -> usize {

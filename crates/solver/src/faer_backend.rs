@@ -18,6 +18,9 @@ use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Conj, MatMut, Par, Side};
 use std::sync::Arc;
 
+mod mixed;
+pub use mixed::{FaerPrecision, MixedStats};
+
 /// Which factorisation faer computes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum FaerMode {
@@ -67,11 +70,20 @@ pub struct FaerSolver {
     pub ordering: FaerOrdering,
     /// Relative zero-pivot tolerance (as [`crate::profile::DEFAULT_PIVOT_TOLERANCE`]).
     pub tolerance: f64,
-    /// Threads for the numeric phase: `Par::Seq` or `Par::rayon(k)`.
+    /// Threads for the numeric phase (solves are sequential, [`SOLVE_PAR`]): `Par::Seq` or
+    /// `Par::rayon(k)`. The bits do not depend on it: faer's supernodal LDLᵀ visits the supernodes in one fixed order and
+    /// passes the threads only to its dense kernels (update products, the diagonal block's
+    /// LDLᵀ, triangular solves), which split the *output* into register tiles and give each
+    /// tile to one thread; every entry's sum runs over the depth in fixed 512-wide blocks,
+    /// whatever the thread count (private-gemm-x86 0.1.22's `kc`). The dense LDLᵀ's blocking
+    /// (128, recursion at 64) does not depend on it either. Tested on 1, 2 and 3 threads
+    /// (tests/threads.rs); re-check it when faer is upgraded.
     pub par: Par,
     /// Bytes the factor, its workspace and the matrix may take; `None`: the process-wide
     /// budget ([`crate::set_memory_budget`]), if any.
     pub memory_budget: Option<MemoryBudget>,
+    /// f64 throughout, or an f32 factor refined in f64 (LDLᵀ only; [`FaerPrecision`]).
+    pub precision: FaerPrecision,
     pattern: Option<Arc<SymmetricPattern>>,
     symbolic: Option<SymbolicCholesky<usize>>,
     chosen: Option<FaerOrdering>,
@@ -79,6 +91,7 @@ pub struct FaerSolver {
     buffer: Option<MemBuffer>,
     factored: bool,
     flops: f64,
+    mixed: mixed::MixedState,
 }
 
 impl std::fmt::Debug for FaerSolver {
@@ -107,6 +120,7 @@ impl FaerSolver {
             tolerance: crate::profile::DEFAULT_PIVOT_TOLERANCE,
             par: Par::Seq,
             memory_budget: None,
+            precision: FaerPrecision::Double,
             pattern: None,
             symbolic: None,
             chosen: None,
@@ -114,6 +128,7 @@ impl FaerSolver {
             buffer: None,
             factored: false,
             flops: 0.0,
+            mixed: mixed::MixedState::default(),
         }
     }
 
@@ -151,33 +166,34 @@ impl FaerSolver {
             .as_ref()
             .map(|s| matches!(s.raw(), SymbolicCholeskyRaw::Supernodal(_)))
     }
+}
 
-    /// The diagonal D in factorisation order (LDLᵀ), or the diagonal of L (LLᵀ).
-    fn factor_diagonal(&self) -> Vec<f64> {
-        let Some(symbolic) = &self.symbolic else {
-            return Vec::new();
-        };
-        let mut d = Vec::with_capacity(symbolic.nrows());
-        match symbolic.raw() {
-            SymbolicCholeskyRaw::Simplicial(s) => {
-                // Column k of the simplicial factor starts with its diagonal entry.
-                let cp = s.col_ptr();
-                for k in 0..s.nrows() {
-                    d.push(self.l_values[cp[k]]);
-                }
+/// The diagonal D in factorisation order (LDLᵀ), or the diagonal of L (LLᵀ), of the factor
+/// `values` (f64 or f32) on `symbolic`.
+fn factor_diagonal<T>(symbolic: &SymbolicCholesky<usize>, values: &[T]) -> Vec<f64>
+where
+    T: faer::traits::ComplexField + Copy + Into<f64>,
+{
+    let mut d = Vec::with_capacity(symbolic.nrows());
+    match symbolic.raw() {
+        SymbolicCholeskyRaw::Simplicial(s) => {
+            // Column k of the simplicial factor starts with its diagonal entry.
+            let cp = s.col_ptr();
+            for k in 0..s.nrows() {
+                d.push(values[cp[k]].into());
             }
-            SymbolicCholeskyRaw::Supernodal(s) => {
-                let f = supernodal::SupernodalLdltRef::new(s, &self.l_values);
-                for k in 0..s.n_supernodes() {
-                    let v = f.supernode(k).val();
-                    for c in 0..v.ncols() {
-                        d.push(v[(c, c)]);
-                    }
+        }
+        SymbolicCholeskyRaw::Supernodal(s) => {
+            let f = supernodal::SupernodalLdltRef::new(s, values);
+            for k in 0..s.n_supernodes() {
+                let v = f.supernode(k).val();
+                for c in 0..v.ncols() {
+                    d.push(v[(c, c)].into());
                 }
             }
         }
-        d
     }
+    d
 }
 
 /// The factor position of the pivot a faer factorisation failed at: its simplicial kernel
@@ -189,6 +205,12 @@ fn pivot_position(simplicial: bool, index: usize) -> usize {
         index
     }
 }
+
+/// Threads of the triangular solves: one. faer's column-major matrix-vector product (a solve
+/// with one right-hand side, blocks of 256² entries and more) splits the *depth* between
+/// threads and adds the partial sums, so its bits depend on the thread count; the solve is
+/// memory-bound (0.2 s of the 1.4 s factorisation on the 45 k cube), so it stays sequential.
+const SOLVE_PAR: Par = Par::Seq;
 
 /// The packing buffer faer's dense matrix product (private-gemm) allocates per thread.
 const GEMM_BUFFER_BYTES: usize = 64 << 20;
@@ -225,6 +247,7 @@ impl LinearSolver for FaerSolver {
         self.pattern = None;
         self.factored = false;
         self.chosen = None;
+        self.mixed = mixed::MixedState::default();
         let symbolic_for = |ordering: SymmetricOrdering<'_, usize>| {
             factorize_symbolic_cholesky(a, Side::Lower, ordering, params).map_err(|e| match e {
                 faer::sparse::FaerError::OutOfMemory => SolverError::OutOfMemory {
@@ -274,16 +297,20 @@ impl LinearSolver for FaerSolver {
                 symbolic.factorize_numeric_llt_scratch::<f64>(self.par, Default::default())
             }
         }
-        .or(symbolic.solve_in_place_scratch::<f64>(RHS_BLOCK, self.par));
+        .or(symbolic.solve_in_place_scratch::<f64>(RHS_BLOCK, self.par))
+        .or(mixed::scratch(&symbolic, self.par));
         let len = symbolic.len_val();
         let f64s = |k: usize| k.saturating_mul(std::mem::size_of::<f64>());
+        let mixed = self.uses_mixed();
         Need {
             what: match self.mode {
                 FaerMode::Ldlt => "faer LDLᵀ factor",
                 FaerMode::Llt => "faer LLᵀ factor",
             },
             entries: len,
-            factor_bytes: f64s(len),
+            // An f32 factor takes half; an f64 one is made only when refinement falls back,
+            // after the f32 one is freed.
+            factor_bytes: if mixed { f64s(len) / 2 } else { f64s(len) },
             // The scratch, the permutation copy and diagonal each factorisation makes, and the
             // dense kernels' per-thread packing buffer (64 MiB, allocated by faer's gemm on
             // first use, outside our budget's reach: an address-space limit it does not fit
@@ -292,7 +319,8 @@ impl LinearSolver for FaerSolver {
                 .size_bytes()
                 .saturating_add(f64s(2 * n))
                 .saturating_add(GEMM_BUFFER_BYTES.saturating_mul(self.par.degree().max(1))),
-            matrix_bytes: f64s(pattern.nnz_lower()),
+            // Mixed: plus the f64 copy of the matrix kept for residuals and its f32 twin.
+            matrix_bytes: f64s(pattern.nnz_lower()).saturating_mul(if mixed { 5 } else { 2 }) / 2,
         }
         .check(current_budget(self.memory_budget.as_ref()))?;
         let buffer = MemBuffer::try_new(req).map_err(|_| SolverError::OutOfMemory {
@@ -301,7 +329,11 @@ impl LinearSolver for FaerSolver {
         })?;
         let flops = factor_flops(&symbolic);
         let lower_nonzeros = column_counts(&symbolic).iter().sum();
-        self.l_values = try_zeros(len, "the faer factor")?;
+        if mixed {
+            self.mixed.reset(len)?;
+        } else {
+            self.l_values = try_zeros(len, "the faer factor")?;
+        }
         self.symbolic = Some(symbolic);
         self.chosen = Some(chosen);
         self.buffer = Some(buffer);
@@ -318,6 +350,36 @@ impl LinearSolver for FaerSolver {
     }
 
     fn factorize(&mut self, a: &SymmetricMatrix) -> Result<Factorization, SolverError> {
+        if self.uses_mixed() {
+            self.factorize_mixed(a)
+        } else {
+            self.factorize_double(a)
+        }
+    }
+
+    fn solve_in_place(&mut self, b: &mut [f64], nrhs: usize) -> Result<(), SolverError> {
+        self.check_rhs(b, nrhs)?;
+        if self.mixed.single_active() {
+            self.solve_mixed(b, nrhs)
+        } else {
+            self.solve_double(b, nrhs)
+        }
+    }
+}
+
+impl FaerSolver {
+    /// Whether factorisations go through the f32 path.
+    fn uses_mixed(&self) -> bool {
+        self.precision != FaerPrecision::Double && self.mode == FaerMode::Ldlt
+    }
+
+    /// The f64 numeric factorisation of `a` into `l_values` (allocated if an f32 factor held
+    /// its place), with pivot checks and inertia.
+    fn factorize_double(&mut self, a: &SymmetricMatrix) -> Result<Factorization, SolverError> {
+        if self.l_values.is_empty() {
+            let len = self.symbolic.as_ref().map_or(0, |s| s.len_val());
+            self.l_values = try_zeros(len, "the faer factor")?;
+        }
         let (Some(pattern), Some(symbolic), Some(buffer)) =
             (&self.pattern, &self.symbolic, &mut self.buffer)
         else {
@@ -386,7 +448,7 @@ impl LinearSolver for FaerSolver {
         // Pivot checks and inertia from the factor's diagonal (D, or L_kk with d_k = L_kk²).
         let diag = a.diagonal();
         let mut negative = 0;
-        for (k, &v) in self.factor_diagonal().iter().enumerate() {
+        for (k, &v) in factor_diagonal(symbolic, &self.l_values).iter().enumerate() {
             let dof = perm_fwd[k];
             let d = if self.mode == FaerMode::Llt { v * v } else { v };
             let scale = diag[dof].abs();
@@ -410,10 +472,9 @@ impl LinearSolver for FaerSolver {
         })
     }
 
-    fn solve_in_place(&mut self, b: &mut [f64], nrhs: usize) -> Result<(), SolverError> {
-        let (true, Some(symbolic), Some(buffer)) =
-            (self.factored, &self.symbolic, &mut self.buffer)
-        else {
+    /// The right-hand sides fit the factor and are finite, and a factor is there.
+    fn check_rhs(&self, b: &[f64], nrhs: usize) -> Result<(), SolverError> {
+        let (true, Some(symbolic)) = (self.factored, &self.symbolic) else {
             return Err(SolverError::NotReady(
                 "solve called before a successful factorize",
             ));
@@ -433,6 +494,16 @@ impl LinearSolver for FaerSolver {
                 value: b[p],
             });
         }
+        Ok(())
+    }
+
+    /// Solves with the f64 factor.
+    fn solve_double(&mut self, b: &mut [f64], nrhs: usize) -> Result<(), SolverError> {
+        let (Some(symbolic), Some(buffer)) = (&self.symbolic, &mut self.buffer) else {
+            return Err(SolverError::NotReady("solve called before analyze"));
+        };
+        let n = symbolic.nrows();
+        let _ = nrhs;
         for block in b.chunks_mut((n * RHS_BLOCK).max(1)) {
             let k = block.len() / n.max(1);
             let rhs = MatMut::from_column_major_slice_mut(block, n, k);
@@ -441,13 +512,13 @@ impl LinearSolver for FaerSolver {
                 FaerMode::Ldlt => LdltRef::new(symbolic, &self.l_values).solve_in_place_with_conj(
                     Conj::No,
                     rhs,
-                    self.par,
+                    SOLVE_PAR,
                     stack,
                 ),
                 FaerMode::Llt => LltRef::new(symbolic, &self.l_values).solve_in_place_with_conj(
                     Conj::No,
                     rhs,
-                    self.par,
+                    SOLVE_PAR,
                     stack,
                 ),
             }

@@ -44,7 +44,9 @@ mod solver;
 
 pub use budget::{MemoryBudget, set_memory_budget};
 pub use error::SolverError;
-pub use faer_backend::{FaerMode, FaerOrdering, FaerSolver, FaerStructure};
+pub use faer_backend::{
+    FaerMode, FaerOrdering, FaerPrecision, FaerSolver, FaerStructure, MixedStats,
+};
 pub use matrix::SymmetricMatrix;
 pub use nested::{LEAF_NODES, nested_dissection};
 pub use ordering::{

@@ -51,17 +51,25 @@ pub enum SolverKind {
     /// [`crate::ProfileLdlt`] with reverse Cuthill–McKee.
     Profile,
     /// [`crate::FaerSolver`] LDLᵀ, ordered by AMD or nested dissection (whichever needs fewer
-    /// flops, [`crate::FaerOrdering::Auto`]): the default. Measured faster than the profile
-    /// solver from about 450 equations on, 2.7× at 11 k and 3–4× at 50–140 k DOF
+    /// flops, [`crate::FaerOrdering::Auto`]), numeric phase on as many threads as the current
+    /// rayon pool has (`--threads N` sets the pool): the default. Measured faster than the
+    /// profile solver from about 450 equations on, 2.7× at 11 k and 3–4× at 50–140 k DOF
     /// (docs/PERFORMANCE.md); the profile solver wins only on tiny systems (153 DOF: 3×).
     #[default]
     FaerLdlt,
-    /// [`crate::FaerSolver`] LLᵀ (ordering as `FaerLdlt`): positive definite matrices only.
+    /// [`crate::FaerSolver`] LLᵀ (ordering and threads as `FaerLdlt`): positive definite
+    /// matrices only.
     FaerLlt,
     /// [`crate::FaerSolver`] LDLᵀ (ordering as `FaerLdlt`), numeric phase on this many rayon
-    /// threads. Faster from about 10 k DOF on two cores; the sums are split differently from
-    /// the sequential solver, so results agree with it to rounding, not bitwise.
+    /// threads (1: sequential). Faster from about 10 k DOF on two cores. The same bits for any
+    /// thread count: threads split the output tiles of each dense block, never a sum
+    /// (tests/threads.rs, [`crate::FaerSolver::par`]).
     FaerLdltThreads(usize),
+    /// [`crate::FaerSolver`] LDLᵀ (ordering as `FaerLdlt`) with an f32 factor refined in f64
+    /// ([`crate::FaerPrecision::mixed`]), on this many threads (0: the rayon pool's). About
+    /// half the factor time and memory where f32 suffices (45 k cube, 89 k plate); on thin
+    /// laminates it falls back to f64 and costs more (docs/PERFORMANCE.md).
+    FaerLdltMixed(usize),
 }
 
 impl SolverKind {
@@ -69,10 +77,26 @@ impl SolverKind {
     pub fn build(self) -> Box<dyn LinearSolver> {
         match self {
             Self::Profile => Box::new(crate::ProfileLdlt::new()),
-            Self::FaerLdlt => Box::new(crate::FaerSolver::new(crate::FaerMode::Ldlt)),
-            Self::FaerLlt => Box::new(crate::FaerSolver::new(crate::FaerMode::Llt)),
+            Self::FaerLdlt => Box::new(
+                crate::FaerSolver::new(crate::FaerMode::Ldlt)
+                    .with_threads(rayon::current_num_threads()),
+            ),
+            Self::FaerLlt => Box::new(
+                crate::FaerSolver::new(crate::FaerMode::Llt)
+                    .with_threads(rayon::current_num_threads()),
+            ),
             Self::FaerLdltThreads(n) => {
                 Box::new(crate::FaerSolver::new(crate::FaerMode::Ldlt).with_threads(n))
+            }
+            Self::FaerLdltMixed(n) => {
+                let threads = if n == 0 {
+                    rayon::current_num_threads()
+                } else {
+                    n
+                };
+                let mut s = crate::FaerSolver::new(crate::FaerMode::Ldlt).with_threads(threads);
+                s.precision = crate::FaerPrecision::mixed();
+                Box::new(s)
             }
         }
     }

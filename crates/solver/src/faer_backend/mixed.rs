@@ -1,0 +1,493 @@
+//! Mixed precision for [`FaerSolver`] (issue 20): the LDLᵀ factor in f32 (half the memory,
+//! dense kernels about twice as fast), each solution refined in f64 (iterative refinement:
+//! x ← x + L̃⁻ᵀD̃⁻¹L̃⁻¹(b − A x) with the f32 factor L̃D̃L̃ᵀ ≈ A, the residual in f64; each step
+//! multiplies the error by about cond(A)·ε₃₂), and the f64 factor whenever the f32 one is in
+//! doubt:
+//!
+//! - an entry of A does not fit f32, or f32 elimination meets a zero pivot;
+//! - a pivot |d̃_k| falls below [`SINGLE_PIVOT_FLOOR`]·|a_kk| (or the floor given): f32 rounding perturbs d_k by
+//!   about ε₃₂·|a_kk| times the growth, so the sign of a smaller one is not trusted;
+//! - the negative pivot count differs from the previous factorisation's (any precision): the
+//!   inertia the path following reads (thesis §3, Sylvester's law) changes only on an f64
+//!   factor, and the next f32 factor must agree with it to be used;
+//! - refinement stalls (the backward error falls by less than half in a step) or has not
+//!   reached the tolerance in [`MAX_REFINEMENT_STEPS`]: A is too ill-conditioned for f32
+//!   (cond(A)·ε₃₂ ≳ 0.5).
+
+use super::{FaerSolver, factor_diagonal};
+use crate::{Factorization, SolverError, SymmetricMatrix};
+use faer::dyn_stack::{MemStack, StackReq};
+use faer::linalg::cholesky::ldlt::factor::LdltRegularization;
+use faer::sparse::linalg::cholesky::{LdltRef, SymbolicCholesky};
+use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
+use faer::{Conj, MatMut, Par, Side};
+
+/// f32 pivots smaller than this fraction of their diagonal entry send the factorisation to
+/// f64 (about 800 ε₃₂: the sign of such a pivot could be rounding's).
+pub const SINGLE_PIVOT_FLOOR: f64 = 1e-4;
+
+/// Refinement steps before falling back to f64 (cond(A)·ε₃₂ = 0.1 needs about 7 from
+/// ε₃₂ to 1e-14).
+pub const MAX_REFINEMENT_STEPS: usize = 20;
+
+/// The default refinement target for the normwise backward error
+/// ‖b − A x‖∞ / (‖A‖∞‖x‖∞ + ‖b‖∞). The f64 factor gives 2e-19–3e-16 on the bench's Hex20
+/// matrices (docs/PERFORMANCE.md); 1e-14 is six orders below Newton's default force tolerance
+/// (1e-8 of the largest force), so the iterations see the same residuals.
+pub const DEFAULT_REFINEMENT_TOLERANCE: f64 = 1e-14;
+
+/// The precision of [`FaerSolver`]'s factor.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum FaerPrecision {
+    /// f64 factor, direct solves (the default).
+    #[default]
+    Double,
+    /// f32 factor, solutions refined in f64 until the normwise backward error is at most
+    /// `tolerance`; f64 factor when the f32 one is in doubt (module docs). LDLᵀ only: an
+    /// LLᵀ solver ignores it.
+    Mixed {
+        /// Target of ‖b − A x‖∞ / (‖A‖∞‖x‖∞ + ‖b‖∞).
+        tolerance: f64,
+        /// f32 pivots below this fraction of their diagonal entry send the factorisation to
+        /// f64 ([`SINGLE_PIVOT_FLOOR`] by default).
+        pivot_floor: f64,
+    },
+}
+
+impl FaerPrecision {
+    /// Mixed precision refined to [`DEFAULT_REFINEMENT_TOLERANCE`].
+    pub fn mixed() -> Self {
+        Self::Mixed {
+            tolerance: DEFAULT_REFINEMENT_TOLERANCE,
+            pivot_floor: SINGLE_PIVOT_FLOOR,
+        }
+    }
+}
+
+/// What mixed precision did since the last `analyze`.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct MixedStats {
+    /// Factorisations kept in f32.
+    pub single_factorizations: usize,
+    /// Factorisations done (or redone) in f64.
+    pub double_factorizations: usize,
+    /// Refinement steps over all solves (one f32 solve and one f64 product each).
+    pub refinement_steps: usize,
+    /// The backward error the last refined solution reached.
+    pub last_backward_error: f64,
+    /// Why the last f64 factorisation was made, if one was.
+    pub last_fallback: Option<&'static str>,
+}
+
+/// The f32 factor and what refinement needs.
+#[derive(Debug, Default)]
+pub(super) struct MixedState {
+    l32: Vec<f32>,
+    len: usize,
+    /// The last factorised matrix (f64), for residuals and the f64 fallback.
+    a: Option<SymmetricMatrix>,
+    a_norm: f64,
+    /// The active factor is the f32 one.
+    single: bool,
+    last_negative: Option<usize>,
+    stats: MixedStats,
+}
+
+impl MixedState {
+    /// Room for an f32 factor of `len` entries; forgets everything else.
+    pub(super) fn reset(&mut self, len: usize) -> Result<(), SolverError> {
+        *self = Self::default();
+        self.len = len;
+        self.l32 = try_zeros_f32(len)?;
+        Ok(())
+    }
+
+    pub(super) fn single_active(&self) -> bool {
+        self.single
+    }
+}
+
+/// Scratch of the f32 factorisation and of one f32 solve.
+pub(super) fn scratch(symbolic: &SymbolicCholesky<usize>, par: Par) -> StackReq {
+    symbolic
+        .factorize_numeric_ldlt_scratch::<f32>(par, Default::default())
+        .or(symbolic.solve_in_place_scratch::<f32>(1, par))
+}
+
+fn try_zeros_f32(len: usize) -> Result<Vec<f32>, SolverError> {
+    let mut v = Vec::new();
+    v.try_reserve_exact(len)
+        .map_err(|_| SolverError::OutOfMemory {
+            what: "the f32 faer factor",
+            bytes: len.saturating_mul(4),
+        })?;
+    v.resize(len, 0.0);
+    Ok(v)
+}
+
+/// ‖A‖∞ of a symmetric matrix stored by its lower triangle.
+fn inf_norm(a: &SymmetricMatrix) -> f64 {
+    let p = a.pattern();
+    let mut rows = vec![0.0f64; p.n()];
+    let (cp, ri, v) = (p.col_ptr(), p.row_idx(), a.values());
+    for j in 0..p.n() {
+        for k in cp[j]..cp[j + 1] {
+            rows[ri[k]] += v[k].abs();
+            if ri[k] != j {
+                rows[j] += v[k].abs();
+            }
+        }
+    }
+    rows.into_iter().fold(0.0, f64::max)
+}
+
+fn max_abs(v: &[f64]) -> f64 {
+    v.iter().fold(0.0, |m, x| m.max(x.abs()))
+}
+
+impl FaerSolver {
+    /// What mixed precision did since the last `analyze`.
+    pub fn mixed_stats(&self) -> MixedStats {
+        self.mixed.stats
+    }
+
+    /// Factorises `a` in f32 if it can be trusted (module docs), else in f64.
+    pub(super) fn factorize_mixed(
+        &mut self,
+        a: &SymmetricMatrix,
+    ) -> Result<Factorization, SolverError> {
+        let Some(pattern) = &self.pattern else {
+            return Err(SolverError::NotReady("factorize called before analyze"));
+        };
+        a.check_for(pattern)?;
+        self.factored = false;
+        self.mixed.single = false;
+        match &mut self.mixed.a {
+            Some(m) if std::sync::Arc::ptr_eq(m.pattern(), a.pattern()) => {
+                m.values_mut().copy_from_slice(a.values());
+            }
+            slot => *slot = Some(a.clone()),
+        }
+        self.mixed.a_norm = inf_norm(a);
+        match self.factorize_single(a)? {
+            Ok(f) => Ok(f),
+            Err(reason) => self.fall_back(a, reason),
+        }
+    }
+
+    /// The f64 factor of `a`, because of `reason`; frees the f32 one first.
+    fn fall_back(
+        &mut self,
+        a: &SymmetricMatrix,
+        reason: &'static str,
+    ) -> Result<Factorization, SolverError> {
+        self.mixed.l32 = Vec::new();
+        self.mixed.single = false;
+        self.mixed.stats.last_fallback = Some(reason);
+        self.mixed.stats.double_factorizations += 1;
+        self.mixed.last_negative = None;
+        let f = self.factorize_double(a)?;
+        self.mixed.last_negative = Some(f.negative_pivots);
+        Ok(f)
+    }
+
+    /// The f32 factorisation: `Ok(Err(reason))` when it cannot be trusted.
+    fn factorize_single(
+        &mut self,
+        a: &SymmetricMatrix,
+    ) -> Result<Result<Factorization, &'static str>, SolverError> {
+        if a.values().iter().any(|v| v.abs() > f64::from(f32::MAX)) {
+            return Ok(Err("an entry does not fit f32"));
+        }
+        if self.mixed.l32.len() != self.mixed.len {
+            self.mixed.l32 = try_zeros_f32(self.mixed.len)?;
+        }
+        let (Some(pattern), Some(symbolic), Some(buffer)) =
+            (&self.pattern, &self.symbolic, &mut self.buffer)
+        else {
+            return Err(SolverError::NotReady("factorize called before analyze"));
+        };
+        let n = pattern.n();
+        let values: Vec<f32> = a.values().iter().map(|&v| v as f32).collect();
+        let sym =
+            SymbolicSparseColMatRef::new_checked(n, n, pattern.col_ptr(), None, pattern.row_idx());
+        let mat = SparseColMatRef::new(sym, &values);
+        if symbolic
+            .factorize_numeric_ldlt(
+                &mut self.mixed.l32,
+                mat,
+                Side::Lower,
+                LdltRegularization::default(),
+                self.par,
+                MemStack::new(buffer),
+                Default::default(),
+            )
+            .is_err()
+        {
+            return Ok(Err("f32 elimination met a zero pivot"));
+        }
+        drop(values);
+        let perm_fwd: Vec<usize> = match symbolic.perm() {
+            Some(p) => p.arrays().0.to_vec(),
+            None => (0..n).collect(),
+        };
+        let floor = match self.precision {
+            FaerPrecision::Mixed { pivot_floor, .. } => pivot_floor,
+            FaerPrecision::Double => 0.0,
+        };
+        let diag = a.diagonal();
+        let mut negative = 0;
+        for (k, d) in factor_diagonal(symbolic, &self.mixed.l32)
+            .into_iter()
+            .enumerate()
+        {
+            let scale = diag[perm_fwd[k]].abs();
+            if !d.is_finite() || d.abs() < floor.max(self.tolerance) * scale {
+                return Ok(Err("an f32 pivot is too small to trust its sign"));
+            }
+            if d < 0.0 {
+                negative += 1;
+            }
+        }
+        if self
+            .mixed
+            .last_negative
+            .is_some_and(|last| last != negative)
+        {
+            return Ok(Err("the negative pivot count changed"));
+        }
+        // The f64 factor, if a fallback made one, is not needed now.
+        self.l_values = Vec::new();
+        self.mixed.single = true;
+        self.mixed.last_negative = Some(negative);
+        self.mixed.stats.single_factorizations += 1;
+        self.factored = true;
+        Ok(Ok(Factorization {
+            negative_pivots: negative,
+            factor_entries: self.mixed.len,
+            flops: self.flops,
+        }))
+    }
+
+    /// Solves with the f32 factor and refines each column in f64; on a stall, factorises in
+    /// f64 and solves directly.
+    pub(super) fn solve_mixed(&mut self, b: &mut [f64], nrhs: usize) -> Result<(), SolverError> {
+        let original = b.to_vec();
+        let n = b.len() / nrhs.max(1);
+        let mut stalled = false;
+        for col in b.chunks_mut(n.max(1)) {
+            if !self.refine(col)? {
+                stalled = true;
+                break;
+            }
+        }
+        if stalled {
+            let Some(a) = self.mixed.a.take() else {
+                return Err(SolverError::NotReady("solve called before factorize"));
+            };
+            let done = self.fall_back(&a, "refinement stalled");
+            self.mixed.a = Some(a);
+            done?;
+            self.factored = true;
+            b.copy_from_slice(&original);
+            return self.solve_double(b, nrhs);
+        }
+        Ok(())
+    }
+
+    /// Iterative refinement of one column in place; `false` if it stalled.
+    fn refine(&mut self, col: &mut [f64]) -> Result<bool, SolverError> {
+        let FaerPrecision::Mixed { tolerance, .. } = self.precision else {
+            return Ok(false);
+        };
+        let (Some(symbolic), Some(buffer), Some(a)) =
+            (&self.symbolic, &mut self.buffer, &self.mixed.a)
+        else {
+            return Err(SolverError::NotReady("solve called before factorize"));
+        };
+        let n = col.len();
+        let b = col.to_vec();
+        let b_norm = max_abs(&b);
+        col.fill(0.0);
+        if b_norm == 0.0 {
+            return Ok(true);
+        }
+        let factor = LdltRef::<usize, f32>::new(symbolic, &self.mixed.l32);
+        let mut r = b.clone();
+        let mut ax = vec![0.0; n];
+        let mut c = vec![0.0f32; n];
+        let mut previous = f64::INFINITY;
+        for _ in 0..MAX_REFINEMENT_STEPS {
+            // The correction in f32, scaled to ‖r‖∞ = 1 so small residuals do not underflow.
+            let scale = max_abs(&r);
+            for (ci, ri) in c.iter_mut().zip(&r) {
+                *ci = (ri / scale) as f32;
+            }
+            factor.solve_in_place_with_conj(
+                Conj::No,
+                MatMut::from_column_major_slice_mut(&mut c, n, 1),
+                super::SOLVE_PAR,
+                MemStack::new(buffer),
+            );
+            for (xi, ci) in col.iter_mut().zip(&c) {
+                *xi += f64::from(*ci) * scale;
+            }
+            a.matvec(col, &mut ax)?;
+            for ((ri, bi), axi) in r.iter_mut().zip(&b).zip(&ax) {
+                *ri = bi - axi;
+            }
+            let omega = max_abs(&r) / (self.mixed.a_norm * max_abs(col) + b_norm);
+            self.mixed.stats.refinement_steps += 1;
+            self.mixed.stats.last_backward_error = omega;
+            if omega <= tolerance {
+                return Ok(true);
+            }
+            if !omega.is_finite() || omega > 0.5 * previous {
+                return Ok(false);
+            }
+            previous = omega;
+        }
+        Ok(false)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{FaerMode, FaerOrdering, LinearSolver, SymmetricPattern};
+    use std::sync::Arc;
+
+    /// A chain of n unit springs between two walls (the 1-D Laplacian tridiag(−1, 2, −1)),
+    /// times `scale`, minus `shift`·I. Eigenvalues scale·(2 − 2 cos(kπ/(n+1))) − shift, so
+    /// cond ≈ 4(n+1)²/π² unshifted; every pivot of any elimination order is ≥ 1/n of its
+    /// diagonal (the Schur complement onto a node is the spring to the walls, ≥ 2/(n+1)).
+    fn chain(n: usize, scale: f64, shift: f64) -> SymmetricMatrix {
+        let lists: Vec<Vec<usize>> = (0..n - 1).map(|i| vec![i, i + 1]).collect();
+        let p = Arc::new(SymmetricPattern::from_dof_lists(n, &lists).unwrap());
+        let mut a = SymmetricMatrix::zeros(p);
+        for i in 0..n {
+            a.add(i, i, scale * 2.0 - shift).unwrap();
+            if i + 1 < n {
+                a.add(i + 1, i, -scale).unwrap();
+            }
+        }
+        a
+    }
+
+    fn solver(precision: FaerPrecision) -> FaerSolver {
+        let mut s = FaerSolver::new(FaerMode::Ldlt).with_ordering(FaerOrdering::NestedDissection);
+        s.precision = precision;
+        s
+    }
+
+    /// (x, negative pivots) of A x = b with b_i = 1 + i mod 3.
+    fn solve(s: &mut FaerSolver, a: &SymmetricMatrix) -> (Vec<f64>, usize) {
+        s.analyze(a.pattern()).unwrap();
+        let f = s.factorize(a).unwrap();
+        let mut x: Vec<f64> = (0..a.n()).map(|i| 1.0 + (i % 3) as f64).collect();
+        s.solve_in_place(&mut x, 1).unwrap();
+        (x, f.negative_pivots)
+    }
+
+    /// n = 300: cond ≈ 3.7e4, so each refinement step gains a factor cond·ε₃₂ ≈ 4e-3: the
+    /// f32 factor is kept and refinement reaches 1e-14 in a few steps. Both solutions then have
+    /// backward error ≤ 1e-14, so they differ by at most 2·cond·1e-14 ≈ 1e-9 relative.
+    #[test]
+    fn refinement_reaches_the_f64_solution() {
+        let a = chain(300, 1.0, 0.0);
+        let (x64, _) = solve(&mut solver(FaerPrecision::Double), &a);
+        let mut s = solver(FaerPrecision::mixed());
+        let (x, neg) = solve(&mut s, &a);
+        let m = s.mixed_stats();
+        assert_eq!(
+            (neg, m.single_factorizations, m.double_factorizations),
+            (0, 1, 0)
+        );
+        assert!((2..=6).contains(&m.refinement_steps), "{m:?}");
+        assert!(m.last_backward_error <= DEFAULT_REFINEMENT_TOLERANCE);
+        let scale = x64.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        for (p, q) in x.iter().zip(&x64) {
+            assert!((p - q).abs() <= 1e-9 * scale, "{p} vs {q}");
+        }
+    }
+
+    /// A tolerance below f64's own rounding floor (backward errors of ~1e-17 here): refinement
+    /// stops gaining and must fall back; the answer is then the f64 factor's, bit for bit.
+    #[test]
+    fn a_stalled_refinement_falls_back_to_f64() {
+        let a = chain(300, 1.0, 0.0);
+        let (x64, _) = solve(&mut solver(FaerPrecision::Double), &a);
+        let mut s = solver(FaerPrecision::Mixed {
+            tolerance: 1e-30,
+            pivot_floor: SINGLE_PIVOT_FLOOR,
+        });
+        let (x, _) = solve(&mut s, &a);
+        let m = s.mixed_stats();
+        assert_eq!(m.last_fallback, Some("refinement stalled"), "{m:?}");
+        assert_eq!((m.single_factorizations, m.double_factorizations), (1, 1));
+        assert!(x.iter().zip(&x64).all(|(p, q)| p.to_bits() == q.to_bits()));
+    }
+
+    /// A free chain held only by springs ε = 1e-8 to ground at every node (A = L + εI, L the
+    /// singular free-free Laplacian): f32 rounds 2 + ε to 2 (its spacing at 2 is 2.4e-7), so
+    /// the f32 matrix is singular and its last pivot is rounding noise. That factor is refused
+    /// and the f64 one (smallest eigenvalue ε, well inside f64) gives the answer.
+    #[test]
+    fn a_doubtful_f32_pivot_falls_back_to_f64() {
+        let n = 400;
+        let mut a = chain(n, 1.0, -1e-8);
+        // Free ends: one spring fewer at each.
+        a.add(0, 0, -1.0).unwrap();
+        a.add(n - 1, n - 1, -1.0).unwrap();
+        let (x64, neg) = solve(&mut solver(FaerPrecision::Double), &a);
+        assert_eq!(neg, 0);
+        let mut s = solver(FaerPrecision::mixed());
+        let (x, _) = solve(&mut s, &a);
+        let m = s.mixed_stats();
+        assert!(
+            matches!(
+                m.last_fallback,
+                Some("an f32 pivot is too small to trust its sign")
+                    | Some("f32 elimination met a zero pivot")
+            ),
+            "{m:?}"
+        );
+        assert_eq!((m.single_factorizations, m.double_factorizations), (0, 1));
+        assert!(x.iter().zip(&x64).all(|(p, q)| p.to_bits() == q.to_bits()));
+    }
+
+    /// The inertia: an SPD factor in f32, then A − 0.5·I (the eigenvalues below 0.5 turn
+    /// negative): the count changed, so it comes from an f64 factor and equals the f64 solver's;
+    /// the same matrix again keeps the f32 factor (its count agrees).
+    #[test]
+    fn a_changed_negative_pivot_count_is_confirmed_in_f64() {
+        let (spd, shifted) = (chain(200, 1.0, 0.0), chain(200, 1.0, 0.5));
+        let (_, expected) = solve(&mut solver(FaerPrecision::Double), &shifted);
+        // 2 − 2cos(kπ/201) < 0.5 for k < 201·acos(0.75)/π = 46.3: 46 negative eigenvalues.
+        assert_eq!(expected, 46);
+        let mut s = solver(FaerPrecision::mixed());
+        s.analyze(spd.pattern()).unwrap();
+        assert_eq!(s.factorize(&spd).unwrap().negative_pivots, 0);
+        assert_eq!(s.mixed_stats().double_factorizations, 0);
+        assert_eq!(s.factorize(&shifted).unwrap().negative_pivots, expected);
+        let m = s.mixed_stats();
+        assert_eq!(m.last_fallback, Some("the negative pivot count changed"));
+        assert_eq!((m.single_factorizations, m.double_factorizations), (1, 1));
+        assert_eq!(s.factorize(&shifted).unwrap().negative_pivots, expected);
+        assert_eq!(s.mixed_stats().single_factorizations, 2);
+    }
+
+    /// Entries beyond f32's range (3.4e38) go to f64 and give the f64 answer.
+    #[test]
+    fn entries_beyond_f32_go_to_f64() {
+        let a = chain(50, 1e39, 0.0);
+        let (x64, _) = solve(&mut solver(FaerPrecision::Double), &a);
+        let mut s = solver(FaerPrecision::mixed());
+        let (x, _) = solve(&mut s, &a);
+        assert_eq!(
+            s.mixed_stats().last_fallback,
+            Some("an entry does not fit f32")
+        );
+        assert_eq!(x, x64);
+    }
+}

@@ -1,0 +1,98 @@
+//! Mixed precision (f32 factor, f64 refinement) on laminate stiffness matrices: quasi-isotropic
+//! graphite/epoxy Hex20 cantilevers of 16 × 3 × 4 cells, 0.125 mm thick (one ply per cell
+//! layer), clamped at x = 0, with cells 4:1 or 16:1 in plan (the bench's laminate). Thinner
+//! cells make the stiffness more ill-conditioned: refinement contracts the error by about
+//! cond(A)·ε₃₂ per step, so it converges on the 4:1 model and cannot on the 16:1 one, where
+//! the solver must fall back to its f64 factor.
+
+mod common;
+
+use nonlin3d::solver::{FaerMode, FaerPrecision, FaerSolver, LinearSolver, SymmetricMatrix};
+
+fn laminate(aspect: f64) -> SymmetricMatrix {
+    let h = 0.125e-3;
+    common::clamped_box_stiffness([16, 3, 4], [aspect * h, aspect * h, h])
+}
+
+/// (x, backward error ‖b − A x‖∞ / (‖A‖∞‖x‖∞ + ‖b‖∞), solver) for a unit transverse load on
+/// every DOF 2 mod 3.
+fn solve(a: &SymmetricMatrix, precision: FaerPrecision) -> (Vec<f64>, f64, FaerSolver) {
+    let mut s = FaerSolver::new(FaerMode::Ldlt);
+    s.precision = precision;
+    s.analyze(a.pattern()).unwrap();
+    assert_eq!(s.factorize(a).unwrap().negative_pivots, 0);
+    let b: Vec<f64> = (0..a.n())
+        .map(|i| f64::from(u8::from(i % 3 == 2)))
+        .collect();
+    let mut x = b.clone();
+    s.solve_in_place(&mut x, 1).unwrap();
+    let mut ax = vec![0.0; a.n()];
+    a.matvec(&x, &mut ax).unwrap();
+    let inf = |v: &[f64]| v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    let r: Vec<f64> = ax.iter().zip(&b).map(|(p, q)| q - p).collect();
+    let mut rows = vec![0.0; a.n()];
+    for (j, (&lo, &hi)) in a
+        .pattern()
+        .col_ptr()
+        .iter()
+        .zip(&a.pattern().col_ptr()[1..])
+        .enumerate()
+    {
+        for k in lo..hi {
+            let (i, v) = (a.pattern().row_idx()[k], a.values()[k].abs());
+            rows[i] += v;
+            if i != j {
+                rows[j] += v;
+            }
+        }
+    }
+    (x.clone(), inf(&r) / (inf(&rows) * inf(&x) + inf(&b)), s)
+}
+
+/// 4:1 cells: the f32 factor is kept (pivot floor off, to exercise refinement alone) and
+/// refinement reaches the 1e-14 backward error target. Both solutions then have backward error
+/// ≤ 1e-14, so they differ by at most 2·cond(A)·1e-14 relative; refinement converging at all
+/// means cond(A)·ε₃₂ < 1, cond(A) < 1.7e7, so 1e-6 is a safe bound.
+#[test]
+fn refinement_reaches_the_f64_solution_on_a_laminate() {
+    let a = laminate(4.0);
+    let (x64, omega64, _) = solve(&a, FaerPrecision::Double);
+    let (x, omega, s) = solve(
+        &a,
+        FaerPrecision::Mixed {
+            tolerance: 1e-14,
+            pivot_floor: 0.0,
+        },
+    );
+    let m = s.mixed_stats();
+    eprintln!("f64 backward error {omega64:.1e}, mixed {omega:.1e}, {m:?}");
+    assert_eq!((m.single_factorizations, m.double_factorizations), (1, 0));
+    assert!(omega <= 1e-14, "{omega}");
+    let scale = x64.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let diff = x
+        .iter()
+        .zip(&x64)
+        .fold(0.0f64, |m, (p, q)| m.max((p - q).abs()));
+    eprintln!("relative difference {:.1e}", diff / scale);
+    assert!(diff <= 1e-6 * scale);
+}
+
+/// 16:1 cells: refinement stalls (the f32 factor is too far from A), the solver falls back to
+/// an f64 factor and returns its solution, bit for bit.
+#[test]
+fn a_thin_laminate_falls_back_to_f64() {
+    let a = laminate(16.0);
+    let (x64, _, _) = solve(&a, FaerPrecision::Double);
+    let (x, _, s) = solve(
+        &a,
+        FaerPrecision::Mixed {
+            tolerance: 1e-14,
+            pivot_floor: 0.0,
+        },
+    );
+    let m = s.mixed_stats();
+    eprintln!("{m:?}");
+    assert_eq!(m.last_fallback, Some("refinement stalled"));
+    assert_eq!((m.single_factorizations, m.double_factorizations), (1, 1));
+    assert!(x.iter().zip(&x64).all(|(p, q)| p.to_bits() == q.to_bits()));
+}
