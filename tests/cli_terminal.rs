@@ -77,9 +77,13 @@ fn frames(chunks: &[(f64, Vec<u8>)]) -> Vec<(f64, String)> {
 #[test]
 fn the_bar_moves_during_a_long_level_and_shows_the_iterations() {
     let dir = tmp("long");
-    let scene = scene(&dir, 6, "-0.004");
+    // 12 slices on one thread: a level of about 5 s here (3.5 s at 10 slices), long enough
+    // for the tick to show on a machine twice as fast.
+    let scene = scene(&dir, 12, "-0.004");
     let out = dir.join("out");
     let (code, chunks) = in_terminal(&[
+        "--threads",
+        "1",
         "run",
         "--out",
         out.to_str().unwrap(),
