@@ -458,7 +458,13 @@ fn main() -> ExitCode {
     }
     let verbosity = cli.verbosity();
     let result = match cli.command {
-        None => run(None, Path::new("nonlin3d-out"), verbosity, None, cli.threads),
+        None => run(
+            None,
+            Path::new("nonlin3d-out"),
+            verbosity,
+            None,
+            cli.threads,
+        ),
         Some(Command::Run {
             scene,
             out,

@@ -257,7 +257,16 @@ fn calculix_with_contact_agrees_with_nonlin3d_on_deflection_and_contact_extent()
             level.value
         );
     }
-    assert!(ours.levels.last().unwrap().contact.as_ref().unwrap().pairs_closed > 0);
+    assert!(
+        ours.levels
+            .last()
+            .unwrap()
+            .contact
+            .as_ref()
+            .unwrap()
+            .pairs_closed
+            > 0
+    );
 }
 
 /// The line (1-based) of the first line of `text` that starts with `prefix`.

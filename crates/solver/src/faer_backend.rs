@@ -70,7 +70,7 @@ pub struct FaerSolver {
     pub ordering: FaerOrdering,
     /// Relative zero-pivot tolerance (as [`crate::profile::DEFAULT_PIVOT_TOLERANCE`]).
     pub tolerance: f64,
-    /// Threads for the numeric phase (solves are sequential, [`SOLVE_PAR`]): `Par::Seq` or
+    /// Threads for the numeric phase (solves are sequential, `SOLVE_PAR`): `Par::Seq` or
     /// `Par::rayon(k)`. The bits do not depend on it: faer's supernodal LDLᵀ visits the supernodes in one fixed order and
     /// passes the threads only to its dense kernels (update products, the diagonal block's
     /// LDLᵀ, triangular solves), which split the *output* into register tiles and give each

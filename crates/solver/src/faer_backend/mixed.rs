@@ -49,13 +49,13 @@ pub enum FaerPrecision {
         /// Target of ‖b − A x‖∞ / (‖A‖∞‖x‖∞ + ‖b‖∞).
         tolerance: f64,
         /// f32 pivots below this fraction of their diagonal entry send the factorisation to
-        /// f64 ([`SINGLE_PIVOT_FLOOR`] by default).
+        /// f64 (`SINGLE_PIVOT_FLOOR` = 1e-4 by default).
         pivot_floor: f64,
     },
 }
 
 impl FaerPrecision {
-    /// Mixed precision refined to [`DEFAULT_REFINEMENT_TOLERANCE`].
+    /// Mixed precision refined to a normwise backward error of 1e-14 (`DEFAULT_REFINEMENT_TOLERANCE`).
     pub fn mixed() -> Self {
         Self::Mixed {
             tolerance: DEFAULT_REFINEMENT_TOLERANCE,
