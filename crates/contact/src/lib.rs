@@ -43,6 +43,7 @@
 mod active;
 mod driver;
 mod error;
+mod facet;
 mod pairs;
 mod recover;
 mod tie;

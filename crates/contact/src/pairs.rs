@@ -9,6 +9,8 @@
 //! - g_i = n_i·(x_up − x_low): positive open, negative overlapping.
 
 use crate::ContactError;
+use crate::facet::{Basis, Facet, dot, sub};
+use crate::facet::{cross, unit};
 use nonlin3d_mesh::Mesh;
 use nonlin3d_mesh::names::{CRACK_LOWER, CRACK_UPPER};
 use std::collections::HashSet;
@@ -29,15 +31,6 @@ impl std::fmt::Display for Pair {
     }
 }
 
-/// One facet of the lower face: its corners in cyclic order, the corners of its cell (for
-/// the outward side), and its mid-edge nodes (quadratic cells) with the two corners of each.
-#[derive(Debug, Clone, PartialEq)]
-pub(crate) struct Facet {
-    pub(crate) corners: [usize; 4],
-    cell: Vec<usize>,
-    pub(crate) mids: Vec<(usize, [usize; 2])>,
-}
-
 /// The crack faces of a mesh: the pairs and the lower face's facets around each pair.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CrackFaces {
@@ -49,17 +42,6 @@ pub struct CrackFaces {
     coords: Vec<[f64; 3]>,
     /// The transformed basis of each pair's lower node ([`recover`](Self::recover)).
     pub(crate) basis: Vec<Basis>,
-}
-
-/// A lower-face node's place in the transformed face basis N̂ (module `recover`).
-#[derive(Debug, Clone, PartialEq, Default)]
-pub(crate) struct Basis {
-    /// Whether the node is a mid-edge node of its facets (quadratic faces).
-    pub(crate) mid: bool,
-    /// Pairs whose lower node is a mid-edge node next to this corner (on an edge from it).
-    pub(crate) next: Vec<usize>,
-    /// ∫ N̂_i dA over the reference facets around the node (m², > 0).
-    pub(crate) weight: f64,
 }
 
 impl CrackFaces {
@@ -335,34 +317,6 @@ fn lower_facets(mesh: &Mesh, up: &HashSet<usize>, lo: &HashSet<usize>) -> Vec<(F
         }
     }
     out
-}
-
-pub(crate) fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-pub(crate) fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-/// |a × b|.
-pub(crate) fn cross_norm(a: [f64; 3], b: [f64; 3]) -> f64 {
-    let c = cross(a, b);
-    dot(c, c).sqrt()
-}
-
-/// n/|n|, None for a zero or non-finite vector.
-fn unit(n: [f64; 3]) -> Option<[f64; 3]> {
-    let l = dot(n, n).sqrt();
-    (l > 0.0 && l.is_finite()).then(|| n.map(|c| c / l))
 }
 
 #[cfg(test)]

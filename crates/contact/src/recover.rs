@@ -23,7 +23,7 @@
 //! that of f̂_i: the release test compares f̂_i with the force tolerance. On linear (Hex8)
 //! faces there is no mid-edge node, T = I, f̂ = f and p̂_i = f_i / (A/4 per facet).
 
-use crate::pairs::{Basis, Facet, cross_norm, sub};
+use crate::facet::{Basis, Facet, cross_norm, sub};
 
 /// The weight α of the mid-edge functions added to their corners (module docs: 1/8 < α < 1/2).
 pub const ALPHA: f64 = 0.2;
