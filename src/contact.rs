@@ -96,6 +96,15 @@ impl ContactStage {
             Some(e) => e,
             None => self.engage(scene, model, newton)?,
         };
+        // A level longer than the contact's largest step is followed again from its start in
+        // sub-levels (the passes from a state far past the first contact can settle on
+        // another equilibrium than the loading path's: `ContactSettings::max_step`).
+        let engaging = plain.is_some();
+        let plain = plain.filter(|_| e.contact.sublevels(from, to) == 1);
+        if engaging && plain.is_none() {
+            u.clear();
+            u.extend_from_slice(start);
+        }
         let level = match plain {
             Some(first) => e.contact.continue_level(
                 &mut e.problem,
