@@ -8,7 +8,12 @@
 //!   by more than the tolerance, the active-set loop starts from that overlapping state (the
 //!   overlapping pairs close and the level is re-solved at the same load; followed again from
 //!   its start only if that fails), and all later levels are solved by the loop (the set may
-//!   open again there). A level without overlap is therefore solved exactly as with `off`.
+//!   open again there). A level without overlap is therefore solved exactly as with `off`. A
+//!   level longer than the contact's largest step (`ContactSettings::max_step`, 0.25 of the
+//!   largest level) is instead followed again from its start in sub-levels with the loop at
+//!   each: passes from a state far past the first contact can settle on another equilibrium
+//!   than the loading path's (one level ε = −0.004 on a graded mesh: centre deflection
+//!   0.721 mm against the path's 0.674).
 //!
 //! The contact system (all candidate pairs reserved in its pattern) is built on first use,
 //! beside the level loop's own system, with its own solver session.
@@ -96,6 +101,15 @@ impl ContactStage {
             Some(e) => e,
             None => self.engage(scene, model, newton)?,
         };
+        // A level longer than the contact's largest step is followed again from its start in
+        // sub-levels (the passes from a state far past the first contact can settle on
+        // another equilibrium than the loading path's: `ContactSettings::max_step`).
+        let engaging = plain.is_some();
+        let plain = plain.filter(|_| e.contact.sublevels(from, to) == 1);
+        if engaging && plain.is_none() {
+            u.clear();
+            u.extend_from_slice(start);
+        }
         let level = match plain {
             Some(first) => e.contact.continue_level(
                 &mut e.problem,
