@@ -11,7 +11,7 @@
 use crate::active::{Change, Tolerances, update};
 use crate::tie::{candidate_tie, contact_force, contact_tie, slave_component};
 use crate::{ContactError, CrackFaces, Pair};
-use nonlin3d_assembly::{SystemBuilder, TieGroup};
+use nonlin3d_assembly::SystemBuilder;
 use nonlin3d_mesh::Mesh;
 use nonlin3d_newton::{
     LevelReport, NewtonSettings, NonlinearProblem, PathSolver, Stepping, StructuralProblem,
@@ -19,56 +19,8 @@ use nonlin3d_newton::{
 };
 use std::time::Instant;
 
-/// How an active pair is held.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum Mode {
-    /// Two-body contact: the pair is tied, n·(u_up − u_low) = −g₀; the contact force acts on
-    /// both faces (Fig. 2.7.1b).
-    #[default]
-    TwoBody,
-    /// The thesis's approximation (Fig. 2.7.1c): the upper node's w is prescribed to the lower
-    /// node's current height (re-taken at each pass); the force that holds it is external, the
-    /// base does not react it.
-    External,
-}
-
-/// Settings of the contact loop.
-#[derive(Debug, Clone, PartialEq)]
-pub struct ContactSettings {
-    /// Overlap allowed before a pair closes (m). Default 1e-9 m: far above the round-off of
-    /// coordinates of centimetre models (1e-18 m), far below the overlaps that matter.
-    pub gap_tolerance: f64,
-    /// Tension allowed before a pair opens (N); the Newton tolerance of the state
-    /// (relative tolerance × force scale, the accuracy of a reaction) when larger. Default 0.
-    pub force_tolerance: f64,
-    /// Most passes (re-solves) at one level. Default 50.
-    pub max_passes: usize,
-    /// Two-body or the thesis's external force.
-    pub mode: Mode,
-    /// The tie group of the contact ties. Default `TieGroup(0xC0)`.
-    pub group: TieGroup,
-    /// Largest load-factor step over which the set may stay unchecked (λ = 1: the largest
-    /// level): a longer level is solved as sub-levels of equal steps ≤ this, the loop at each
-    /// ([`Contact::sublevels`]). Default 0.25. Measured on the 30 mm circle (5 901 DOF,
-    /// e = 0.1 mm, ε = −0.004 in one level): the passes started from the state without
-    /// contact land on the path's solution (centre deflection 0.674 mm) for jumps up to
-    /// ε = −0.0038 and on another equilibrium (0.688–0.721 mm, a few pairs carrying 12–47 N)
-    /// from −0.0039 on; steps of 0.001 and of 0.00025 agree within 0.0003 mm.
-    pub max_step: f64,
-}
-
-impl Default for ContactSettings {
-    fn default() -> Self {
-        Self {
-            gap_tolerance: 1e-9,
-            force_tolerance: 0.0,
-            max_passes: 50,
-            mode: Mode::TwoBody,
-            group: TieGroup(0xC0),
-            max_step: 0.25,
-        }
-    }
-}
+mod settings;
+pub use settings::{ContactSettings, Mode};
 
 /// Gaps, forces and the set at a state: the results of contact.
 #[derive(Debug, Clone, PartialEq)]
@@ -613,79 +565,4 @@ impl Contact {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::pairs::tests::stacked;
-
-    /// A level is split into the fewest equal steps of at most `max_step`: one level to λ = 1
-    /// in four, the sweep's fifths and a step of exactly `max_step` whole; a step that is not
-    /// positive and finite is refused by name.
-    #[test]
-    fn long_levels_are_split_into_steps_of_at_most_max_step() {
-        let (mesh, up, lo) = stacked();
-        let faces = CrackFaces::from_sets(&mesh, &up, &lo).unwrap();
-        let contact = Contact::with_faces(faces.clone(), ContactSettings::default()).unwrap();
-        assert_eq!(contact.sublevels(0.0, 1.0), 4);
-        assert_eq!(contact.sublevels(0.8, 1.0), 1);
-        assert_eq!(contact.sublevels(0.0, 0.25), 1);
-        assert_eq!(contact.sublevels(0.0, 0.26), 2);
-        assert_eq!(contact.sublevels(1.0, 1.0), 1);
-        for bad in [0.0, -0.1, f64::NAN, f64::INFINITY] {
-            let settings = ContactSettings {
-                max_step: bad,
-                ..ContactSettings::default()
-            };
-            let e = Contact::with_faces(faces.clone(), settings).unwrap_err();
-            assert!(e.to_string().contains("max_step"), "{e}");
-        }
-    }
-
-    /// A set seen before at the level is a cycle: the error names the level and the pairs whose
-    /// state differs among the sets since its first visit (here pairs 1 and 2, which flip in
-    /// turn), not the pair that stayed; a new set passes until the pass limit.
-    #[test]
-    fn a_repeated_set_is_a_cycle_naming_the_flipping_pairs() {
-        let (mesh, up, lo) = stacked();
-        let faces = CrackFaces::from_sets(&mesh, &up, &lo).unwrap();
-        let settings = ContactSettings {
-            max_passes: 3,
-            ..ContactSettings::default()
-        };
-        let contact = Contact::with_faces(faces, settings).unwrap();
-        let change = Change::default();
-        let seen = vec![
-            vec![true, false, false, false],
-            vec![true, true, false, false],
-            vec![true, false, true, false],
-        ];
-        let e = contact
-            .check_progress(0.75, &seen, &[true, true, false, false], 2, &change)
-            .unwrap_err();
-        match &e {
-            ContactError::Cycle {
-                lambda,
-                passes,
-                pairs,
-            } => {
-                assert_eq!((*lambda, *passes), (0.75, 2));
-                let (a, b) = (contact.faces().pairs()[1], contact.faces().pairs()[2]);
-                assert_eq!(pairs, &[a, b]);
-            }
-            other => panic!("{other}"),
-        }
-        assert_eq!(
-            e.to_string(),
-            "contact at λ = 0.75: the active set repeats after 2 passes (a cycle); the pairs \
-             that flip: nodes 9/5, nodes 10/6"
-        );
-        assert!(
-            contact
-                .check_progress(0.75, &seen, &[false; 4], 2, &change)
-                .is_ok()
-        );
-        assert!(matches!(
-            contact.check_progress(0.75, &seen, &[false; 4], 3, &change),
-            Err(ContactError::Passes { passes: 3, .. })
-        ));
-    }
-}
+mod tests;

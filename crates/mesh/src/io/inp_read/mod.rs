@@ -15,6 +15,7 @@ mod contact;
 mod lexer;
 mod model;
 mod output;
+mod riks;
 mod sections;
 mod step;
 

@@ -1,0 +1,75 @@
+//! Tests of the contact loop (`driver`).
+use super::*;
+use crate::pairs::tests::stacked;
+
+/// A level is split into the fewest equal steps of at most `max_step`: one level to λ = 1
+/// in four, the sweep's fifths and a step of exactly `max_step` whole; a step that is not
+/// positive and finite is refused by name.
+#[test]
+fn long_levels_are_split_into_steps_of_at_most_max_step() {
+    let (mesh, up, lo) = stacked();
+    let faces = CrackFaces::from_sets(&mesh, &up, &lo).unwrap();
+    let contact = Contact::with_faces(faces.clone(), ContactSettings::default()).unwrap();
+    assert_eq!(contact.sublevels(0.0, 1.0), 4);
+    assert_eq!(contact.sublevels(0.8, 1.0), 1);
+    assert_eq!(contact.sublevels(0.0, 0.25), 1);
+    assert_eq!(contact.sublevels(0.0, 0.26), 2);
+    assert_eq!(contact.sublevels(1.0, 1.0), 1);
+    for bad in [0.0, -0.1, f64::NAN, f64::INFINITY] {
+        let settings = ContactSettings {
+            max_step: bad,
+            ..ContactSettings::default()
+        };
+        let e = Contact::with_faces(faces.clone(), settings).unwrap_err();
+        assert!(e.to_string().contains("max_step"), "{e}");
+    }
+}
+
+/// A set seen before at the level is a cycle: the error names the level and the pairs whose
+/// state differs among the sets since its first visit (here pairs 1 and 2, which flip in
+/// turn), not the pair that stayed; a new set passes until the pass limit.
+#[test]
+fn a_repeated_set_is_a_cycle_naming_the_flipping_pairs() {
+    let (mesh, up, lo) = stacked();
+    let faces = CrackFaces::from_sets(&mesh, &up, &lo).unwrap();
+    let settings = ContactSettings {
+        max_passes: 3,
+        ..ContactSettings::default()
+    };
+    let contact = Contact::with_faces(faces, settings).unwrap();
+    let change = Change::default();
+    let seen = vec![
+        vec![true, false, false, false],
+        vec![true, true, false, false],
+        vec![true, false, true, false],
+    ];
+    let e = contact
+        .check_progress(0.75, &seen, &[true, true, false, false], 2, &change)
+        .unwrap_err();
+    match &e {
+        ContactError::Cycle {
+            lambda,
+            passes,
+            pairs,
+        } => {
+            assert_eq!((*lambda, *passes), (0.75, 2));
+            let (a, b) = (contact.faces().pairs()[1], contact.faces().pairs()[2]);
+            assert_eq!(pairs, &[a, b]);
+        }
+        other => panic!("{other}"),
+    }
+    assert_eq!(
+        e.to_string(),
+        "contact at λ = 0.75: the active set repeats after 2 passes (a cycle); the pairs \
+         that flip: nodes 9/5, nodes 10/6"
+    );
+    assert!(
+        contact
+            .check_progress(0.75, &seen, &[false; 4], 2, &change)
+            .is_ok()
+    );
+    assert!(matches!(
+        contact.check_progress(0.75, &seen, &[false; 4], 3, &change),
+        Err(ContactError::Passes { passes: 3, .. })
+    ));
+}
