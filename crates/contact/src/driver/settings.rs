@@ -32,7 +32,8 @@ pub struct ContactSettings {
     pub group: TieGroup,
     /// Largest load-factor step over which the set may stay unchecked (λ = 1: the largest
     /// level): a longer level is solved as sub-levels of equal steps ≤ this, the loop at each
-    /// ([`Contact::sublevels`]). Default 0.25. Measured on the 30 mm circle (5 901 DOF,
+    /// ([`Contact::sublevels`](crate::Contact::sublevels)). Default 0.25. Measured on the
+    /// 30 mm circle (5 901 DOF,
     /// e = 0.1 mm, ε = −0.004 in one level): the passes started from the state without
     /// contact land on the path's solution (centre deflection 0.674 mm) for jumps up to
     /// ε = −0.0038 and on another equilibrium (0.688–0.721 mm, a few pairs carrying 12–47 N)
