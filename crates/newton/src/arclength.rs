@@ -296,7 +296,12 @@ fn check(arc: &ArcLength) -> Result<(), NewtonError> {
     } else {
         Err(NewtonError::Setting {
             name: "arc-length",
-            reason: format!("{arc:?}"),
+            reason: format!(
+                "needs a finite, positive initial = {} and min = {}, max = {} ≥ min, growth = \
+                 {} ≥ 1, 0 < cutback = {} < 1, target iterations = {} > 0 and, for the \
+                 spherical constraint, a finite ψ ≥ 0",
+                arc.initial, arc.min, arc.max, arc.growth, arc.cutback, arc.target_iterations
+            ),
         })
     }
 }
