@@ -4,10 +4,10 @@
 //! and the perturbation protocol (thesis §2.5, §3.2) as [`solve_level`](crate::solve_level).
 
 use super::{ArcIncrement, ArcLength, ArcStop, follow_arc_length};
-use crate::level::perturbed_redo;
+use crate::level::{PERTURBED_INCREMENTS, PERTURBED_PATIENCE};
 use crate::{
     DeadLoads, IncrementReport, LevelReport, NewtonError, NewtonSettings, NonlinearProblem,
-    PathSolver, Stepping, Termination,
+    PathSolver, Stepping, Termination, perturbed_step,
 };
 
 /// The record of a converged arc-length increment as an [`IncrementReport`].
@@ -115,13 +115,24 @@ pub fn solve_level_arc<P: NonlinearProblem + DeadLoads>(
     let mut perturbed = false;
     if pivots.is_some_and(|p| p > 0) && !perturbation.is_empty() {
         *u = start;
-        attempts.extend(perturbed_redo(
+        let part = ((to - from) / PERTURBED_INCREMENTS).abs().max(stepping.min);
+        let fine = Stepping {
+            initial: part,
+            max: part,
+            ..stepping.clone()
+        };
+        let patient = NewtonSettings {
+            max_iterations: PERTURBED_PATIENCE * newton.max_iterations,
+            ..newton.clone()
+        };
+        attempts.extend(perturbed_step(
             problem,
             u,
-            (from, to),
+            from,
+            to,
             perturbation,
-            newton,
-            stepping,
+            &patient,
+            &fine,
         )?);
         perturbed = true;
         pivots = Some(session.inertia_at(problem, u, to)?);
