@@ -67,24 +67,13 @@ pub fn solve_level<P: NonlinearProblem + DeadLoads>(
     let mut perturbed = false;
     if unstable && !perturbation.is_empty() {
         *u = start;
-        let part = ((to - from) / PERTURBED_INCREMENTS).abs().max(stepping.min);
-        let fine = Stepping {
-            initial: part,
-            max: part,
-            ..stepping.clone()
-        };
-        let patient = NewtonSettings {
-            max_iterations: PERTURBED_PATIENCE * newton.max_iterations,
-            ..newton.clone()
-        };
-        attempts.extend(perturbed_step(
+        attempts.extend(perturbed_redo(
             problem,
             u,
-            from,
-            to,
+            (from, to),
             perturbation,
-            &patient,
-            &fine,
+            newton,
+            &stepping,
         )?);
         perturbed = true;
         pivots = inertia(problem, u, to, newton, &attempts, session)?;
@@ -94,6 +83,31 @@ pub fn solve_level<P: NonlinearProblem + DeadLoads>(
         perturbed,
         negative_pivots: pivots,
     })
+}
+
+/// The perturbation protocol's redo of a level (thesis §3.2) from the level's start `u`: the
+/// perturbed step in [`PERTURBED_INCREMENTS`] equal increments with
+/// [`PERTURBED_PATIENCE`] times the iteration limit, the perturbation applied and removed
+/// ([`perturbed_step`]). Shared by [`solve_level`] and the arc-length level.
+pub(crate) fn perturbed_redo<P: NonlinearProblem + DeadLoads>(
+    problem: &mut P,
+    u: &mut Vec<f64>,
+    (from, to): (f64, f64),
+    perturbation: &[(usize, f64)],
+    newton: &NewtonSettings,
+    stepping: &Stepping,
+) -> Result<Vec<IncrementReport>, NewtonError> {
+    let part = ((to - from) / PERTURBED_INCREMENTS).abs().max(stepping.min);
+    let fine = Stepping {
+        initial: part,
+        max: part,
+        ..stepping.clone()
+    };
+    let patient = NewtonSettings {
+        max_iterations: PERTURBED_PATIENCE * newton.max_iterations,
+        ..newton.clone()
+    };
+    perturbed_step(problem, u, from, to, perturbation, &patient, &fine)
 }
 
 /// Negative pivots at the converged state `u` at λ = `to`: with a kept tangent one extra

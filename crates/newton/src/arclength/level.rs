@@ -4,10 +4,10 @@
 //! and the perturbation protocol (thesis §2.5, §3.2) as [`solve_level`](crate::solve_level).
 
 use super::{ArcIncrement, ArcLength, ArcStop, follow_arc_length};
-use crate::level::{PERTURBED_INCREMENTS, PERTURBED_PATIENCE};
+use crate::level::perturbed_redo;
 use crate::{
     DeadLoads, IncrementReport, LevelReport, NewtonError, NewtonSettings, NonlinearProblem,
-    PathSolver, Stepping, Termination, perturbed_step,
+    PathSolver, Stepping, Termination,
 };
 
 /// The record of a converged arc-length increment as an [`IncrementReport`].
@@ -28,7 +28,7 @@ fn report_of(inc: &ArcIncrement) -> IncrementReport {
 /// past it (λ_a < to ≤ λ_b: u = u_a + (to − λ_a)/(λ_b − λ_a)·(u_b − u_a)), or, if that fails,
 /// from u_b. A limit point below `to` is passed (the path turns and comes back, within
 /// `arc.max_increments`). Past a bifurcation (negative pivots at `to`) with a `perturbation`,
-/// the level is redone by the §3.2 protocol ([`perturbed_step`], `stepping` its increments),
+/// the level is redone by the §3.2 protocol ([`perturbed_step`](crate::perturbed_step), `stepping` its increments),
 /// as [`solve_level`](crate::solve_level) does.
 #[allow(clippy::too_many_arguments)]
 pub fn solve_level_arc<P: NonlinearProblem + DeadLoads>(
@@ -115,24 +115,13 @@ pub fn solve_level_arc<P: NonlinearProblem + DeadLoads>(
     let mut perturbed = false;
     if pivots.is_some_and(|p| p > 0) && !perturbation.is_empty() {
         *u = start;
-        let part = ((to - from) / PERTURBED_INCREMENTS).abs().max(stepping.min);
-        let fine = Stepping {
-            initial: part,
-            max: part,
-            ..stepping.clone()
-        };
-        let patient = NewtonSettings {
-            max_iterations: PERTURBED_PATIENCE * newton.max_iterations,
-            ..newton.clone()
-        };
-        attempts.extend(perturbed_step(
+        attempts.extend(perturbed_redo(
             problem,
             u,
-            from,
-            to,
+            (from, to),
             perturbation,
-            &patient,
-            &fine,
+            newton,
+            stepping,
         )?);
         perturbed = true;
         pivots = Some(session.inertia_at(problem, u, to)?);
