@@ -29,9 +29,11 @@
 //! the last increment took, s ← s·√(I_d/I) (Crisfield 1981, eq. 17), and is cut back on failure.
 
 use crate::error::sig6;
-use crate::{IterationRecord, NewtonError, NewtonSettings, NonlinearProblem, residual_tolerance};
+use crate::{IterationRecord, NewtonError, NewtonSettings, NonlinearProblem};
 
+mod attempt;
 mod level;
+use attempt::traced_attempt;
 pub use level::solve_level_arc;
 use nonlin3d_solver::{LinearSolver, SymmetricMatrix};
 
@@ -161,7 +163,7 @@ pub struct ArcIncrement {
     pub residual: f64,
     /// ‖r‖∞ at the predicted state, N.
     pub initial_residual: f64,
-    /// The residual tolerance at its end, N ([`residual_tolerance`]).
+    /// The residual tolerance at its end, N ([`residual_tolerance`](crate::residual_tolerance)).
     pub tolerance: f64,
     /// The corrector iterations: ‖r‖∞ after each, ‖δu‖∞, the negative pivots of its
     /// factorisation (step 1: no line search).
@@ -395,7 +397,7 @@ pub fn follow_arc_length<P: NonlinearProblem + ?Sized>(
         };
         let mut cutbacks = 0;
         let (trial, trial_lambda, records, initial_residual, tolerance) = loop {
-            match attempt(&mut w, &from, s, l2, psi2, settings)? {
+            match traced_attempt(&mut w, &from, s, (l2, psi2), settings)? {
                 Ok(done) => break done,
                 Err(reason) => {
                     cutbacks += 1;
@@ -457,130 +459,4 @@ pub fn follow_arc_length<P: NonlinearProblem + ?Sized>(
         }
     }
     Ok(report)
-}
-
-/// The converged end of an attempt: state, load factor, the iterations, the initial ‖r‖∞, the
-/// tolerance met.
-type Converged = (Vec<f64>, f64, Vec<IterationRecord>, f64, f64);
-
-/// One attempt at an increment of arc length `s` from `from`: the tangent predictor, then
-/// corrector iterations on the constraint's quadratic until the residual test of `settings`
-/// passes. Ok(Err(why)) when the attempt failed in a way a shorter arc may cure; on success
-/// `w.k` holds the tangent at the converged state (the next increment's start).
-fn attempt<P: NonlinearProblem + ?Sized>(
-    w: &mut Work<P>,
-    from: &Start,
-    s: f64,
-    l2: f64,
-    psi2: f64,
-    settings: &NewtonSettings,
-) -> Result<Result<Converged, String>, NewtonError> {
-    let t0 = from.rate;
-    let dl0 = from.sign * s / (dot(t0, t0) / l2 + psi2).sqrt();
-    let mut du: Vec<f64> = t0.iter().map(|t| dl0 * t).collect();
-    let mut dl = dl0;
-    let mut u: Vec<f64> = from.u.iter().zip(&du).map(|(a, b)| a + b).collect();
-    let mut lambda = from.lambda + dl;
-    w.problem.prescribe(&mut u, lambda);
-    let mut first = None;
-    let mut records: Vec<IterationRecord> = Vec::new();
-    let (mut moved, mut pivots) = (0.0, None);
-    for iteration in 0..=settings.max_iterations {
-        let scale = w.evaluate(&u, lambda)?;
-        let norm = norm_inf(&w.r);
-        if iteration > 0 {
-            records.push(IterationRecord {
-                residual: norm,
-                step: 1.0,
-                increment: moved,
-                negative_pivots: pivots,
-                bfgs_pairs: 0,
-            });
-        }
-        if !norm.is_finite() || u.iter().any(|x| !x.is_finite()) {
-            return Ok(Err(format!(
-                "a residual or displacement became NaN or infinite at iteration {iteration}"
-            )));
-        }
-        let initial = *first.get_or_insert(norm);
-        let tolerance = residual_tolerance(settings, scale)?;
-        if norm <= tolerance {
-            return Ok(Ok((u, lambda, records, initial, tolerance)));
-        }
-        if norm > 1e8 * initial {
-            return Ok(Err(format!(
-                "diverged at iteration {iteration} (residual above 1e8 times its initial value)"
-            )));
-        }
-        if iteration == settings.max_iterations {
-            break;
-        }
-        match w.factorize() {
-            Ok(p) => pivots = Some(p),
-            Err(why) => {
-                return Ok(Err(format!(
-                    "singular tangent at iteration {iteration}: {why}"
-                )));
-            }
-        }
-        let r = std::mem::take(&mut w.r);
-        let solved = w.solve(&r);
-        w.r = r;
-        let dr = match solved {
-            Ok(d) => d,
-            Err(why) => return Ok(Err(format!("the solve failed: {why}"))),
-        };
-        let dt = w.rate(&u, lambda)?;
-        let Some(dlambda) = root(&du, dl, &dr, &dt, s, l2, psi2) else {
-            return Ok(Err(format!(
-                "the arc-length constraint has no real root at iteration {}",
-                iteration + 1
-            )));
-        };
-        moved = 0.0;
-        for (((x, d), a), b) in u.iter_mut().zip(du.iter_mut()).zip(&dr).zip(&dt) {
-            let step = a + dlambda * b;
-            *x += step;
-            *d += step;
-            moved = f64::max(moved, step.abs());
-        }
-        dl += dlambda;
-        lambda += dlambda;
-        w.problem.prescribe(&mut u, lambda);
-    }
-    Ok(Err(format!(
-        "no convergence within {} iterations",
-        settings.max_iterations
-    )))
-}
-
-/// δλ from the constraint's quadratic a₁δλ² + a₂δλ + a₃ = 0 (Crisfield 1981, eq. 10) for the
-/// increment so far (Δu, Δλ) and the iteration's δu_r, δu_t; of two real roots the one whose
-/// new increment makes the smaller angle with (Δu, Δλ) (eq. 13). None without a real root.
-fn root(du: &[f64], dl: f64, dr: &[f64], dt: &[f64], s: f64, l2: f64, psi2: f64) -> Option<f64> {
-    let a: Vec<f64> = du.iter().zip(dr).map(|(x, y)| x + y).collect();
-    let a1 = dot(dt, dt) / l2 + psi2;
-    let a2 = 2.0 * (dot(&a, dt) / l2 + psi2 * dl);
-    let a3 = dot(&a, &a) / l2 + psi2 * dl * dl - s * s;
-    let disc = a2 * a2 - 4.0 * a1 * a3;
-    if !(a1 > 0.0 && disc >= 0.0) {
-        return None;
-    }
-    // Numerically stable pair of roots.
-    let qq = -0.5 * (a2 + a2.signum() * disc.sqrt());
-    let roots = if qq == 0.0 {
-        [0.0, 0.0]
-    } else {
-        [qq / a1, a3 / qq]
-    };
-    // cos of the angle (up to a positive factor): (a + δλ·δu_t)·Δu/ℓ² + ψ²(Δλ + δλ)Δλ.
-    let base = dot(&a, du) / l2 + psi2 * dl * dl;
-    let slope = dot(dt, du) / l2 + psi2 * dl;
-    let cosine = |x: f64| base + x * slope;
-    let best = if cosine(roots[0]) >= cosine(roots[1]) {
-        roots[0]
-    } else {
-        roots[1]
-    };
-    best.is_finite().then_some(best)
 }
