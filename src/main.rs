@@ -110,6 +110,10 @@ enum Command {
         /// with DIRECT (default: the deck's *STATIC initial increment).
         #[arg(long)]
         increment: Option<f64>,
+        /// Linear solver: faer (LDLᵀ, f64), faer-mixed (f32 factor refined in f64 to the same
+        /// residual; falls back to f64 where f32 is not enough) or profile (the thesis's skyline).
+        #[arg(long, default_value = "faer", value_parser = ["faer", "faer-mixed", "profile"])]
+        solver: String,
     },
 }
 
@@ -118,6 +122,7 @@ fn solve(
     out: &Path,
     tolerance: Option<f64>,
     increment: Option<f64>,
+    solver: &str,
     verbosity: Verbosity,
 ) -> Result<(), Failure> {
     use nonlin3d::deck::Progress;
@@ -126,16 +131,22 @@ fn solve(
     let model = nonlin3d::mesh::read_inp_file(deck)
         .map_err(|e| Failure::Input(nonlin3d::Error::from(e)))?;
     let input = nonlin3d::provenance::input_file(deck).map_err(Failure::Input)?;
-    let options = nonlin3d::deck::StepOptions {
+    let mut newton = match tolerance {
         // An absolute tolerance replaces the relative one, as in a scene's tolerance_n.
-        newton: match tolerance {
-            Some(t) => NewtonSettings {
-                force_tolerance: t,
-                relative_tolerance: 0.0,
-                ..NewtonSettings::default()
-            },
-            None => NewtonSettings::default(),
+        Some(t) => NewtonSettings {
+            force_tolerance: t,
+            relative_tolerance: 0.0,
+            ..NewtonSettings::default()
         },
+        None => NewtonSettings::default(),
+    };
+    newton.solver = match solver {
+        "faer-mixed" => nonlin3d::solver::SolverKind::FaerLdltMixed(0),
+        "profile" => nonlin3d::solver::SolverKind::Profile,
+        _ => nonlin3d::solver::SolverKind::FaerLdlt,
+    };
+    let options = nonlin3d::deck::StepOptions {
+        newton,
         initial_increment: increment,
     };
     // Bad input (no step, an inverted element, …) and an output folder that cannot be written
@@ -483,7 +494,8 @@ fn main() -> ExitCode {
             out,
             tolerance,
             increment,
-        }) => solve(&deck, &out, tolerance, increment, verbosity),
+            solver,
+        }) => solve(&deck, &out, tolerance, increment, &solver, verbosity),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -128,10 +128,7 @@ fn the_solve_command_lists_the_lpf_by_increment() {
     }
     // The arc-length corrector reports its iterations as Newton's do: one convergence.cvg record
     // per iteration of every increment (a header line first), so the log follows a RIKS step.
-    let iterations: u64 = incs
-        .iter()
-        .map(|i| i["iterations"].as_u64().unwrap())
-        .sum();
+    let iterations: u64 = incs.iter().map(|i| i["iterations"].as_u64().unwrap()).sum();
     assert!(iterations > 0);
     let cvg = std::fs::read_to_string(out.join("convergence.cvg")).unwrap();
     assert_eq!(cvg.lines().count() as u64, iterations + 1, "{cvg}");
