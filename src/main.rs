@@ -486,8 +486,13 @@ fn main() -> ExitCode {
             inp,
             max_memory,
         }) => export(&scene, &inp, max_memory, verbosity),
+        // -q: nothing but errors, as for every command (the table is the report).
         Some(Command::EigenCheck) => nonlin3d::eigen_check::run()
-            .map(|rows| print!("{}", nonlin3d::eigen_check::report(&rows)))
+            .map(|rows| {
+                if !matches!(verbosity, Verbosity::Quiet) {
+                    print!("{}", nonlin3d::eigen_check::report(&rows))
+                }
+            })
             .map_err(Failure::Run),
         Some(Command::Solve {
             deck,

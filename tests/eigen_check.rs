@@ -40,3 +40,24 @@ fn quasi_isotropic_material_is_transversely_isotropic() {
     assert!((k[0][0] - k[1][1]).abs() < 1e-9 * k[0][0]);
     assert!((k[3][3] - 0.5 * (k[0][0] - k[0][1])).abs() < 1e-9 * k[0][0]);
 }
+
+/// `nonlin3d -q eigen-check` prints nothing and succeeds; without -q the table is printed.
+#[test]
+fn quiet_eigen_check_prints_nothing() {
+    let run = |args: &[&str]| {
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_nonlin3d"))
+            .args(args)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        (o.stdout, o.stderr)
+    };
+    let (out, err) = run(&["-q", "eigen-check"]);
+    assert!(
+        out.is_empty() && err.is_empty(),
+        "{}",
+        String::from_utf8_lossy(&out)
+    );
+    let (out, _) = run(&["eigen-check"]);
+    assert!(!out.is_empty());
+}
