@@ -20,6 +20,7 @@
 //! | [`deck`] | this crate | solving an Abaqus/CalculiX deck: the `nonlin3d solve` command |
 //! | [`eigen_check`] | this crate | the element eigen-check (§2.5): `nonlin3d eigen-check` |
 //! | [`log`], [`provenance`] | this crate | Newton's iterations as data (a `tracing` layer), `status.sta` and `convergence.cvg`; program, input hash, resolved scene, solver, times and memory in results.json / summary.json |
+//! | [`study`] | this crate | speed against error: a scene over knob settings, Richardson references, the Pareto front (`nonlin3d study`) |
 //! | [`budget`] | this crate | memory limits (`--max-memory`, available memory, RLIMIT_AS, cgroup) and a model's size before it is built |
 //!
 //! Substructuring and contact come as their own crates in later releases.
@@ -52,6 +53,7 @@ pub mod provenance;
 pub mod report;
 pub mod results;
 pub mod scene;
+pub mod study;
 pub mod substructure;
 
 /// The README's code blocks, compiled and run as doc-tests.

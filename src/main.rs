@@ -7,6 +7,8 @@
 //! - `run` and `export` take `--max-memory SIZE` (2GiB, 500MB): the run stays below it and
 //!   below the machine's and the process's own limits, or stops with the estimate.
 //! - `nonlin3d eigen-check`: the element eigen-check of thesis §2.5.
+//! - `nonlin3d study SCENE.toml --knobs KNOBS.toml --out DIR`: speed against error over the
+//!   knobs file's cases (`DIR/study.json`, `study.csv`, `study.svg`, a table).
 //! - `nonlin3d solve DECK.inp --out DIR`: solves an Abaqus/CalculiX deck (the subset in
 //!   docs/DECKS.md; linear or NLGEOM static steps) and writes `DIR/displacements.csv`,
 //!   `DIR/step-K/displacements.csv`, the output requests per increment
@@ -95,6 +97,20 @@ enum Command {
     },
     /// Zero-energy modes of distorted Hex20/Hex8 elements under each rule (thesis §2.5).
     EigenCheck,
+    /// Speed against error: the scene over the knobs file's cases (docs/ACCURACY.md §4).
+    Study {
+        /// The scene (TOML).
+        scene: PathBuf,
+        /// The cases: `[common]` and `[[case]]` tables of scene knobs.
+        #[arg(long)]
+        knobs: PathBuf,
+        /// Output directory (study.json, study.csv, study.svg).
+        #[arg(long, default_value = "nonlin3d-study")]
+        out: PathBuf,
+        /// Cases run side by side, each on one thread (default: --threads or all cores).
+        #[arg(long)]
+        jobs: Option<usize>,
+    },
     /// Solve an Abaqus/CalculiX .inp deck (static steps, NLGEOM or linear).
     Solve {
         /// The deck.
@@ -436,6 +452,60 @@ fn run(
     Ok(())
 }
 
+/// `nonlin3d study`: runs the cases with a bar (on a terminal), writes the files, prints the
+/// table.
+fn study(
+    scene: &Path,
+    knobs: &Path,
+    out: &Path,
+    jobs: usize,
+    verbosity: Verbosity,
+) -> Result<(), Failure> {
+    use nonlin3d::study::Event;
+    use std::io::IsTerminal;
+    let base = read_scene(Some(scene)).map_err(Failure::Input)?;
+    let plan = nonlin3d::study::Plan::read(knobs).map_err(Failure::Input)?;
+    plan.scenes(&base).map_err(Failure::Input)?;
+    let loud = verbosity != Verbosity::Quiet;
+    let bar = indicatif::ProgressBar::new(plan.cases.len() as u64);
+    if !(loud && std::io::stderr().is_terminal()) {
+        bar.set_draw_target(indicatif::ProgressDrawTarget::hidden());
+    }
+    if let Ok(style) =
+        indicatif::ProgressStyle::with_template("{bar:30} {pos}/{len} cases, {elapsed}  {wide_msg}")
+    {
+        bar.set_style(style);
+    }
+    bar.enable_steady_tick(std::time::Duration::from_millis(200));
+    let running = std::sync::Mutex::new(Vec::<String>::new());
+    let progress = |e: Event| {
+        let mut names = running.lock().unwrap_or_else(|e| e.into_inner());
+        match e {
+            Event::Started { name, .. } => names.push(name.to_string()),
+            Event::Finished { case, done, .. } => {
+                names.retain(|n| *n != case.name);
+                bar.set_position(done as u64);
+                if verbosity == Verbosity::Verbose {
+                    bar.println(format!(
+                        "{}: {} DOF, {:.2} s",
+                        case.name, case.dofs, case.wall_s
+                    ));
+                }
+            }
+        }
+        bar.set_message(format!("running {}", names.join(", ")));
+    };
+    let result = nonlin3d::study::run(&base, &plan, jobs, &progress).map_err(Failure::Run);
+    bar.finish_and_clear();
+    let result = result?;
+    nonlin3d::study::write_all(&result, out).map_err(Failure::Run)?;
+    if loud {
+        print!("{}", nonlin3d::study::table(&result));
+        println!("results in {}", out.display());
+    }
+    Ok(())
+}
+
 fn export(
     scene: &Path,
     inp: &Path,
@@ -486,6 +556,12 @@ fn main() -> ExitCode {
             inp,
             max_memory,
         }) => export(&scene, &inp, max_memory, verbosity),
+        Some(Command::Study {
+            scene,
+            knobs,
+            out,
+            jobs,
+        }) => study(&scene, &knobs, &out, jobs.unwrap_or(0), verbosity),
         // -q: nothing but errors, as for every command (the table is the report).
         Some(Command::EigenCheck) => nonlin3d::eigen_check::run()
             .map(|rows| {
