@@ -7,6 +7,8 @@
 //! - `run` and `export` take `--max-memory SIZE` (2GiB, 500MB): the run stays below it and
 //!   below the machine's and the process's own limits, or stops with the estimate.
 //! - `nonlin3d eigen-check`: the element eigen-check of thesis §2.5.
+//! - `nonlin3d sweep plan|run|status|merge`: a parametric study from a scene's `[sweep]`
+//!   ([`nonlin3d::sweep`]); `run` on such a scene plans, runs and merges it into `--out`.
 //! - `nonlin3d solve DECK.inp --out DIR`: solves an Abaqus/CalculiX deck (the subset in
 //!   docs/DECKS.md; linear or NLGEOM static steps) and writes `DIR/displacements.csv`,
 //!   `DIR/step-K/displacements.csv`, the output requests per increment
@@ -93,6 +95,9 @@ enum Command {
         #[arg(long, value_parser = nonlin3d::budget::parse_size)]
         max_memory: Option<u64>,
     },
+    /// A parametric study from a scene's [sweep]: plan, run (all cases or one), status, merge.
+    #[command(subcommand)]
+    Sweep(nonlin3d::sweep::cli::SweepCommand),
     /// Zero-energy modes of distorted Hex20/Hex8 elements under each rule (thesis §2.5).
     EigenCheck,
     /// Solve an Abaqus/CalculiX .inp deck (static steps, NLGEOM or linear).
@@ -339,6 +344,13 @@ fn run(
 ) -> Result<(), Failure> {
     use nonlin3d::analysis::Progress;
     let t0 = Instant::now();
+    // A scene with [sweep] is a study: planned, run and merged into `out`.
+    if let Some(p) =
+        path.filter(|p| std::fs::read_to_string(p).is_ok_and(|t| nonlin3d::sweep::has_sweep(&t)))
+    {
+        return nonlin3d::sweep::cli::study(p, out, verbosity == Verbosity::Quiet, threads)
+            .map_err(sweep_failure);
+    }
     nonlin3d::budget::install(max_memory);
     let mut scene = read_scene(path).map_err(Failure::Input)?;
     let input = path
@@ -425,6 +437,14 @@ fn run(
     Ok(())
 }
 
+fn sweep_failure(f: nonlin3d::sweep::cli::Failure) -> Failure {
+    if f.input {
+        Failure::Input(f.error)
+    } else {
+        Failure::Run(f.error)
+    }
+}
+
 fn export(
     scene: &Path,
     inp: &Path,
@@ -475,6 +495,10 @@ fn main() -> ExitCode {
             inp,
             max_memory,
         }) => export(&scene, &inp, max_memory, verbosity),
+        Some(Command::Sweep(command)) => {
+            nonlin3d::sweep::cli::main(command, verbosity == Verbosity::Quiet, cli.threads)
+                .map_err(sweep_failure)
+        }
         Some(Command::EigenCheck) => nonlin3d::eigen_check::run()
             .map(|rows| print!("{}", nonlin3d::eigen_check::report(&rows)))
             .map_err(Failure::Run),
