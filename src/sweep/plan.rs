@@ -180,8 +180,8 @@ fn folder(id: usize, count: usize) -> String {
 }
 
 /// Plans the study of `scene` (a file with `[sweep]`) into `out`. An `out` holding the same
-/// plan already is kept as it is (its results too: the study resumes); one holding anything
-/// else is refused.
+/// plan already is kept as it is (its results too: the study resumes), a deleted case folder
+/// planned again; one holding anything else is refused.
 pub fn plan(scene: &Path, out: &Path) -> Result<Plan, Error> {
     let bytes = std::fs::read(scene).map_err(|source| Error::Io {
         path: scene.to_path_buf(),
@@ -229,6 +229,17 @@ pub fn plan(scene: &Path, out: &Path) -> Result<Plan, Error> {
     if out.join(PLAN).is_file() {
         let old = Plan::read(out)?;
         if old.cases == plan.cases {
+            // The same study: a case folder deleted since is planned again (and run next).
+            for (case, r) in old.cases.iter().zip(&resolved) {
+                let d = old.case_dir(out, case);
+                if !d.join("scene.toml").is_file() {
+                    std::fs::create_dir_all(&d).map_err(|source| Error::Io {
+                        path: d.clone(),
+                        source,
+                    })?;
+                    crate::output::write_atomic(&d.join("scene.toml"), r.text.as_bytes())?;
+                }
+            }
             return Ok(old);
         }
         return bad(format!(

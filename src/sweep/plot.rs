@@ -1,6 +1,7 @@
 //! `study.svg`: three panels against the swept parameter `x` — G_T max at the last level,
 //! |critical strain| of the growth criterion, |buckling strain| (the first value found
-//! unstable) — one series per combination of the other swept parameters' values. An `x` whose
+//! unstable) — one series per combination of the values of the swept parameters that do not
+//! vary with `x` (its `zip` group does). An `x` whose
 //! values are not numbers (layups) is plotted at its values' positions 0, 1, 2, …
 
 use super::merge::Row;
@@ -55,13 +56,18 @@ pub fn study(plan: &Plan, rows: &[Row], path: &Path) -> Result<(), Error> {
             }
         }
     };
-    // Series: the other parameters' values, in case order.
+    // Series: the values of the parameters that do not vary with x (x's zip group does).
+    let with_x: Vec<&String> = plan
+        .zip
+        .iter()
+        .find(|g| g.contains(&plan.x))
+        .map_or_else(|| vec![&plan.x], |g| g.iter().collect());
     let mut series: BTreeMap<String, Vec<(f64, &Row)>> = BTreeMap::new();
     for r in rows {
         let key = r
             .parameters
             .iter()
-            .filter(|(k, _)| **k != plan.x)
+            .filter(|(k, _)| !with_x.contains(k))
             .map(|(k, v)| format!("{} = {v}", k.rsplit('.').next().unwrap_or(k)))
             .collect::<Vec<_>>()
             .join(", ");
@@ -123,8 +129,10 @@ pub fn study(plan: &Plan, rows: &[Row], path: &Path) -> Result<(), Error> {
             }
         }
         if series.keys().any(|k| !k.is_empty()) {
+            // Upper left: x starts at 0, the data sit to the right.
             chart
                 .configure_series_labels()
+                .position(SeriesLabelPosition::UpperLeft)
                 .background_style(WHITE.mix(0.8))
                 .border_style(BLACK)
                 .draw()
