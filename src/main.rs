@@ -348,7 +348,8 @@ fn run(
     if let Some(p) =
         path.filter(|p| std::fs::read_to_string(p).is_ok_and(|t| nonlin3d::sweep::has_sweep(&t)))
     {
-        return nonlin3d::sweep::cli::study(p, out, verbosity == Verbosity::Quiet, threads)
+        let quiet = verbosity == Verbosity::Quiet;
+        return nonlin3d::sweep::cli::study(p, out, quiet, threads, max_memory)
             .map_err(sweep_failure);
     }
     nonlin3d::budget::install(max_memory);

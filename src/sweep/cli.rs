@@ -105,9 +105,16 @@ pub fn main(command: SweepCommand, quiet: bool, threads: Option<usize>) -> Resul
 }
 
 /// `nonlin3d run SCENE --out DIR` on a scene with `[sweep]`: plan into DIR (kept if it holds
-/// this plan already, so a second run resumes), run the cases, merge.
-pub fn study(scene: &Path, out: &Path, quiet: bool, threads: Option<usize>) -> Result<(), Failure> {
-    crate::budget::install(None);
+/// this plan already, so a second run resumes), run the cases, merge. `max_memory` bounds
+/// each case (`--max-memory`), not the cases running together.
+pub fn study(
+    scene: &Path,
+    out: &Path,
+    quiet: bool,
+    threads: Option<usize>,
+    max_memory: Option<u64>,
+) -> Result<(), Failure> {
+    crate::budget::install(max_memory);
     let p = plan(scene, out).map_err(input)?;
     if !quiet {
         println!(
