@@ -161,6 +161,10 @@ pub enum Error {
     /// The SIGINT/SIGTERM handlers could not be installed.
     #[error("installing the signal handler: {0}")]
     Signal(std::io::Error),
+    /// A parametric study (`[sweep]`, `nonlin3d sweep`): its table, plan or cases, in words
+    /// that name the field, the case and its values.
+    #[error("{0}")]
+    Sweep(String),
     /// A run that stopped part-way: why, and where what converged before was kept.
     #[error(
         "{source}\n(the {kept} converged before are in {}, {summary} \"complete\": false)",

@@ -21,6 +21,7 @@
 //! | [`eigen_check`] | this crate | the element eigen-check (§2.5): `nonlin3d eigen-check` |
 //! | [`log`], [`provenance`] | this crate | Newton's iterations as data (a `tracing` layer), `status.sta` and `convergence.cvg`; program, input hash, resolved scene, solver, times and memory in results.json / summary.json |
 //! | [`study`] | this crate | speed against error: a scene over knob settings, Richardson references, the Pareto front (`nonlin3d study`) |
+//! | [`sweep`] | this crate | parametric studies: a scene's `[sweep]` planned into one scene per case, run in parallel or case by case (job arrays), merged into a table and plot: `nonlin3d sweep` |
 //! | [`budget`] | this crate | memory limits (`--max-memory`, available memory, RLIMIT_AS, cgroup) and a model's size before it is built |
 //!
 //! Substructuring and contact come as their own crates in later releases.
@@ -55,6 +56,7 @@ pub mod results;
 pub mod scene;
 pub mod study;
 pub mod substructure;
+pub mod sweep;
 
 /// The README's code blocks, compiled and run as doc-tests.
 #[cfg(doctest)]

@@ -9,6 +9,8 @@
 //! - `nonlin3d eigen-check`: the element eigen-check of thesis §2.5.
 //! - `nonlin3d study SCENE.toml --knobs KNOBS.toml --out DIR`: speed against error over the
 //!   knobs file's cases (`DIR/study.json`, `study.csv`, `study.svg`, a table).
+//! - `nonlin3d sweep plan|run|status|merge`: a parametric study from a scene's `[sweep]`
+//!   ([`nonlin3d::sweep`]); `run` on such a scene plans, runs and merges it into `--out`.
 //! - `nonlin3d solve DECK.inp --out DIR`: solves an Abaqus/CalculiX deck (the subset in
 //!   docs/DECKS.md; linear or NLGEOM static steps) and writes `DIR/displacements.csv`,
 //!   `DIR/step-K/displacements.csv`, the output requests per increment
@@ -27,6 +29,7 @@
 //! (summary.json for `solve`).
 
 mod progress;
+mod study_command;
 
 use clap::{Parser, Subcommand};
 use nonlin3d::newton::NewtonSettings;
@@ -95,6 +98,9 @@ enum Command {
         #[arg(long, value_parser = nonlin3d::budget::parse_size)]
         max_memory: Option<u64>,
     },
+    /// A parametric study from a scene's [sweep]: plan, run (all cases or one), status, merge.
+    #[command(subcommand)]
+    Sweep(nonlin3d::sweep::cli::SweepCommand),
     /// Zero-energy modes of distorted Hex20/Hex8 elements under each rule (thesis §2.5).
     EigenCheck,
     /// Speed against error: the scene over the knobs file's cases (docs/ACCURACY.md §4).
@@ -366,6 +372,14 @@ fn run(
 ) -> Result<(), Failure> {
     use nonlin3d::analysis::Progress;
     let t0 = Instant::now();
+    // A scene with [sweep] is a study: planned, run and merged into `out`.
+    if let Some(p) =
+        path.filter(|p| std::fs::read_to_string(p).is_ok_and(|t| nonlin3d::sweep::has_sweep(&t)))
+    {
+        let quiet = verbosity == Verbosity::Quiet;
+        return nonlin3d::sweep::cli::study(p, out, quiet, threads, max_memory)
+            .map_err(sweep_failure);
+    }
     nonlin3d::budget::install(max_memory);
     let mut scene = read_scene(path).map_err(Failure::Input)?;
     let input = path
@@ -452,58 +466,12 @@ fn run(
     Ok(())
 }
 
-/// `nonlin3d study`: runs the cases with a bar (on a terminal), writes the files, prints the
-/// table.
-fn study(
-    scene: &Path,
-    knobs: &Path,
-    out: &Path,
-    jobs: usize,
-    verbosity: Verbosity,
-) -> Result<(), Failure> {
-    use nonlin3d::study::Event;
-    use std::io::IsTerminal;
-    let base = read_scene(Some(scene)).map_err(Failure::Input)?;
-    let plan = nonlin3d::study::Plan::read(knobs).map_err(Failure::Input)?;
-    plan.scenes(&base).map_err(Failure::Input)?;
-    let loud = verbosity != Verbosity::Quiet;
-    let bar = indicatif::ProgressBar::new(plan.cases.len() as u64);
-    if !(loud && std::io::stderr().is_terminal()) {
-        bar.set_draw_target(indicatif::ProgressDrawTarget::hidden());
+fn sweep_failure(f: nonlin3d::sweep::cli::Failure) -> Failure {
+    if f.input {
+        Failure::Input(f.error)
+    } else {
+        Failure::Run(f.error)
     }
-    if let Ok(style) =
-        indicatif::ProgressStyle::with_template("{bar:30} {pos}/{len} cases, {elapsed}  {wide_msg}")
-    {
-        bar.set_style(style);
-    }
-    bar.enable_steady_tick(std::time::Duration::from_millis(200));
-    let running = std::sync::Mutex::new(Vec::<String>::new());
-    let progress = |e: Event| {
-        let mut names = running.lock().unwrap_or_else(|e| e.into_inner());
-        match e {
-            Event::Started { name, .. } => names.push(name.to_string()),
-            Event::Finished { case, done, .. } => {
-                names.retain(|n| *n != case.name);
-                bar.set_position(done as u64);
-                if verbosity == Verbosity::Verbose {
-                    bar.println(format!(
-                        "{}: {} DOF, {:.2} s",
-                        case.name, case.dofs, case.wall_s
-                    ));
-                }
-            }
-        }
-        bar.set_message(format!("running {}", names.join(", ")));
-    };
-    let result = nonlin3d::study::run(&base, &plan, jobs, &progress).map_err(Failure::Run);
-    bar.finish_and_clear();
-    let result = result?;
-    nonlin3d::study::write_all(&result, out).map_err(Failure::Run)?;
-    if loud {
-        print!("{}", nonlin3d::study::table(&result));
-        println!("results in {}", out.display());
-    }
-    Ok(())
 }
 
 fn export(
@@ -561,8 +529,12 @@ fn main() -> ExitCode {
             knobs,
             out,
             jobs,
-        }) => study(&scene, &knobs, &out, jobs.unwrap_or(0), verbosity),
+        }) => study_command::study(&scene, &knobs, &out, jobs.unwrap_or(0), verbosity),
         // -q: nothing but errors, as for every command (the table is the report).
+        Some(Command::Sweep(command)) => {
+            nonlin3d::sweep::cli::main(command, verbosity == Verbosity::Quiet, cli.threads)
+                .map_err(sweep_failure)
+        }
         Some(Command::EigenCheck) => nonlin3d::eigen_check::run()
             .map(|rows| {
                 if !matches!(verbosity, Verbosity::Quiet) {

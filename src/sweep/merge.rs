@@ -1,0 +1,221 @@
+//! `nonlin3d sweep merge`: one row per case from its results.json, whatever is complete, into
+//! `study.csv`, `study.json` and `study.svg` (G_T max, critical strain and buckling strain
+//! against the swept parameter `x`, one series per combination of the other parameters).
+//! Every number is read back from the cases' results.json and printed the same way, so the
+//! tables do not depend on how (or in how many workers) the cases ran — except `wall_s`.
+
+use super::plan::Plan;
+use super::run::{CaseState, case_state};
+use crate::Error;
+use crate::output::write_atomic;
+use serde::Serialize;
+use serde_json::Value;
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// One case of the study table. G in J/m², S in mm, strains as applied (compression
+/// negative); the G values at the case's last (largest) level.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Row {
+    /// Case id.
+    pub case: usize,
+    /// `complete`, `failed`, `incomplete` or `missing`.
+    pub status: String,
+    /// The swept fields' values.
+    pub parameters: BTreeMap<String, Value>,
+    /// The last level's applied strain (or load, N, for a plate).
+    pub strain: Option<f64>,
+    /// Largest G_T over the front points whose faces are not overlapped, at the last level.
+    pub g_t_max: Option<f64>,
+    /// Its S, mm.
+    pub g_t_max_s_mm: Option<f64>,
+    /// G_I at S = 0 (the front's point on the y axis), last level.
+    pub g_i_s0: Option<f64>,
+    /// G_II at S = 0, last level.
+    pub g_ii_s0: Option<f64>,
+    /// The crack faces behind S = 0: `open`, `overlapped` (G there not physical) or `closed`.
+    pub faces_s0: Option<String>,
+    /// The buckling strain lies between this (last value on the stable trivial path) …
+    pub buckling_from: Option<f64>,
+    /// … and this (first value found unstable): the inertia guard's bracket, or the levels
+    /// around the one that took the perturbation.
+    pub buckling_to: Option<f64>,
+    /// Critical strain of the scene's growth criterion (results.json `critical.strain`).
+    pub critical_strain: Option<f64>,
+    /// Where, S in mm.
+    pub critical_s_mm: Option<f64>,
+    /// Wall time of the case's run, s (results.json `provenance.wall_s.total`).
+    pub wall_s: Option<f64>,
+    /// Why a failed case stopped.
+    pub error: Option<String>,
+}
+
+/// The row of case `id` in state `state` from its results.json `v`.
+fn row(id: usize, parameters: BTreeMap<String, Value>, state: &CaseState, v: &Value) -> Row {
+    let mut r = Row {
+        case: id,
+        status: state.name().into(),
+        parameters,
+        strain: None,
+        g_t_max: None,
+        g_t_max_s_mm: None,
+        g_i_s0: None,
+        g_ii_s0: None,
+        faces_s0: None,
+        buckling_from: None,
+        buckling_to: None,
+        critical_strain: None,
+        critical_s_mm: None,
+        wall_s: None,
+        error: state.error().map(str::to_string),
+    };
+    if *state != CaseState::Complete {
+        return r;
+    }
+    let levels = v["levels"].as_array().map_or(&[][..], Vec::as_slice);
+    if let Some(last) = levels.last() {
+        r.strain = last["value"].as_f64();
+        let front = last["front"].as_array().map_or(&[][..], Vec::as_slice);
+        let peak = front
+            .iter()
+            .filter(|p| p["faces"].as_str() != Some("overlapped"))
+            .filter_map(|p| Some((p["g_t"].as_f64()?, p["s_mm"].as_f64()?)))
+            .max_by(|a, b| a.0.total_cmp(&b.0));
+        (r.g_t_max, r.g_t_max_s_mm) = (peak.map(|p| p.0), peak.map(|p| p.1));
+        if let Some(p0) = front.iter().find(|p| p["s_mm"].as_f64() == Some(0.0)) {
+            r.g_i_s0 = p0["g_i"].as_f64();
+            r.g_ii_s0 = p0["g_ii"].as_f64();
+            r.faces_s0 = p0["faces"].as_str().map(str::to_string);
+        }
+    }
+    let crossing = levels
+        .iter()
+        .find_map(|l| l["convergence"]["bifurcation"].as_object());
+    if let Some(c) = crossing {
+        r.buckling_from = c.get("from").and_then(Value::as_f64);
+        r.buckling_to = c.get("to").and_then(Value::as_f64);
+    } else if let Some(at) = v["model"]["perturbed_at"].as_f64() {
+        let k = levels.iter().position(|l| l["value"].as_f64() == Some(at));
+        r.buckling_from = Some(
+            k.and_then(|k| k.checked_sub(1))
+                .map_or(0.0, |j| levels[j]["value"].as_f64().unwrap_or(0.0)),
+        );
+        r.buckling_to = Some(at);
+    }
+    r.critical_strain = v["critical"]["strain"].as_f64();
+    r.critical_s_mm = v["critical"]["s_mm"].as_f64();
+    r.wall_s = v["provenance"]["wall_s"]["total"].as_f64();
+    r
+}
+
+/// The study table of `dir`: one row per case of its plan.
+pub fn rows(dir: &Path) -> Result<(Plan, Vec<Row>), Error> {
+    let plan = Plan::read(dir)?;
+    let rows = plan
+        .cases
+        .iter()
+        .map(|c| {
+            let folder = plan.case_dir(dir, c);
+            let state = case_state(&folder);
+            let v = std::fs::read_to_string(folder.join("results.json"))
+                .ok()
+                .and_then(|t| serde_json::from_str(&t).ok())
+                .unwrap_or(Value::Null);
+            row(c.id, c.parameters.clone(), &state, &v)
+        })
+        .collect();
+    Ok((plan, rows))
+}
+
+/// A CSV cell: quoted when it holds a comma, a quote or a line break.
+fn cell(text: &str) -> String {
+    if text.contains([',', '"', '\n', '\r']) {
+        format!("\"{}\"", text.replace('"', "\"\""))
+    } else {
+        text.to_string()
+    }
+}
+
+/// A parameter as a cell: strings bare, numbers and lists as JSON.
+fn parameter(v: Option<&Value>) -> String {
+    match v {
+        Some(Value::String(s)) => s.clone(),
+        Some(v) => v.to_string(),
+        None => String::new(),
+    }
+}
+
+/// `study.csv`: a header, then one line per case.
+pub fn csv(plan: &Plan, rows: &[Row]) -> String {
+    let num = |x: Option<f64>| x.map(|x| x.to_string()).unwrap_or_default();
+    let mut out = String::from("case,status");
+    for f in &plan.fields {
+        out += &format!(",{}", cell(f));
+    }
+    out += ",strain,g_t_max,g_t_max_s_mm,g_i_s0,g_ii_s0,faces_s0,buckling_from,buckling_to,\
+            critical_strain,critical_s_mm,wall_s,error\n";
+    for r in rows {
+        out += &format!("{},{}", r.case, r.status);
+        for f in &plan.fields {
+            out += &format!(",{}", cell(&parameter(r.parameters.get(f))));
+        }
+        let cells = [
+            num(r.strain),
+            num(r.g_t_max),
+            num(r.g_t_max_s_mm),
+            num(r.g_i_s0),
+            num(r.g_ii_s0),
+            r.faces_s0.clone().unwrap_or_default(),
+            num(r.buckling_from),
+            num(r.buckling_to),
+            num(r.critical_strain),
+            num(r.critical_s_mm),
+            num(r.wall_s),
+            cell(r.error.as_deref().unwrap_or_default()),
+        ];
+        out += &format!(",{}\n", cells.join(","));
+    }
+    out
+}
+
+/// What [`merge`] wrote.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Merged {
+    /// Cases by state name.
+    pub counts: BTreeMap<&'static str, usize>,
+    /// The rows.
+    pub rows: Vec<Row>,
+}
+
+/// Writes `study.csv`, `study.json` and `study.svg` in `dir` from whatever cases are complete
+/// (failed ones with their errors).
+pub fn merge(dir: &Path) -> Result<Merged, Error> {
+    let (plan, rows) = rows(dir)?;
+    write_atomic(&dir.join("study.csv"), csv(&plan, &rows).as_bytes())?;
+    let json = serde_json::json!({
+        "title": plan.title,
+        "fields": plan.fields,
+        "zip": plan.zip,
+        "x": plan.x,
+        "units": "G in J/m², S in mm, strains as applied (compression negative), wall_s in s; \
+                  G at each case's last level",
+        "cases": rows,
+    });
+    write_atomic(
+        &dir.join("study.json"),
+        serde_json::to_string_pretty(&json)?.as_bytes(),
+    )?;
+    let path = dir.join("study.svg");
+    crate::output::atomically(&path, |tmp| super::plot::study(&plan, &rows, tmp))?;
+    let mut counts = BTreeMap::new();
+    for r in &rows {
+        let name = match r.status.as_str() {
+            "complete" => "complete",
+            "failed" => "failed",
+            "incomplete" => "incomplete",
+            _ => "missing",
+        };
+        *counts.entry(name).or_insert(0) += 1;
+    }
+    Ok(Merged { counts, rows })
+}
