@@ -13,21 +13,34 @@ use nonlin3d_mesh::inp::{
     contact_cards, inp_string,
 };
 
-/// A support as a `*BOUNDARY` line at load factor `f` of the largest strain `reference`: the
-/// set, the component numbered from 1, the value.
-fn boundary(support: &Support, f: f64, reference: f64) -> InpBoundary {
+/// A support as `*BOUNDARY` lines at load factor `f` of the largest strain `reference`: the
+/// set, the component numbered from 1, the value; a support whose value varies from node to
+/// node (the thin film's bonded face, [`Value::Uniform`]) one line per node, on the node's
+/// own set `<set>_<node id>` that [`deck_of`] adds.
+fn boundary(model: &Model, support: &Support, f: f64, reference: f64) -> Vec<InpBoundary> {
     let dof = support.axis.offset() as u8 + 1;
-    InpBoundary {
-        nset: match support.nodes {
-            Nodes::Set(name) | Nodes::Node { set: name, .. } => name.into(),
-        },
+    let line = |nset: String, x: [f64; 3]| InpBoundary {
+        nset,
         first: dof,
         last: dof,
-        value: match support.value {
-            Value::Zero => 0.0,
-            Value::Strain { length } => length * f * reference,
-        },
+        value: support.value.at(support.axis, x, f * reference),
+    };
+    match (support.nodes.clone(), support.value) {
+        (Nodes::Set(name), Value::Uniform { .. }) => model
+            .node_set(name)
+            .unwrap_or_default()
+            .iter()
+            .map(|&n| line(node_set_name(name, n), model.mesh.nodes[n]))
+            .collect(),
+        (Nodes::Set(name) | Nodes::Node { set: name, .. }, _) => {
+            vec![line(name.into(), [0.0; 3])]
+        }
     }
+}
+
+/// The one-node set of node `n` (0-based) of set `set` in a deck (ids are indices + 1).
+fn node_set_name(set: &str, n: usize) -> String {
+    format!("{set}_{}", n + 1)
 }
 
 /// The deck text of a scene. For each strain level two NLGEOM steps: the strain with the
@@ -72,7 +85,12 @@ pub fn deck_of(scene: &Scene, model: &Model) -> Result<String, Error> {
     for s in &supports {
         match s.nodes {
             Nodes::Set(name) => {
-                model.node_set(name)?;
+                let nodes = model.node_set(name)?;
+                if matches!(s.value, Value::Uniform { .. }) {
+                    for &n in nodes {
+                        mesh.node_sets.insert(node_set_name(name, n), vec![n]);
+                    }
+                }
             }
             Nodes::Node { set, node } => {
                 mesh.node_sets.insert(set.into(), vec![node]);
@@ -104,7 +122,10 @@ pub fn deck_of(scene: &Scene, model: &Model) -> Result<String, Error> {
     let mut steps = Vec::new();
     let first = |k: usize| -> Vec<InpBoundary> {
         match k {
-            0 => held.iter().map(|s| boundary(s, 0.0, 0.0)).collect(),
+            0 => held
+                .iter()
+                .flat_map(|s| boundary(model, s, 0.0, 0.0))
+                .collect(),
             _ => Vec::new(),
         }
     };
@@ -125,7 +146,11 @@ pub fn deck_of(scene: &Scene, model: &Model) -> Result<String, Error> {
         let p = perturbation_loads(model, perturbation_force(scene, model)?)?;
         for (k, f) in factors.iter().enumerate() {
             let mut b = first(k);
-            b.extend(driven.iter().map(|s| boundary(s, *f, reference)));
+            b.extend(
+                driven
+                    .iter()
+                    .flat_map(|s| boundary(model, s, *f, reference)),
+            );
             steps.push(step(b, cloads(&p, 1.0)));
             if !p.is_empty() {
                 steps.push(step(Vec::new(), cloads(&p, 0.0)));
