@@ -264,7 +264,8 @@ fn nearly_incompressible_hex20() {
 /// A very thin sublaminate, h = 0.1 mm over a 60 mm delamination (ε_cr ≈ −2.5e-5 on this
 /// mesh: the bifurcation is crossed at −0.000125 within the first level, −0.0005): the
 /// perturbation applied at that first level, 20 times past buckling, does not carry the
-/// sublaminate off the flat state, and the level is reported stable with 0 negative pivots;
+/// sublaminate off the flat state, and the level is reported stable with 0 negative pivots
+/// (while level 2's first increment records 3 negative pivots at that same state);
 /// the next levels are flagged unstable (warnings), the last one with what to do. The flat
 /// state at 20–80 ε_cr is a wrong answer. Reproducer: tests/hard_cases/thin_0p1mm_60mm.toml.
 #[test]
