@@ -109,7 +109,37 @@ pub(crate) fn scene(s: &Scene) -> Result<(), Error> {
             .validate()
             .map_err(|e| Error::Scene(format!("criterion: {e}")))?;
     }
+    thin_film(s)?;
     substructure(s)
+}
+
+/// The thin-film model (§5.3) is the sublaminate alone: no linear region to condense
+/// (`[substructure]` partition `none`), and no cells under the lower crack face for the
+/// contact stage (`[contact] crack_faces = "off"`, overlaps reported as `overlapped`).
+fn thin_film(s: &Scene) -> Result<(), Error> {
+    if !matches!(s.geometry, Geometry::ThinFilm { .. }) {
+        return Ok(());
+    }
+    let partition = s.substructure.partition;
+    if partition != PartitionName::None {
+        return bad(format!(
+            "substructure.partition = \"{}\" with geometry.kind = \"thin-film\": the \
+             thin-film model is the sublaminate alone (the base is prescribed), so there is no \
+             linear region to condense; set partition = \"none\"",
+            partition.name()
+        ));
+    }
+    let faces = s.contact.crack_faces;
+    if faces != crate::scene::CrackFacesName::Off {
+        return bad(format!(
+            "contact.crack_faces = \"{}\" (the default is \"auto\") with geometry.kind = \
+             \"thin-film\": the thin film's lower crack face is the base's prescribed motion, \
+             with no cells for the contact stage; write [contact] crack_faces = \"off\" \
+             (overlapping faces are then reported as overlapped)",
+            faces.name()
+        ));
+    }
+    Ok(())
 }
 
 /// `[substructure]`: ℓ positive and finite, given only with the thesis's partition (the other
@@ -214,6 +244,9 @@ fn geometry_fits(g: &Geometry) -> Result<(), Error> {
         }
         | Geometry::Edge {
             a_mm, b_mm, w_mm, ..
+        }
+        | Geometry::ThinFilm {
+            a_mm, b_mm, w_mm, ..
         } => room(a_mm, b_mm, w_mm, "max(a_mm, b_mm)"),
         Geometry::Plate { a_mm, w_mm, .. } => room(a_mm, a_mm, w_mm, "a_mm"),
         Geometry::ThroughWidth {
@@ -248,6 +281,9 @@ fn mesh_controls(s: &Scene) -> Result<(), Error> {
             shape: Shape::Ellipse,
             ..
         } | Geometry::Edge {
+            shape: Shape::Ellipse,
+            ..
+        } | Geometry::ThinFilm {
             shape: Shape::Ellipse,
             ..
         }
@@ -335,6 +371,7 @@ fn layup(s: &Scene) -> Result<(), Error> {
     let h = match s.geometry {
         Geometry::Embedded { h_mm, .. }
         | Geometry::Edge { h_mm, .. }
+        | Geometry::ThinFilm { h_mm, .. }
         | Geometry::Plate { h_mm, .. }
         | Geometry::ThroughWidth { h_mm, .. } => h_mm,
     };
@@ -463,11 +500,14 @@ pub(crate) fn warnings(s: &Scene) -> Vec<String> {
     let (h, base) = match s.geometry {
         Geometry::Embedded { h_mm, base_mm, .. }
         | Geometry::Edge { h_mm, base_mm, .. }
+        | Geometry::ThinFilm { h_mm, base_mm, .. }
         | Geometry::Plate { h_mm, base_mm, .. }
         | Geometry::ThroughWidth { h_mm, base_mm, .. } => (h_mm, base_mm),
     };
     let span = match s.geometry {
-        Geometry::Embedded { a_mm, b_mm, .. } | Geometry::Edge { a_mm, b_mm, .. } => a_mm.min(b_mm),
+        Geometry::Embedded { a_mm, b_mm, .. }
+        | Geometry::Edge { a_mm, b_mm, .. }
+        | Geometry::ThinFilm { a_mm, b_mm, .. } => a_mm.min(b_mm),
         Geometry::Plate { a_mm, .. } | Geometry::ThroughWidth { a_mm, .. } => a_mm,
     };
     if h >= base {

@@ -13,21 +13,34 @@ use nonlin3d_mesh::inp::{
     contact_cards, inp_string,
 };
 
-/// A support as a `*BOUNDARY` line at load factor `f` of the largest strain `reference`: the
-/// set, the component numbered from 1, the value.
-fn boundary(support: &Support, f: f64, reference: f64) -> InpBoundary {
+/// A support as `*BOUNDARY` lines at load factor `f` of the largest strain `reference`: the
+/// set, the component numbered from 1, the value; a support whose value varies from node to
+/// node (the thin film's bonded face, [`Value::Uniform`]) one line per node, on the node's
+/// own set `<set>_<node id>` that [`deck_of`] adds.
+fn boundary(model: &Model, support: &Support, f: f64, reference: f64) -> Vec<InpBoundary> {
     let dof = support.axis.offset() as u8 + 1;
-    InpBoundary {
-        nset: match support.nodes {
-            Nodes::Set(name) | Nodes::Node { set: name, .. } => name.into(),
-        },
+    let line = |nset: String, x: [f64; 3]| InpBoundary {
+        nset,
         first: dof,
         last: dof,
-        value: match support.value {
-            Value::Zero => 0.0,
-            Value::Strain { length } => length * f * reference,
-        },
+        value: support.value.at(support.axis, x, f * reference),
+    };
+    match (support.nodes.clone(), support.value) {
+        (Nodes::Set(name), Value::Uniform { .. }) => model
+            .node_set(name)
+            .unwrap_or_default()
+            .iter()
+            .map(|&n| line(node_set_name(name, n), model.mesh.nodes[n]))
+            .collect(),
+        (Nodes::Set(name) | Nodes::Node { set: name, .. }, _) => {
+            vec![line(name.into(), [0.0; 3])]
+        }
     }
+}
+
+/// The one-node set of node `n` (0-based) of set `set` in a deck (ids are indices + 1).
+fn node_set_name(set: &str, n: usize) -> String {
+    format!("{set}_{}", n + 1)
 }
 
 /// The deck text of a scene. For each strain level two NLGEOM steps: the strain with the
@@ -72,7 +85,12 @@ pub fn deck_of(scene: &Scene, model: &Model) -> Result<String, Error> {
     for s in &supports {
         match s.nodes {
             Nodes::Set(name) => {
-                model.node_set(name)?;
+                let nodes = model.node_set(name)?;
+                if matches!(s.value, Value::Uniform { .. }) {
+                    for &n in nodes {
+                        mesh.node_sets.insert(node_set_name(name, n), vec![n]);
+                    }
+                }
             }
             Nodes::Node { set, node } => {
                 mesh.node_sets.insert(set.into(), vec![node]);
@@ -104,7 +122,10 @@ pub fn deck_of(scene: &Scene, model: &Model) -> Result<String, Error> {
     let mut steps = Vec::new();
     let first = |k: usize| -> Vec<InpBoundary> {
         match k {
-            0 => held.iter().map(|s| boundary(s, 0.0, 0.0)).collect(),
+            0 => held
+                .iter()
+                .flat_map(|s| boundary(model, s, 0.0, 0.0))
+                .collect(),
             _ => Vec::new(),
         }
     };
@@ -125,7 +146,11 @@ pub fn deck_of(scene: &Scene, model: &Model) -> Result<String, Error> {
         let p = perturbation_loads(model, perturbation_force(scene, model)?)?;
         for (k, f) in factors.iter().enumerate() {
             let mut b = first(k);
-            b.extend(driven.iter().map(|s| boundary(s, *f, reference)));
+            b.extend(
+                driven
+                    .iter()
+                    .flat_map(|s| boundary(model, s, *f, reference)),
+            );
             steps.push(step(b, cloads(&p, 1.0)));
             if !p.is_empty() {
                 steps.push(step(Vec::new(), cloads(&p, 0.0)));
@@ -202,8 +227,8 @@ mod tests {
     /// The exported deck and the analysis's constraints of one scene agree: in the step of the
     /// largest strain (load factor 1, the constraints' λ = 1) the DOFs the deck holds or
     /// prescribes, with the `*BOUNDARY` lines of every step up to it in force, are the DOFs the
-    /// constraints hold or prescribe, with the same values bit for bit (u = x_end·1·ε_ref both
-    /// ways); its `*CLOAD`s are the plate's P/4, or the perturbation force.
+    /// constraints hold or prescribe, with the same values (u = x_end·1·ε_ref both ways, bit for bit
+    /// where the deck's 13 digits hold the value); its `*CLOAD`s are the plate's P/4, or the perturbation force.
     fn deck_matches_constraints(toml: &str) {
         let scene = Scene::from_toml(toml).unwrap();
         let model = build_model(&scene).unwrap();
@@ -231,7 +256,18 @@ mod tests {
         }
         let expected: BTreeMap<usize, f64> = c.prescribed().collect();
         assert!(!expected.is_empty());
-        assert_eq!(held, expected, "{}", scene.title);
+        // The deck writer prints 13 significant digits: values that are not short decimals
+        // (the thin film's u = ε·x at each node) come back within 5e-13 relative of the largest.
+        let scale = expected.values().fold(0.0_f64, |m, v| m.max(v.abs()));
+        assert!(
+            held.keys().eq(expected.keys())
+                && held
+                    .iter()
+                    .zip(&expected)
+                    .all(|((_, a), (_, b))| (a - b).abs() <= 1e-12 * scale),
+            "{}: {held:?} against {expected:?}",
+            scene.title
+        );
         let mut loads = BTreeMap::new();
         for l in &deck.steps[upto].cloads {
             for n in nodes(&deck, &l.target) {
@@ -278,6 +314,15 @@ mod tests {
         deck_matches_constraints(include_str!(
             "../examples/scenes/fig_3_2_3_through_width.toml"
         ));
+    }
+
+    /// Thin film: no z = 0; every bonded node prescribed on its own set with the base's
+    /// displacement there (u = ε·x, v = (S12/S11)·ε·y, w = (S13/S11)·ε·z).
+    #[test]
+    fn thin_film_deck_matches_constraints() {
+        let text = include_str!("../examples/scenes/thin_film_circle_30mm.toml")
+            .replace("slices = 8", "slices = 4");
+        deck_matches_constraints(&text);
     }
 
     /// Plate: no prescribed end, the central load instead.

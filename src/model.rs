@@ -7,14 +7,14 @@
 use crate::error::Error;
 use crate::scene::{Geometry, MapName, Scene, Shape};
 use nonlin3d_laminate::Stiffness;
-use nonlin3d_mesh::names::{CENTER_TOP, CRACK_LOWER, X0, X1, Y_HOLD, Y0, Y1, Z0};
+use nonlin3d_mesh::names::{BONDED, CENTER_TOP, CRACK_LOWER, X0, X1, Y_HOLD, Y0, Y1, Z0};
 use nonlin3d_mesh::{
     EllipticMap, EmbeddedParams, Front, Imperfection, Mesh, PlyLayout, ThroughWidthParams,
     embedded_delamination_with_front, through_width_delamination,
 };
 
 /// Which boundary conditions a model gets (thesis §3.2).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub enum ModelKind {
     /// u = 0 on x = 0, v = 0 on y = 0, w = 0 on z = 0, u = W·ε on x = W.
     Embedded,
@@ -24,6 +24,15 @@ pub enum ModelKind {
     ThroughWidth,
     /// u = 0 on x = 0, v = 0 on y = 0, w = 0 on z = 0; the central transverse load.
     Plate,
+    /// The thin-film model (§5.3): the sublaminate alone; u = 0 on x = 0, v = 0 on y = 0,
+    /// u = W·ε on x = W, and its lower face outside the delamination (with the lower crack
+    /// face kept for VCCT's openings) moved with the base laminate's uniform strain.
+    ThinFilm {
+        /// S12/S11 of the base material: ε_y = (S12/S11)·ε under uniaxial stress.
+        nu_y: f64,
+        /// S13/S11 of the base material: ε_z = (S13/S11)·ε.
+        nu_z: f64,
+    },
 }
 
 /// The finite element model of a scene.
@@ -84,6 +93,19 @@ pub fn build_model(scene: &Scene) -> Result<Model, Error> {
             };
             (m, f, k, p.w, p.h, p.a.min(p.b), p.front_shape())
         }
+        Geometry::ThinFilm {
+            shape,
+            a_mm,
+            b_mm,
+            h_mm,
+            base_mm,
+            w_mm,
+        } => {
+            let p = embedded_params(scene, *shape, *a_mm, *b_mm, *h_mm, *base_mm, *w_mm);
+            let (m, f) = thin_film::cut(embedded_delamination_with_front(&p)?)?;
+            let k = thin_film::kind(&materials)?;
+            (m, f, k, p.w, p.h, p.a.min(p.b), p.front_shape())
+        }
         Geometry::Plate {
             a_mm,
             h_mm,
@@ -123,6 +145,8 @@ pub fn build_model(scene: &Scene) -> Result<Model, Error> {
         front_shape,
     })
 }
+
+mod thin_film;
 
 /// A millimetre in metres (scenes are in mm, models in SI).
 const MM: f64 = 1e-3;
@@ -227,12 +251,12 @@ fn imperfection(scene: &Scene) -> Option<(Imperfection, f64)> {
     }
     let mm = MM;
     let shape = match &scene.geometry {
-        Geometry::Embedded { a_mm, b_mm, .. } | Geometry::Edge { a_mm, b_mm, .. } => {
-            Imperfection::Cosine {
-                a: a_mm * mm,
-                b: b_mm * mm,
-            }
-        }
+        Geometry::Embedded { a_mm, b_mm, .. }
+        | Geometry::Edge { a_mm, b_mm, .. }
+        | Geometry::ThinFilm { a_mm, b_mm, .. } => Imperfection::Cosine {
+            a: a_mm * mm,
+            b: b_mm * mm,
+        },
         Geometry::ThroughWidth { a_mm, .. } => Imperfection::Strip { a: a_mm * mm },
         Geometry::Plate { a_mm, .. } => Imperfection::Cosine {
             a: a_mm * mm,
@@ -290,6 +314,24 @@ pub enum Value {
         /// The lever of the strain, m.
         length: f64,
     },
+    /// The base laminate's uniform strain at each node (the thin-film model, §5.3): the
+    /// component = ratio·ε·(the node's coordinate along it), ratio 1 along x, S12/S11 along y
+    /// and S13/S11 along z (uniaxial stress σ_x in the base, S its compliance).
+    Uniform {
+        /// ε along the component over the applied ε.
+        ratio: f64,
+    },
+}
+
+impl Value {
+    /// The value at node position `x` (m) on component `axis` at the applied strain `strain`.
+    pub fn at(self, axis: Axis, x: [f64; 3], strain: f64) -> f64 {
+        match self {
+            Self::Zero => 0.0,
+            Self::Strain { length } => length * strain,
+            Self::Uniform { ratio } => ratio * x[axis.offset()] * strain,
+        }
+    }
 }
 
 /// One support of a model: a component of some nodes held at zero or prescribed.
@@ -321,7 +363,11 @@ impl Model {
     ///   the delamination), against the rigid motion in y;
     /// - through-width: v = 0 on y = 0 and on y = W (plane strain);
     ///
-    /// and last, except on the plate, u = x_end·ε on x = W.
+    /// - thin-film: v = 0 on y = 0, no z = 0 (there is no base);
+    ///
+    /// then, except on the plate, u = x_end·ε on x = W; and last, on the thin film, the
+    /// bonded face (`bonded`: z = H outside the delamination, and the lower crack face) moved
+    /// with the base: u = ε·x, v = (S12/S11)·ε·y, w = (S13/S11)·ε·z.
     pub fn supports(&self) -> Result<Vec<Support>, Error> {
         let set = |name, axis| Support {
             nodes: Nodes::Set(name),
@@ -340,6 +386,12 @@ impl Model {
             }),
             ModelKind::ThroughWidth => s.extend([set(Y0, Axis::Y), set(Y1, Axis::Y)]),
             ModelKind::Embedded | ModelKind::Plate => s.push(set(Y0, Axis::Y)),
+            ModelKind::ThinFilm { .. } => {
+                // No base, so no z = 0: the bonded face carries the base's motion instead
+                // (last, so it wins where it meets x = 0, y = 0 or x = W; the values agree).
+                s.retain(|s| s.nodes != Nodes::Set(Z0));
+                s.push(set(Y0, Axis::Y));
+            }
         }
         if self.kind != ModelKind::Plate {
             s.push(Support {
@@ -347,6 +399,15 @@ impl Model {
                 axis: Axis::X,
                 value: Value::Strain { length: self.x_end },
             });
+        }
+        if let ModelKind::ThinFilm { nu_y, nu_z } = self.kind {
+            for (axis, ratio) in [(Axis::X, 1.0), (Axis::Y, nu_y), (Axis::Z, nu_z)] {
+                s.push(Support {
+                    nodes: Nodes::Set(BONDED),
+                    axis,
+                    value: Value::Uniform { ratio },
+                });
+            }
         }
         Ok(s)
     }

@@ -38,9 +38,10 @@ pub fn constraints(model: &Model, reference: f64) -> Result<Constraints, Error> 
         let nodes = model.nodes_of(&s.nodes)?;
         match s.value {
             Value::Zero => c.fix_nodes(nodes, s.axis.offset())?,
-            Value::Strain { length } => {
+            v => {
                 for &n in nodes {
-                    c.prescribe(3 * n + s.axis.offset(), length * reference)?;
+                    let x = model.mesh.nodes[n];
+                    c.prescribe(3 * n + s.axis.offset(), v.at(s.axis, x, reference))?;
                 }
             }
         }

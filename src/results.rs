@@ -336,12 +336,22 @@ impl Results {
         if let Some(last) = self.levels.last()
             && last.convergence.stable == Some(false)
         {
-            out.push(format!(
-                "the run ends on an unstable state (at {what} {}); with loads.perturbation_n = 0 \
-                 the unbuckled path is followed past its bifurcation — give a perturbation load \
-                 (or leave it unset for the automatic one) to follow the buckled branch",
-                last.value
-            ));
+            out.push(match (self.model.perturbation_n, self.model.perturbed_at) {
+                (Some(p), Some(at)) => format!(
+                    "the run ends on an unstable state (at {what} {}): the perturbation \
+                     ({p:.3e} N, applied at {what} {at}) did not carry the sublaminate onto the \
+                     buckled branch; add a level just past the bifurcation, give a larger \
+                     loads.perturbation_n, or an initial imperfection (loads.imperfection_mm)",
+                    last.value
+                ),
+                _ => format!(
+                    "the run ends on an unstable state (at {what} {}); with loads.perturbation_n \
+                     = 0 the unbuckled path is followed past its bifurcation — give a \
+                     perturbation load (or leave it unset for the automatic one) to follow the \
+                     buckled branch",
+                    last.value
+                ),
+            });
         }
         out
     }

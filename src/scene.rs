@@ -102,6 +102,25 @@ pub enum Geometry {
         /// Model size W, mm.
         w_mm: f64,
     },
+    /// The thin-film model of §5.3: the sublaminate of the embedded model alone, its lower
+    /// face outside the delamination moved with the base laminate's uniform strain (the base
+    /// taken as rigid against the sublaminate); the fields as for `embedded` (H places the
+    /// delamination plane z = H and gives the base's through-thickness displacement there).
+    ThinFilm {
+        /// Planform.
+        #[serde(default)]
+        shape: Shape,
+        /// Semi-axis along x, mm.
+        a_mm: f64,
+        /// Semi-axis along y, mm.
+        b_mm: f64,
+        /// Sublaminate thickness h, mm.
+        h_mm: f64,
+        /// Base laminate thickness H, mm.
+        base_mm: f64,
+        /// Quarter-model size W, mm.
+        w_mm: f64,
+    },
     /// Through-width delamination (Fig. 3.2.3), plane strain.
     ThroughWidth {
         /// Half-length a (delaminated for 0 ≤ x < a), mm.
@@ -148,6 +167,14 @@ impl Geometry {
                 base_mm,
                 w_mm,
                 ..
+            }
+            | Self::ThinFilm {
+                a_mm,
+                b_mm,
+                h_mm,
+                base_mm,
+                w_mm,
+                ..
             } => vec![
                 ("a_mm", a_mm),
                 ("b_mm", b_mm),
@@ -187,6 +214,7 @@ impl Geometry {
         match *self {
             Self::Embedded { base_mm, .. }
             | Self::Edge { base_mm, .. }
+            | Self::ThinFilm { base_mm, .. }
             | Self::ThroughWidth { base_mm, .. }
             | Self::Plate { base_mm, .. } => base_mm,
         }
