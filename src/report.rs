@@ -121,6 +121,18 @@ pub fn write_all(results: &mut Results, dir: &Path) -> Result<(), Error> {
     atomically(&dir.join("deflection.svg"), |tmp| {
         crate::plot::deflection_plot(results, tmp)
     })?;
+    atomically(&dir.join("overview.svg"), |tmp| {
+        crate::plot::overview_plot(results, tmp)
+    })?;
+    let indexed = results
+        .levels
+        .iter()
+        .any(|l| l.front.iter().any(|r| r.failure_index.is_some()));
+    if indexed {
+        atomically(&dir.join("failure_index.svg"), |tmp| {
+            crate::plot::failure_index_plot(results, tmp)
+        })?;
+    }
     // `[substructure] write_matrix = true`: K_red as CalculiX's .mtx.
     let matrices = results
         .model
@@ -216,25 +228,29 @@ pub fn table(results: &Results) -> String {
     for w in &results.warnings {
         let _ = writeln!(s, "warning: {w}");
     }
-    match results.critical {
-        Some(c) if c.after.is_some() => {
-            let _ = writeln!(
-                s,
-                "growth onset by the criterion between strain {} (unbuckled, nothing released) \
-                 and {} (at S = {:.2} mm); add levels between them to locate it",
-                c.after.unwrap_or(f64::NAN),
-                c.strain,
-                c.s_mm
-            );
-        }
-        Some(c) => {
-            let _ = writeln!(
-                s,
-                "growth onset by the criterion at strain {:.5}, S = {:.2} mm",
-                c.strain, c.s_mm
-            );
-        }
-        None => {}
+    if let Some(c) = results.critical {
+        let at = match c.after {
+            Some(after) => format!(
+                "between strain {after} (unbuckled, nothing released) and {} (add levels between \
+                 them to locate it)",
+                c.strain
+            ),
+            None => format!("at strain {:.5}", c.strain),
+        };
+        let _ = writeln!(
+            s,
+            "growth onset by the criterion {at}, S = {:.2} mm; there at level {} ({head} {}): \
+             failure index {:.3}, mode mix (G_II + G_III)/G_T = {:.3} (G_I {:.2}, G_II {:.2}, \
+             G_III {:.2} J/m²)",
+            c.s_mm,
+            c.level,
+            results.levels.get(c.level).map_or(f64::NAN, |l| l.value),
+            c.index,
+            c.mode_mix,
+            c.g_i,
+            c.g_ii,
+            c.g_iii
+        );
     }
     let t = &results.timings;
     let _ = writeln!(
