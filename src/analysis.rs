@@ -462,10 +462,19 @@ fn criterion(
         .map(|l| (l.value, l.front.iter().map(FrontRow::release).collect()))
         .collect();
     Ok(
-        nonlin3d_vcct::critical_strain(&criterion, &sweep)?.map(|c| Critical {
-            strain: c.strain,
-            after: c.after,
-            s_mm: c.s * 1e3,
+        nonlin3d_vcct::critical_strain(&criterion, &sweep)?.map(|c| {
+            let r = &sweep[c.level].1[c.point];
+            Critical {
+                strain: c.strain,
+                after: c.after,
+                s_mm: c.s * 1e3,
+                level: c.level,
+                index: c.index,
+                mode_mix: nonlin3d_vcct::MixedMode::mode_mix(r),
+                g_i: r.g_i,
+                g_ii: r.g_ii,
+                g_iii: r.g_iii,
+            }
         }),
     )
 }

@@ -279,13 +279,10 @@ fn io(path: &Path) -> impl FnOnce(std::io::Error) -> Error + '_ {
     }
 }
 
-/// A CSV field: quoted when it holds a comma or a quote.
-fn quoted(s: &str) -> String {
-    if s.contains([',', '"', '\n']) {
-        format!("\"{}\"", s.replace('"', "\"\"").replace('\n', " "))
-    } else {
-        s.into()
-    }
+/// One CSV line through the `csv` crate (quoted where a field needs it); a line break inside a
+/// field (a termination's text) becomes a space, so that each record stays on one line.
+fn line(fields: &[String]) -> String {
+    crate::report::Csv::line(fields.iter().map(|f| f.replace('\n', " ")))
 }
 
 impl StatusFiles {
@@ -324,6 +321,9 @@ impl StatusFiles {
             time_s,
             event,
         } = record;
+        let (unit, increment, attempt) =
+            (unit.to_string(), increment.to_string(), attempt.to_string());
+        let time = format!("{time_s:.3}");
         let (line, name) = match event {
             NewtonEvent::Iteration {
                 lambda,
@@ -332,11 +332,17 @@ impl StatusFiles {
                 correction,
                 negative_pivots,
             } => (
-                format!(
-                    "{unit},{increment},{attempt},{iteration},{lambda:e},{residual:e},\
-                     {correction:e},{},{time_s:.3}\n",
-                    negative_pivots.map_or(String::new(), |p| p.to_string())
-                ),
+                line(&[
+                    unit,
+                    increment,
+                    attempt,
+                    iteration.to_string(),
+                    format!("{lambda:e}"),
+                    format!("{residual:e}"),
+                    format!("{correction:e}"),
+                    negative_pivots.map_or(String::new(), |p| p.to_string()),
+                    time,
+                ]),
                 CONVERGENCE_FILE,
             ),
             NewtonEvent::Attempt {
@@ -345,21 +351,32 @@ impl StatusFiles {
                 converged,
                 termination,
             } => (
-                format!(
-                    "{unit},{increment},{attempt},{lambda:e},{iterations},{},{time_s:.3},{}\n",
-                    if *converged { "converged" } else { "cut back" },
-                    quoted(termination)
-                ),
+                line(&[
+                    unit,
+                    increment,
+                    attempt,
+                    format!("{lambda:e}"),
+                    iterations.to_string(),
+                    if *converged { "converged" } else { "cut back" }.to_string(),
+                    time,
+                    termination.clone(),
+                ]),
                 STATUS_FILE,
             ),
             NewtonEvent::Refused {
                 lambda,
                 termination,
             } => (
-                format!(
-                    "{unit},{increment},{attempt},{lambda:e},,refused,{time_s:.3},{}\n",
-                    quoted(termination)
-                ),
+                line(&[
+                    unit,
+                    increment,
+                    attempt,
+                    format!("{lambda:e}"),
+                    String::new(),
+                    "refused".to_string(),
+                    time,
+                    termination.clone(),
+                ]),
                 STATUS_FILE,
             ),
         };

@@ -49,6 +49,8 @@ fn ours(name: &str) -> bool {
             | "g_ii.svg"
             | "g_t.svg"
             | "deflection.svg"
+            | "overview.svg"
+            | "failure_index.svg"
     ) || numbered("front_", ".csv")
         || numbered("model_", ".vtu")
         || numbered("front_", ".vtu")

@@ -14,34 +14,87 @@ fn io(path: &Path) -> impl FnOnce(std::io::Error) -> Error + '_ {
     }
 }
 
-/// The CSV of one level's front table.
+/// A CSV text written through the `csv` crate: RFC 4180 quoting of any field that holds a
+/// comma, quote or line break, `\n` line ends. Numbers are formatted by the caller (`{:e}` for
+/// G and lengths derived from the solution: the shortest form that reads back to the same
+/// f64).
+pub(crate) struct Csv(csv::Writer<Vec<u8>>);
+
+impl Csv {
+    /// A table with its header row.
+    pub(crate) fn new(header: &[&str]) -> Self {
+        let mut w = Self(
+            csv::WriterBuilder::new()
+                .flexible(true)
+                .from_writer(Vec::new()),
+        );
+        w.row(header);
+        w
+    }
+
+    /// One row.
+    pub(crate) fn row<S: AsRef<[u8]>>(&mut self, fields: impl IntoIterator<Item = S>) {
+        // Into a Vec<u8>, with flexible record lengths, a write cannot fail.
+        let _ = self.0.write_record(fields);
+    }
+
+    /// One record alone, with its line end (a line appended to a file as a run goes).
+    pub(crate) fn line<S: AsRef<[u8]>>(fields: impl IntoIterator<Item = S>) -> String {
+        let mut w = Self(
+            csv::WriterBuilder::new()
+                .flexible(true)
+                .from_writer(Vec::new()),
+        );
+        w.row(fields);
+        w.finish()
+    }
+
+    /// The text.
+    pub(crate) fn finish(self) -> String {
+        let bytes = self.0.into_inner().unwrap_or_default();
+        String::from_utf8_lossy(&bytes).into_owned()
+    }
+}
+
+/// The CSV of one level's front table (G in J/m², lengths in mm, areas in mm²).
 pub fn front_csv(results: &Results, level: usize) -> String {
-    let mut s = String::from(
-        "s_mm,theta_deg,x_mm,y_mm,delta_a_mm,g_i,g_ii,g_iii,g_t,faces,opening_mm,area_mm2,node,failure_index\n",
-    );
+    let mut t = Csv::new(&[
+        "s_mm",
+        "theta_deg",
+        "x_mm",
+        "y_mm",
+        "delta_a_mm",
+        "g_i_j_m2",
+        "g_ii_j_m2",
+        "g_iii_j_m2",
+        "g_t_j_m2",
+        "faces",
+        "opening_mm",
+        "area_mm2",
+        "node",
+        "failure_index",
+    ]);
     if let Some(l) = results.levels.get(level) {
         for r in &l.front {
-            let _ = writeln!(
-                s,
-                "{},{},{},{},{},{:e},{:e},{:e},{:e},{},{:e},{:e},{},{}",
-                r.s_mm,
-                r.theta_deg,
-                r.x_mm,
-                r.y_mm,
-                r.delta_a_mm,
-                r.g_i,
-                r.g_ii,
-                r.g_iii,
-                r.g_t,
-                r.faces.as_str(),
-                r.opening_mm,
-                r.area_mm2,
-                r.node,
-                r.failure_index.map_or(String::new(), |f| format!("{f:e}"))
-            );
+            t.row([
+                r.s_mm.to_string(),
+                r.theta_deg.to_string(),
+                r.x_mm.to_string(),
+                r.y_mm.to_string(),
+                r.delta_a_mm.to_string(),
+                format!("{:e}", r.g_i),
+                format!("{:e}", r.g_ii),
+                format!("{:e}", r.g_iii),
+                format!("{:e}", r.g_t),
+                r.faces.as_str().to_string(),
+                format!("{:e}", r.opening_mm),
+                format!("{:e}", r.area_mm2),
+                r.node.to_string(),
+                r.failure_index.map_or(String::new(), |f| format!("{f:e}")),
+            ]);
         }
     }
-    s
+    t.finish()
 }
 
 /// `yes`, `NO` (unstable: negative pivots) or `?` (not computed).
@@ -53,36 +106,43 @@ fn stability_word(l: &crate::results::LevelResult) -> &'static str {
     }
 }
 
-/// The CSV of the levels: applied value, deflections, largest G_I/G_II/G_T over the open front
-/// points, overlapped points, negative pivots, stability and Newton iterations.
+/// The CSV of the levels: applied value, deflections (mm), largest G_I/G_II/G_T over the open
+/// front points (J/m²), overlapped points, negative pivots, stability and Newton iterations.
 pub fn levels_csv(results: &Results) -> String {
-    let mut s = format!(
-        "{},centre_deflection_mm,max_face_separation_mm,g_i_max,g_ii_max,g_t_max,overlapped_points,front_points,negative_pivots,stable,iterations\n",
-        results.quantity
-    );
+    let mut t = Csv::new(&[
+        results.quantity.as_str(),
+        "centre_deflection_mm",
+        "max_face_separation_mm",
+        "g_i_max_j_m2",
+        "g_ii_max_j_m2",
+        "g_t_max_j_m2",
+        "overlapped_points",
+        "front_points",
+        "negative_pivots",
+        "stable",
+        "iterations",
+    ]);
     let opt = |v: Option<f64>| v.map_or(String::new(), |v| format!("{v:e}"));
     for l in &results.levels {
-        let _ = writeln!(
-            s,
-            "{},{:e},{:e},{},{},{},{},{},{},{},{}",
-            l.value,
-            l.centre_deflection_mm,
-            l.max_face_separation_mm,
+        t.row([
+            l.value.to_string(),
+            format!("{:e}", l.centre_deflection_mm),
+            format!("{:e}", l.max_face_separation_mm),
             opt(l.peak(|r| r.g_i).map(|r| r.g_i)),
             opt(l.peak(|r| r.g_ii).map(|r| r.g_ii)),
             opt(l.peak(|r| r.g_t).map(|r| r.g_t)),
-            l.overlapped(),
-            l.front.len(),
+            l.overlapped().to_string(),
+            l.front.len().to_string(),
             l.convergence
                 .negative_pivots
                 .map_or(String::new(), |p| p.to_string()),
             l.convergence
                 .stable
                 .map_or(String::new(), |b| b.to_string()),
-            l.convergence.iterations
-        );
+            l.convergence.iterations.to_string(),
+        ]);
     }
-    s
+    t.finish()
 }
 
 /// Writes everything into `dir` (created if needed), each file atomically
@@ -121,6 +181,18 @@ pub fn write_all(results: &mut Results, dir: &Path) -> Result<(), Error> {
     atomically(&dir.join("deflection.svg"), |tmp| {
         crate::plot::deflection_plot(results, tmp)
     })?;
+    atomically(&dir.join("overview.svg"), |tmp| {
+        crate::plot::overview_plot(results, tmp)
+    })?;
+    let indexed = results
+        .levels
+        .iter()
+        .any(|l| l.front.iter().any(|r| r.failure_index.is_some()));
+    if indexed {
+        atomically(&dir.join("failure_index.svg"), |tmp| {
+            crate::plot::failure_index_plot(results, tmp)
+        })?;
+    }
     // `[substructure] write_matrix = true`: K_red as CalculiX's .mtx.
     let matrices = results
         .model
@@ -216,25 +288,29 @@ pub fn table(results: &Results) -> String {
     for w in &results.warnings {
         let _ = writeln!(s, "warning: {w}");
     }
-    match results.critical {
-        Some(c) if c.after.is_some() => {
-            let _ = writeln!(
-                s,
-                "growth onset by the criterion between strain {} (unbuckled, nothing released) \
-                 and {} (at S = {:.2} mm); add levels between them to locate it",
-                c.after.unwrap_or(f64::NAN),
-                c.strain,
-                c.s_mm
-            );
-        }
-        Some(c) => {
-            let _ = writeln!(
-                s,
-                "growth onset by the criterion at strain {:.5}, S = {:.2} mm",
-                c.strain, c.s_mm
-            );
-        }
-        None => {}
+    if let Some(c) = results.critical {
+        let at = match c.after {
+            Some(after) => format!(
+                "between strain {after} (unbuckled, nothing released) and {} (add levels between \
+                 them to locate it)",
+                c.strain
+            ),
+            None => format!("at strain {:.5}", c.strain),
+        };
+        let _ = writeln!(
+            s,
+            "growth onset by the criterion {at}, S = {:.2} mm; there at level {} ({head} {}): \
+             failure index {:.3}, mode mix (G_II + G_III)/G_T = {:.3} (G_I {:.2}, G_II {:.2}, \
+             G_III {:.2} J/m²)",
+            c.s_mm,
+            c.level,
+            results.levels.get(c.level).map_or(f64::NAN, |l| l.value),
+            c.index,
+            c.mode_mix,
+            c.g_i,
+            c.g_ii,
+            c.g_iii
+        );
     }
     let t = &results.timings;
     let _ = writeln!(
@@ -263,4 +339,22 @@ pub fn table(results: &Results) -> String {
         }
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A field with a comma, a quote or a line break is quoted (RFC 4180), others are not; a
+    /// record ends in `\n`.
+    #[test]
+    fn csv_fields_are_quoted_where_needed() {
+        assert_eq!(
+            Csv::line(["1", "a,b", "say \"no\""]),
+            "1,\"a,b\",\"say \"\"no\"\"\"\n"
+        );
+        let mut t = Csv::new(&["x_mm", "note"]);
+        t.row(["2.5", ""]);
+        assert_eq!(t.finish(), "x_mm,note\n2.5,\n");
+    }
 }

@@ -307,6 +307,19 @@ pub struct Critical {
     pub after: Option<f64>,
     /// Where: S, mm.
     pub s_mm: f64,
+    /// The first level whose largest failure index is ≥ 1 (0-based, as `front_K.csv`'s K).
+    pub level: usize,
+    /// The failure index there (≥ 1).
+    pub index: f64,
+    /// Mode mix (G_II + G_III)/G_T of that point at that level (0: pure mode I, 1: pure
+    /// shear), the front VTU's `mode_mix`.
+    pub mode_mix: f64,
+    /// G_I, G_II, G_III of that point at that level, J/m².
+    pub g_i: f64,
+    /// G_II, J/m².
+    pub g_ii: f64,
+    /// G_III, J/m².
+    pub g_iii: f64,
 }
 
 impl Results {

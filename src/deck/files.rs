@@ -30,7 +30,6 @@ use nonlin3d_element::{IntegrationRule, Kinematics, Material};
 use nonlin3d_laminate::ShearCoupling;
 use nonlin3d_mesh::vtu::pvd_string;
 use nonlin3d_mesh::{InpModel, Mesh};
-use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 fn io(path: &Path) -> impl FnOnce(std::io::Error) -> Error + '_ {
@@ -83,11 +82,16 @@ fn ours_relative(path: &Path) -> bool {
 
 /// `node,ux,uy,uz` by deck node id.
 fn displacements_csv(model: &InpModel, u: &[[f64; 3]]) -> String {
-    let mut s = String::from("node,ux,uy,uz\n");
+    let mut t = crate::report::Csv::new(&["node", "ux", "uy", "uz"]);
     for (id, d) in model.node_ids.iter().zip(u) {
-        let _ = writeln!(s, "{id},{:e},{:e},{:e}", d[0], d[1], d[2]);
+        t.row([
+            id.to_string(),
+            format!("{:e}", d[0]),
+            format!("{:e}", d[1]),
+            format!("{:e}", d[2]),
+        ]);
     }
-    s
+    t.finish()
 }
 
 /// The summary entry of a step: its record, its output files with the increments they hold,

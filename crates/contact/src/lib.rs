@@ -34,6 +34,20 @@
 //! | [`contact_tie`], [`contact_force`] | the constraint of a closed pair and its force |
 //! | [`Contact`], [`ContactSettings`], [`Mode`] | the loop around a load level |
 //! | [`ContactLevel`], [`PassReport`], [`ContactState`] | per-level report; gaps and forces as results |
+//!
+//! The active-set update alone: of three pairs, an open one overlapping by 2 µm closes, a held
+//! one in tension (−5 N) opens, and an open one with a gap stays open.
+//!
+//! ```
+//! use nonlin3d_contact::{Tolerances, update};
+//!
+//! let gaps = [-2e-6, 0.0, 1e-6]; // m
+//! let forces = [0.0, -5.0, 0.0]; // N, compressive positive
+//! let active = [false, true, false];
+//! let change = update(&gaps, &forces, &active, Tolerances { gap: 1e-9, force: 1e-6 });
+//! assert_eq!(change.added, [0]);
+//! assert_eq!(change.released, [1]);
+//! ```
 #![deny(missing_docs)]
 #![cfg_attr(
     not(test),

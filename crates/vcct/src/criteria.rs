@@ -1,5 +1,17 @@
 //! Mixed-mode delamination criteria: the failure index along a front and the critical applied
 //! strain of a strain sweep.
+//!
+//! Sources (as Abaqus's VCCT documentation also cites them):
+//! - power law: E. M. Wu and R. C. Reuter, "Crack extension in fiberglass reinforced
+//!   plastics", T&AM Report 275, University of Illinois, 1965 — (G_I/G_Ic)^α +
+//!   (G_II/G_IIc)^β + (G_III/G_IIIc)^β = 1 at onset; J. R. Reeder, "An evaluation of mixed-mode
+//!   delamination failure criteria", NASA TM-104210, 1992, compares it with the others;
+//! - Benzeggagh–Kenane: M. L. Benzeggagh and M. Kenane, "Measurement of mixed-mode
+//!   delamination fracture toughness of unidirectional glass/epoxy composites with mixed-mode
+//!   bending apparatus", Composites Science and Technology 56 (1996) 439–449 — G_c = G_Ic +
+//!   (G_IIc − G_Ic)·(G_shear/G_T)^η, onset at G_T = G_c.
+//!
+//! The thesis (§2.8) computes G_I, G_II, G_III along the front and applies no criterion.
 
 use crate::{FrontRelease, VcctError};
 
@@ -105,6 +117,14 @@ impl MixedMode {
         }
     }
 
+    /// The mode mix of a front point, (G_II + G_III)/G_T with G_T = G_I + G_II + G_III as
+    /// VCCT gives them (0 where G_T = 0): B–K's G_shear/G_T, the front VTU's `mode_mix`.
+    pub fn mode_mix(r: &FrontRelease) -> f64 {
+        let shear = r.g_ii + r.g_iii;
+        let total = r.g_i + shear;
+        if total == 0.0 { 0.0 } else { shear / total }
+    }
+
     /// Failure indices along a front.
     pub fn indices(&self, rates: &[FrontRelease]) -> Vec<f64> {
         rates.iter().map(|r| self.index(r)).collect()
@@ -125,6 +145,10 @@ pub struct CriticalStrain {
     pub after: Option<f64>,
     /// Index of the front point that reaches 1 first (in the sweep's front tables).
     pub point: usize,
+    /// Index (in `levels`) of the first level whose largest failure index is ≥ 1.
+    pub level: usize,
+    /// The failure index of `point` at `level` (≥ 1).
+    pub index: f64,
     /// S of that point (m).
     pub s: f64,
 }
@@ -150,7 +174,7 @@ pub fn critical_strain(
             .max_by(|a, b| a.1.total_cmp(&b.1))
     };
     let mut last: Option<(f64, f64)> = None;
-    for (strain, rates) in levels {
+    for (level, (strain, rates)) in levels.iter().enumerate() {
         let Some((i, f)) = peak(rates) else {
             continue;
         };
@@ -167,6 +191,8 @@ pub fn critical_strain(
                 strain: at,
                 after,
                 point: i,
+                level,
+                index: f,
                 s: rates[i].s,
             }));
         }
@@ -233,6 +259,53 @@ mod tests {
             .validate(),
             Err(VcctError::Criterion { name: "G_Ic", .. })
         ));
+    }
+
+    /// Hand computations at a mixed-mode point G = (60, 30, 10) J/m² (G_T = 100, mode mix
+    /// (30 + 10)/100 = 0.4) and at (50, 400, 100):
+    /// - power law, G_Ic = 200, G_IIc = 800, G_IIIc = 1000, α = 1, β = 2:
+    ///   50/200 + (400/800)² + (100/1000)² = 0.25 + 0.25 + 0.01 = 0.51;
+    /// - B–K, G_Ic = 200, G_IIc = 800, η = 2: G_c = 200 + 600·0.4² = 296, index 100/296.
+    ///
+    /// Computed in floating point these agree with the decimal values to a few ulps: 1e-15
+    /// relative.
+    #[test]
+    fn indices_and_mode_mix_match_hand_computations() {
+        let pl = MixedMode::PowerLaw {
+            g_ic: 200.0,
+            g_iic: 800.0,
+            g_iiic: 1000.0,
+            alpha: 1.0,
+            beta: 2.0,
+        };
+        assert_relative_eq!(
+            pl.index(&point(50.0, 400.0, 100.0)),
+            0.51,
+            max_relative = 1e-15
+        );
+        let bk = MixedMode::BenzeggaghKenane {
+            g_ic: 200.0,
+            g_iic: 800.0,
+            eta: 2.0,
+        };
+        let p = point(60.0, 30.0, 10.0);
+        assert_relative_eq!(MixedMode::mode_mix(&p), 0.4, max_relative = 1e-15);
+        assert_relative_eq!(bk.index(&p), 100.0 / 296.0, max_relative = 1e-15);
+        assert_eq!(MixedMode::mode_mix(&point(0.0, 0.0, 0.0)), 0.0);
+        // The onset of a sweep of this point scaled by (ε/ε₁)², ε₁ = −0.001: B–K's index is
+        // proportional to the scale (the mix is fixed), 0.338 at ε₁ and 1.351 at 2ε₁; √index
+        // is linear in ε, so the onset is at ε₁·√(296/100) exactly, at the second level.
+        let levels: Vec<(f64, Vec<FrontRelease>)> = [1.0, 2.0]
+            .iter()
+            .map(|&k| {
+                let q = k * k;
+                (-0.001 * k, vec![point(60.0 * q, 30.0 * q, 10.0 * q)])
+            })
+            .collect();
+        let hit = critical_strain(&bk, &levels).unwrap().unwrap();
+        assert_eq!((hit.level, hit.point), (1, 0));
+        assert_relative_eq!(hit.index, 400.0 / 296.0, max_relative = 1e-15);
+        assert_relative_eq!(hit.strain, -0.001 * 2.96_f64.sqrt(), max_relative = 1e-14);
     }
 
     /// G ∝ ε² gives √index ∝ ε: the interpolation recovers the onset exactly.
