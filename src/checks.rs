@@ -337,6 +337,12 @@ fn mesh_controls(s: &Scene) -> Result<(), Error> {
             ));
         }
     }
+    if through && let Some([i, o]) = c.front_band {
+        return bad(format!(
+            "mesh.front_band = [{i}, {o}]: the band of finer slices is built for embedded, edge \
+             and plate models; a through-width front is straight (refine it with across)"
+        ));
+    }
     if let Some(g) = c.front_grading
         && !(g.is_finite() && g > 0.0)
     {

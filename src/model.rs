@@ -9,8 +9,8 @@ use crate::scene::{Geometry, MapName, Scene, Shape};
 use nonlin3d_laminate::Stiffness;
 use nonlin3d_mesh::names::{BONDED, CENTER_TOP, CRACK_LOWER, X0, X1, Y_HOLD, Y0, Y1, Z0};
 use nonlin3d_mesh::{
-    EllipticMap, EmbeddedParams, Front, Imperfection, Mesh, PlyLayout, ThroughWidthParams,
-    embedded_delamination_with_front, through_width_delamination,
+    EllipticMap, EmbeddedParams, Front, FrontBand, Imperfection, Mesh, PlyLayout,
+    ThroughWidthParams, embedded_delamination_with_front, through_width_delamination,
 };
 
 /// Which boundary conditions a model gets (thesis §3.2).
@@ -193,6 +193,10 @@ fn embedded_params(
         radial_outside: c.outside.unwrap_or(d.radial_outside),
         front_grading: c.front_grading.unwrap_or(d.front_grading),
         front_element: c.front_element_mm.map(|e| e * mm).or(d.front_element),
+        front_band: c
+            .front_band
+            .map(|[inside, outside]| FrontBand { inside, outside })
+            .or(d.front_band),
         sub_layers: c.sub_layers.unwrap_or(d.sub_layers),
         base_layers: c.base_layers.unwrap_or(d.base_layers),
         map: match shape {

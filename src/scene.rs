@@ -320,6 +320,11 @@ pub struct MeshControls {
     /// at the front are square in the radial–thickness plane; `front_grading` is then unused.
     #[serde(default)]
     pub front_element_mm: Option<f64>,
+    /// `[inside, outside]`: the rings behind and ahead of the front that carry three times the
+    /// slices (embedded, edge: issue 25's refinement along the front only), joined to the rest
+    /// by a conformal transition ring on each side. Unset: every ring has `slices` arcs.
+    #[serde(default)]
+    pub front_band: Option<[usize; 2]>,
     /// Elements through the sublaminate.
     #[serde(default)]
     pub sub_layers: Option<usize>,

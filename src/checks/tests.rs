@@ -41,6 +41,11 @@ fn a_front_element_is_positive_and_not_for_through_width_models() {
     };
     let m = message(&s);
     assert!(m.contains("through-width"), "{m}");
+    s.mesh.front_element_mm = None;
+    s.mesh.slices = None;
+    s.mesh.front_band = Some([2, 2]);
+    let m = message(&s);
+    assert!(m.contains("mesh.front_band = [2, 2]"), "{m}");
 }
 
 #[test]

@@ -37,10 +37,10 @@ mod quality;
 pub use error::MeshError;
 pub use front::{Front, FrontPoint};
 pub use generators::{
-    BoxParams, Centre, EllipticMap, EmbeddedParams, FrontShape, NonlinearRegion, Partition,
-    PlyLayout, ThroughWidthParams, edge_delamination, ellipse_distance, embedded_delamination,
-    embedded_delamination_with_front, graded_coordinates, graded_from_first, nonlinear_region,
-    structured_box, thin_film, through_width_delamination,
+    BoxParams, Centre, EllipticMap, EmbeddedParams, FrontBand, FrontShape, NonlinearRegion,
+    Partition, PlyLayout, ThroughWidthParams, edge_delamination, ellipse_distance,
+    embedded_delamination, embedded_delamination_with_front, graded_coordinates, graded_from_first,
+    nonlinear_region, structured_box, thin_film, through_width_delamination,
 };
 pub use io::inp_read::{
     Amplitude, ContactPairs, Controls, InpModel, NodeRef, NotUsed, OutputKind, OutputRequest,

@@ -40,7 +40,7 @@ mod planform;
 mod sets;
 
 pub use maps::EllipticMap;
-pub use params::{Centre, EmbeddedParams, PlyLayout};
+pub use params::{Centre, EmbeddedParams, FrontBand, PlyLayout};
 
 use crate::MeshError;
 use crate::front::Front;

@@ -11,8 +11,8 @@ mod structured;
 mod through_width;
 
 pub use embedded::{
-    Centre, EllipticMap, EmbeddedParams, PlyLayout, edge_delamination, embedded_delamination,
-    embedded_delamination_with_front, thin_film,
+    Centre, EllipticMap, EmbeddedParams, FrontBand, PlyLayout, edge_delamination,
+    embedded_delamination, embedded_delamination_with_front, thin_film,
 };
 pub use grading::{graded_coordinates, graded_from_first};
 pub(crate) use grading::{grid_index, grid_position};

@@ -18,7 +18,9 @@ pub(super) fn descriptor(
 ) -> Result<Front, MeshError> {
     let cells = CellsTouching::new(&solid.mesh, &solid.sub_cells);
     let mut points = Vec::new();
-    for q in (0..=p.slices).rev() {
+    // The front ring's arcs: `slices`, or the front band's (issue 25).
+    let n = s.rings[s.front_ring].len() - 1;
+    for q in (0..=n).rev() {
         points.push(corner_point(p.kind, s, solid, &cells, q)?);
         if p.kind == ElementKind::Hex20 && q > 0 {
             points.push(mid_edge_point(s, solid, &cells, q)?);

@@ -39,6 +39,12 @@ pub struct EmbeddedParams {
     /// plane, where the VCCT's forces and openings (§2.8) are taken. A count too small to
     /// reach e (n·e < length) gives uniform elements. `None`: the thesis's grading (§3.1).
     pub front_element: Option<f64>,
+    /// Refinement along the front only (issue 25): `Some(band)` gives the `band.inside` rings
+    /// behind the front and the `band.outside` rings ahead of it [`FrontBand::FACTOR`]·`slices`
+    /// arcs, joined to the `slices`-arc rings on either side by one conformal transition ring
+    /// (each coarse arc split into three, four quadrilaterals: no hanging node). `None`: every
+    /// ring has `slices` arcs (§3.1).
+    pub front_band: Option<FrontBand>,
     /// Core (first ring) radius as a fraction of the front circle's radius min(a, b).
     pub core_fraction: f64,
     /// Rings out to `transition`·min(a, b) (radii of the circular mesh, whose front circle has
@@ -56,6 +62,22 @@ pub struct EmbeddedParams {
     pub plies: Option<PlyLayout>,
     /// How the centre (the axis r = 0) is meshed.
     pub centre: Centre,
+}
+
+/// A band of rings around the front with [`FrontBand::FACTOR`] times the slices (issue 25).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct FrontBand {
+    /// Rings behind the front with the fine slices (≥ 1, < `radial_inside`: one more ring is
+    /// the transition).
+    pub inside: usize,
+    /// Rings ahead of the front with the fine slices (≥ 1, < `radial_outside`).
+    pub outside: usize,
+}
+
+impl FrontBand {
+    /// The band's arcs per coarse arc: the conformal quadrilateral transition splits an edge
+    /// into three (two edges need no interior vertex pattern that quadrilaterals can close).
+    pub const FACTOR: usize = 3;
 }
 
 /// The centre of the swept section.
@@ -116,6 +138,7 @@ impl EmbeddedParams {
             radial_outside: 5,
             front_grading: 0.25,
             front_element: None,
+            front_band: None,
             core_fraction: 0.3,
             transition: 1.4,
             sub_layers: 1,
@@ -165,6 +188,22 @@ impl EmbeddedParams {
                     "{e} m must be positive and shorter than the distance from the core to the \
                      front, {} m",
                     self.a.min(self.b) * (1.0 - self.core_fraction)
+                ),
+            );
+        }
+        if let Some(band) = self.front_band
+            && !(band.inside >= 1
+                && band.outside >= 1
+                && band.inside < self.radial_inside
+                && band.outside < self.radial_outside)
+        {
+            return bad(
+                "front_band",
+                format!(
+                    "{} rings inside and {} outside: each at least 1 and below radial_inside = {} \
+                     and radial_outside = {} (one more ring on each side joins the band to the \
+                     coarse rings)",
+                    band.inside, band.outside, self.radial_inside, self.radial_outside
                 ),
             );
         }

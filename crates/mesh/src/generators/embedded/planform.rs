@@ -4,7 +4,7 @@
 //! (eq. 3.1.1–3.1.2 or the rectangle, module `maps`).
 
 use super::maps::{front_radius, planform, radial_stations};
-use super::{Centre, EmbeddedParams};
+use super::{Centre, EmbeddedParams, FrontBand};
 use crate::MeshError;
 
 /// The 2-D quarter section of §3.1, already mapped onto the planform.
@@ -27,6 +27,17 @@ pub(super) struct Section {
 /// The angle φ = (π/2)·q/slices of slice line q in the circular mesh (§3.1).
 fn angle(p: &EmbeddedParams, q: usize) -> f64 {
     std::f64::consts::FRAC_PI_2 * q as f64 / p.slices as f64
+}
+
+/// Arcs of the ring at radial station m0 (index into the radial stations, `front` the front
+/// circle's): `slices`, or [`FrontBand::FACTOR`]·`slices` inside the front band (issue 25).
+fn arcs(p: &EmbeddedParams, m0: usize, front: usize) -> usize {
+    match p.front_band {
+        Some(b) if m0 + b.inside >= front && m0 <= front + b.outside => {
+            FrontBand::FACTOR * p.slices
+        }
+        _ => p.slices,
+    }
 }
 
 /// A point (x, y) of the circular mesh taken through the planform map (eq. 3.1.1–3.1.2 or the
@@ -61,26 +72,28 @@ pub(super) fn section(p: &EmbeddedParams) -> Result<Section, MeshError> {
     // a ≤ b: semi-axes t·a and √(t²a² + b² − a²) ≤ t·b; mirrored for a > b).
     let wt = p.transition * front_radius(p);
     for (m0, &r) in rho.iter().enumerate() {
-        let ring = (0..=p.slices)
-            .map(|q| s.push(ring_point(p, wt, r, q), m0 < front))
+        let n = arcs(p, m0, front);
+        let ring = (0..=n)
+            .map(|q| s.push(ring_point(p, wt, r, q, n), m0 < front))
             .collect();
         s.rings.push(ring);
     }
-    s.ring_quads(p.slices);
+    s.ring_quads(front);
     Ok(s)
 }
 
-/// Ring point at radius `r` (circular mesh) on slice line q (§3.1, Fig. 3.1.1c): the planform
-/// map (eq. 3.1.1–3.1.2) of the circle point for r ≤ `wt` (the transition radius); beyond, the
-/// straight blend from the mapped transition ring (β = 0) to the square boundary (β = 1 at W).
-fn ring_point(p: &EmbeddedParams, wt: f64, r: f64, q: usize) -> [f64; 2] {
-    let phi = angle(p, q);
+/// Ring point at radius `r` (circular mesh) on slice line q of n (§3.1, Fig. 3.1.1c): the
+/// planform map (eq. 3.1.1–3.1.2) of the circle point for r ≤ `wt` (the transition radius);
+/// beyond, the straight blend from the mapped transition ring (β = 0) to the square boundary
+/// (β = 1 at W).
+fn ring_point(p: &EmbeddedParams, wt: f64, r: f64, q: usize, n: usize) -> [f64; 2] {
+    let phi = std::f64::consts::FRAC_PI_2 * q as f64 / n as f64;
     if r <= wt {
         return mapped(p, r * phi.cos(), r * phi.sin());
     }
     let on_ring = mapped(p, wt * phi.cos(), wt * phi.sin());
     let beta = (r - wt) / (p.w - wt);
-    let sq = if q == p.slices {
+    let sq = if q == n {
         [0.0, p.w]
     } else if phi <= std::f64::consts::FRAC_PI_4 {
         [p.w, p.w * phi.tan()]
@@ -149,17 +162,71 @@ impl Section {
         ring
     }
 
-    /// The quadrilaterals between consecutive rings (Fig. 3.1.1), counter-clockwise from +z.
-    fn ring_quads(&mut self, slices: usize) {
+    /// The quadrilaterals between consecutive rings (Fig. 3.1.1), counter-clockwise from +z;
+    /// between a ring of n arcs and one of 3n (the front band's edges, issue 25) the conformal
+    /// transition of [`Section::transition_quads`].
+    fn ring_quads(&mut self, front: usize) {
         for m in 0..self.rings.len() - 1 {
-            for q in 0..slices {
-                self.quads.push([
-                    self.rings[m][q],
-                    self.rings[m + 1][q],
-                    self.rings[m + 1][q + 1],
-                    self.rings[m][q + 1],
-                ]);
+            let (ni, no) = (self.rings[m].len() - 1, self.rings[m + 1].len() - 1);
+            if ni == no {
+                for q in 0..ni {
+                    self.quads.push([
+                        self.rings[m][q],
+                        self.rings[m + 1][q],
+                        self.rings[m + 1][q + 1],
+                        self.rings[m][q + 1],
+                    ]);
+                }
+            } else {
+                // Rings m and m + 1 are stations m − 1 and m; inside the front when m ≤ front.
+                let inside = m <= front;
+                self.transition_quads(m, inside);
             }
+        }
+    }
+
+    /// The conformal 1 → 3 transition between ring m and ring m + 1 (one of them has
+    /// [`FrontBand::FACTOR`] times the other's arcs): each coarse arc A–B faces fine vertices
+    /// F0…F3; two interior vertices I1, I2, halfway from the points 1/3 and 2/3 along the chord
+    /// A–B to F1 and F2 (so they stay between the chord and the fine ring however curved),
+    /// close four quadrilaterals A F0 F1 I1, I1 F1 F2 I2, I2 F2 F3 B and A I1 I2 B (coarse ring
+    /// inside; mirrored when the coarse ring is outside). Every vertex is shared, so the mesh
+    /// stays conformal and reproduces linear fields exactly.
+    fn transition_quads(&mut self, m: usize, inside: bool) {
+        let coarse_inside = self.rings[m].len() < self.rings[m + 1].len();
+        let (c, f) = if coarse_inside {
+            (m, m + 1)
+        } else {
+            (m + 1, m)
+        };
+        let n = self.rings[c].len() - 1;
+        let k = FrontBand::FACTOR;
+        for q in 0..n {
+            let (a, b) = (self.rings[c][q], self.rings[c][q + 1]);
+            let fv: Vec<usize> = (0..=k).map(|j| self.rings[f][k * q + j]).collect();
+            let [i1, i2] = [1, 2].map(|j| {
+                let t = j as f64 / k as f64;
+                let (pa, pb, pf) = (self.points[a], self.points[b], self.points[fv[j]]);
+                let chord = [pa[0] + t * (pb[0] - pa[0]), pa[1] + t * (pb[1] - pa[1])];
+                self.push([0.5 * (chord[0] + pf[0]), 0.5 * (chord[1] + pf[1])], inside)
+            });
+            // Each quad as (inner q, outer q, outer q + 1, inner q + 1), as the ring quads.
+            let quads = if coarse_inside {
+                [
+                    [a, fv[0], fv[1], i1],
+                    [i1, fv[1], fv[2], i2],
+                    [i2, fv[2], fv[3], b],
+                    [a, i1, i2, b],
+                ]
+            } else {
+                [
+                    [fv[0], a, i1, fv[1]],
+                    [fv[1], i1, i2, fv[2]],
+                    [fv[2], i2, b, fv[3]],
+                    [i1, a, b, i2],
+                ]
+            };
+            self.quads.extend(quads);
         }
     }
 }

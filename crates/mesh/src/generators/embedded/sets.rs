@@ -83,7 +83,7 @@ fn front_nodes(p: &EmbeddedParams, s: &Section, solid: &Solid) -> Vec<usize> {
     let ring = &s.rings[s.front_ring];
     let mut nodes: Vec<usize> = ring.iter().map(|&v| solid.upper(v)).collect();
     if p.kind == ElementKind::Hex20 {
-        for q in 0..p.slices {
+        for q in 0..ring.len() - 1 {
             let (na, nb) = (solid.upper(ring[q]), solid.upper(ring[q + 1]));
             if let Some(id) = solid.midside(na, nb) {
                 nodes.push(id);
