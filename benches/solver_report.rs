@@ -8,7 +8,8 @@
 //! Run: `cargo bench --bench solver_report` (add `-- quick` to stop at ~50 k DOF,
 //! `-- only=laminate` to run the cases whose name contains that text, `-- noprofile` to leave
 //! out the profile solver, `-- noamd` to leave out faer with AMD, `-- mixed` to add faer ND
-//! with an f32 factor refined in f64, `-- rounds=N` to run every solver of a case N times in
+//! with an f32 factor refined in f64, `-- split` to add faer ND split at the top separator
+//! (`FaerSplit::Halves`, halves on two threads), `-- rounds=N` to run every solver of a case N times in
 //! turn, so that ratios between solvers come from neighbouring runs on a busy machine).
 //! The last column is the normwise backward error ‖b − A x‖∞ / (‖A‖∞‖x‖∞ + ‖b‖∞) of the
 //! solve.
@@ -23,7 +24,8 @@ use nonlin3d::mesh::{
     through_width_delamination,
 };
 use nonlin3d::solver::{
-    FaerMode, FaerOrdering, FaerPrecision, FaerSolver, LinearSolver, ProfileLdlt, SymmetricMatrix,
+    FaerMode, FaerOrdering, FaerPrecision, FaerSolver, FaerSplit, LinearSolver, ProfileLdlt,
+    SymmetricMatrix,
 };
 use std::time::Instant;
 
@@ -299,6 +301,22 @@ fn main() {
                 0,
                 (Box::new(ProfileLdlt::new()), "profile LDLᵀ (RCM)".into()),
             );
+        }
+        // The tree-level split (two halves on two threads, `FaerSplit::Halves`), f64.
+        if has("split") {
+            for threads in [1, 2] {
+                let mut s = FaerSolver::new(FaerMode::Ldlt)
+                    .with_ordering(FaerOrdering::NestedDissection)
+                    .with_threads(threads);
+                s.split = FaerSplit::Halves;
+                solvers.push((
+                    Box::new(s),
+                    format!(
+                        "faer LDLᵀ ND split, {threads} thread{}",
+                        if threads > 1 { "s" } else { "" }
+                    ),
+                ));
+            }
         }
         let mut mixed: Vec<(FaerSolver, String)> = Vec::new();
         if has("mixed") {

@@ -45,7 +45,7 @@ mod solver;
 pub use budget::{MemoryBudget, set_memory_budget};
 pub use error::SolverError;
 pub use faer_backend::{
-    FaerMode, FaerOrdering, FaerPrecision, FaerSolver, FaerStructure, MixedStats,
+    FaerMode, FaerOrdering, FaerPrecision, FaerSolver, FaerSplit, FaerStructure, MixedStats,
 };
 pub use matrix::SymmetricMatrix;
 pub use nested::{LEAF_NODES, nested_dissection};
