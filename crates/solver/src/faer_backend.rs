@@ -374,7 +374,10 @@ impl LinearSolver for FaerSolver {
         self.factored = false;
         self.flops = flops;
         Ok(Analysis {
-            factor_entries: len,
+            factor_entries: self
+                .split_state
+                .as_ref()
+                .map_or(len, |s| s.factor_entries()),
             lower_nonzeros,
             flops,
             bandwidth: None,
