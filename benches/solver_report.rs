@@ -8,7 +8,8 @@
 //! Run: `cargo bench --bench solver_report` (add `-- quick` to stop at ~50 k DOF,
 //! `-- only=laminate` to run the cases whose name contains that text, `-- noprofile` to leave
 //! out the profile solver, `-- noamd` to leave out faer with AMD, `-- mixed` to add faer ND
-//! with an f32 factor refined in f64, `-- rounds=N` to run every solver of a case N times in
+//! with an f32 factor refined in f64, `-- split` to add faer ND split at the top separator
+//! (`FaerSplit::Halves`, halves on two threads), `-- rounds=N` to run every solver of a case N times in
 //! turn, so that ratios between solvers come from neighbouring runs on a busy machine).
 //! The last column is the normwise backward error ‖b − A x‖∞ / (‖A‖∞‖x‖∞ + ‖b‖∞) of the
 //! solve.
@@ -23,7 +24,8 @@ use nonlin3d::mesh::{
     through_width_delamination,
 };
 use nonlin3d::solver::{
-    FaerMode, FaerOrdering, FaerPrecision, FaerSolver, LinearSolver, ProfileLdlt, SymmetricMatrix,
+    FaerMode, FaerOrdering, FaerPrecision, FaerSolver, FaerSplit, LinearSolver, ProfileLdlt,
+    SymmetricMatrix,
 };
 use std::time::Instant;
 
@@ -44,6 +46,28 @@ fn peak_mib() -> f64 {
 fn current_mib() -> f64 {
     status_mib("VmRSS")
 }
+/// CPU seconds of this process so far, all threads (`/proc/self/stat` utime + stime, in
+/// ticks of 1/100 s).
+fn cpu_seconds() -> f64 {
+    std::fs::read_to_string("/proc/self/stat")
+        .ok()
+        .and_then(|s| {
+            // Fields after the command name (which ends with the last ')'): utime is the 12th.
+            let rest = &s[s.rfind(')')? + 2..];
+            let f: Vec<&str> = rest.split_whitespace().collect();
+            Some((f.get(11)?.parse::<f64>().ok()? + f.get(12)?.parse::<f64>().ok()?) / 100.0)
+        })
+        .unwrap_or(f64::NAN)
+}
+
+/// The 1-minute load average.
+fn load_average() -> String {
+    std::fs::read_to_string("/proc/loadavg")
+        .ok()
+        .and_then(|s| s.split_whitespace().next().map(str::to_owned))
+        .unwrap_or_default()
+}
+
 /// Resets VmHWM (Linux `clear_refs` 5).
 fn reset_peak() {
     let _ = std::fs::write("/proc/self/clear_refs", "5");
@@ -116,11 +140,13 @@ struct Row {
     solver: String,
     symbolic: f64,
     numeric: f64,
+    numeric_cpu: f64,
     solve: f64,
     entries: usize,
     lower: usize,
     flops: f64,
     peak: f64,
+    load: String,
     negative: usize,
     backward_error: f64,
 }
@@ -153,7 +179,7 @@ fn run(case: &str, k: &SymmetricMatrix, s: &mut dyn LinearSolver, label: String)
     let analysis = match s.analyze(k.pattern()) {
         Ok(a) => a,
         Err(e) => {
-            println!("| {case} | {n} | {label} | {e} | | | | | | | | |");
+            println!("| {case} | {n} | {label} | {e} | | | | | | | | | | |");
             return None;
         }
     };
@@ -161,12 +187,17 @@ fn run(case: &str, k: &SymmetricMatrix, s: &mut dyn LinearSolver, label: String)
     // Small systems take milliseconds: best of several runs there, one run for large ones.
     let reps = if n < 20_000 { 15 } else { 1 };
     let (mut numeric, mut solve) = (f64::INFINITY, f64::INFINITY);
+    let mut numeric_cpu = f64::NAN;
     let mut f = None;
     let mut omega = 0.0;
     for _ in 0..reps {
-        let t = Instant::now();
+        let (t, c) = (Instant::now(), cpu_seconds());
         f = Some(s.factorize(k).ok()?);
-        numeric = numeric.min(t.elapsed().as_secs_f64());
+        let (wall, cpu) = (t.elapsed().as_secs_f64(), cpu_seconds() - c);
+        if wall < numeric {
+            numeric = wall;
+            numeric_cpu = cpu;
+        }
         let mut b = vec![1.0; n];
         let t = Instant::now();
         s.solve_in_place(&mut b, 1).ok()?;
@@ -181,11 +212,13 @@ fn run(case: &str, k: &SymmetricMatrix, s: &mut dyn LinearSolver, label: String)
         solver: label,
         symbolic,
         numeric,
+        numeric_cpu,
         solve,
         entries: analysis.factor_entries,
         lower: analysis.lower_nonzeros,
         flops: f.flops,
         peak,
+        load: load_average(),
         negative: f.negative_pivots,
         backward_error: omega,
     })
@@ -200,9 +233,9 @@ fn main() {
     );
     println!();
     println!(
-        "| case | DOF | solver | symbolic ms | numeric ms (best of 15 below 20 k DOF) | solve ms | factor entries | nnz(L) | GFLOP | GFLOP/s | peak MiB | neg. pivots | backward error |"
+        "| case | DOF | solver | symbolic ms | numeric ms (best of 15 below 20 k DOF) | numeric CPU s (all threads) | load | solve ms | factor entries | nnz(L) | GFLOP | GFLOP/s | peak MiB | neg. pivots | backward error |"
     );
-    println!("|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
+    println!("|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
     let has = |flag: &str| std::env::args().any(|a| a == flag);
     let rounds: usize = std::env::args()
         .find_map(|a| a.strip_prefix("rounds=").and_then(|r| r.parse().ok()))
@@ -300,6 +333,22 @@ fn main() {
                 (Box::new(ProfileLdlt::new()), "profile LDLᵀ (RCM)".into()),
             );
         }
+        // The tree-level split (two halves on two threads, `FaerSplit::Halves`), f64.
+        if has("split") {
+            for threads in [1, 2] {
+                let mut s = FaerSolver::new(FaerMode::Ldlt)
+                    .with_ordering(FaerOrdering::NestedDissection)
+                    .with_threads(threads);
+                s.split = FaerSplit::Halves;
+                solvers.push((
+                    Box::new(s),
+                    format!(
+                        "faer LDLᵀ ND split, {threads} thread{}",
+                        if threads > 1 { "s" } else { "" }
+                    ),
+                ));
+            }
+        }
         let mut mixed: Vec<(FaerSolver, String)> = Vec::new();
         if has("mixed") {
             for threads in [1, 2] {
@@ -338,12 +387,14 @@ fn main() {
             }
             for r in rows {
                 println!(
-                    "| {} | {} | {} | {:.3} | {:.3} | {:.3} | {} | {} | {:.2} | {:.1} | {:.0} | {} | {:.1e} |",
+                    "| {} | {} | {} | {:.3} | {:.3} | {:.2} | {} | {:.3} | {} | {} | {:.2} | {:.1} | {:.0} | {} | {:.1e} |",
                     r.case,
                     r.dofs,
                     r.solver,
                     1e3 * r.symbolic,
                     1e3 * r.numeric,
+                    r.numeric_cpu,
+                    r.load,
                     1e3 * r.solve,
                     r.entries,
                     r.lower,

@@ -19,6 +19,7 @@ use faer::{Conj, MatMut, Par, Side};
 use std::sync::Arc;
 
 mod mixed;
+mod split;
 pub use mixed::{FaerPrecision, MixedStats};
 
 /// Which factorisation faer computes.
@@ -60,6 +61,19 @@ pub enum FaerOrdering {
     Auto,
 }
 
+/// Whether [`FaerSolver`]'s LDLᵀ splits the matrix at the nested-dissection order's top
+/// separator and factors the two halves on two threads (tree-level parallelism, `split.rs`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum FaerSplit {
+    /// One faer factorisation (the default).
+    #[default]
+    Off,
+    /// Split whenever the chosen ordering is nested dissection and its top level was
+    /// dissected (f64 LDLᵀ only; mixed precision and LLᵀ ignore it). Falls back to the unsplit
+    /// factor when a half's separator block meets a pivot below 1e-8 of its diagonal.
+    Halves,
+}
+
 /// faer's sparse Cholesky behind [`LinearSolver`].
 pub struct FaerSolver {
     /// LDLᵀ or LLᵀ.
@@ -84,6 +98,10 @@ pub struct FaerSolver {
     pub memory_budget: Option<MemoryBudget>,
     /// f64 throughout, or an f32 factor refined in f64 (LDLᵀ only; [`FaerPrecision`]).
     pub precision: FaerPrecision,
+    /// Tree-level split of the LDLᵀ ([`FaerSplit`]).
+    pub split: FaerSplit,
+    split_state: Option<split::Split>,
+    split_fallback: Option<&'static str>,
     pattern: Option<Arc<SymmetricPattern>>,
     symbolic: Option<SymbolicCholesky<usize>>,
     chosen: Option<FaerOrdering>,
@@ -121,6 +139,9 @@ impl FaerSolver {
             par: Par::Seq,
             memory_budget: None,
             precision: FaerPrecision::Double,
+            split: FaerSplit::Off,
+            split_state: None,
+            split_fallback: None,
             pattern: None,
             symbolic: None,
             chosen: None,
@@ -248,6 +269,9 @@ impl LinearSolver for FaerSolver {
         self.factored = false;
         self.chosen = None;
         self.mixed = mixed::MixedState::default();
+        self.split_state = None;
+        self.split_fallback = None;
+        let top = std::cell::Cell::new(None);
         let symbolic_for = |ordering: SymmetricOrdering<'_, usize>| {
             factorize_symbolic_cholesky(a, Side::Lower, ordering, params).map_err(|e| match e {
                 faer::sparse::FaerError::OutOfMemory => SolverError::OutOfMemory {
@@ -258,8 +282,9 @@ impl LinearSolver for FaerSolver {
             })
         };
         let nested = || {
-            let perm = crate::nested_dissection(pattern)?;
+            let (perm, sides) = crate::nested::nested_dissection_top(pattern)?;
             let p = faer::perm::PermRef::new_checked(perm.forward(), perm.inverse(), n);
+            top.set(sides.map(|s| (perm.forward().to_vec(), s)));
             symbolic_for(SymmetricOrdering::Custom(p))
         };
         let (symbolic, chosen) = match self.ordering {
@@ -329,9 +354,17 @@ impl LinearSolver for FaerSolver {
         })?;
         let flops = factor_flops(&symbolic);
         let lower_nonzeros = column_counts(&symbolic).iter().sum();
+        let splits = self.split == FaerSplit::Halves
+            && self.mode == FaerMode::Ldlt
+            && !mixed
+            && chosen == FaerOrdering::NestedDissection;
+        if let (true, Some((forward, sides))) = (splits, top.take()) {
+            // The unsplit factor is allocated only if a fallback needs it.
+            self.split_state = split::Split::analyze(pattern, &forward, sides)?;
+        }
         if mixed {
             self.mixed.reset(len)?;
-        } else {
+        } else if self.split_state.is_none() {
             self.l_values = try_zeros(len, "the faer factor")?;
         }
         self.symbolic = Some(symbolic);
@@ -341,7 +374,10 @@ impl LinearSolver for FaerSolver {
         self.factored = false;
         self.flops = flops;
         Ok(Analysis {
-            factor_entries: len,
+            factor_entries: self
+                .split_state
+                .as_ref()
+                .map_or(len, |s| s.factor_entries()),
             lower_nonzeros,
             flops,
             bandwidth: None,
@@ -352,6 +388,8 @@ impl LinearSolver for FaerSolver {
     fn factorize(&mut self, a: &SymmetricMatrix) -> Result<Factorization, SolverError> {
         if self.uses_mixed() {
             self.factorize_mixed(a)
+        } else if self.split_state.is_some() {
+            self.factorize_split(a)
         } else {
             self.factorize_double(a)
         }
@@ -361,6 +399,12 @@ impl LinearSolver for FaerSolver {
         self.check_rhs(b, nrhs)?;
         if self.mixed.single_active() {
             self.solve_mixed(b, nrhs)
+        } else if let Some(split) = self.split_state.as_mut().filter(|s| s.is_factored()) {
+            let n = b.len() / nrhs.max(1);
+            for col in b.chunks_mut(n.max(1)) {
+                split.solve_column(col, self.par);
+            }
+            Ok(())
         } else {
             self.solve_double(b, nrhs)
         }
@@ -558,39 +602,4 @@ fn column_counts(symbolic: &SymbolicCholesky<usize>) -> Vec<usize> {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// A matrix singular only in the coupled pair (1, 7) (the block [1 1; 1 1 + δ], DOF 1
-    /// also coupled, with zero values, to DOFs 0, 2, 3, 4 so that the ordering moves it):
-    /// whichever structure, and whether faer meets an exact zero (δ = 0) or the pivot test
-    /// catches a tiny one (δ = 1e-14), the zero pivot is named at DOF 1 or 7 with their
-    /// diagonal, not at a neighbour.
-    #[test]
-    fn a_zero_pivot_names_its_own_dof() {
-        let n = 9;
-        let mut lists: Vec<Vec<usize>> = (0..n).map(|i| vec![i]).collect();
-        lists.push(vec![1, 7]);
-        lists.push(vec![0, 1, 2, 3, 4]);
-        let p = Arc::new(SymmetricPattern::from_dof_lists(n, &lists).unwrap());
-        for delta in [0.0, 1e-14] {
-            let mut a = SymmetricMatrix::zeros(p.clone());
-            for i in (0..n).filter(|&i| i != 1 && i != 7) {
-                a.add(i, i, 10.0 + i as f64).unwrap();
-            }
-            a.scatter_add(&[1, 7], &[1.0, 1.0, 1.0, 1.0 + delta])
-                .unwrap();
-            for structure in [FaerStructure::Simplicial, FaerStructure::Supernodal] {
-                let mut s = FaerSolver::new(FaerMode::Ldlt).with_structure(structure);
-                s.analyze(&p).unwrap();
-                match s.factorize(&a) {
-                    Err(SolverError::ZeroPivot { dof, diagonal, .. }) => {
-                        assert!(dof == 1 || dof == 7, "{structure:?}, δ {delta}: DOF {dof}");
-                        assert!((diagonal - 1.0).abs() < 1e-12);
-                    }
-                    other => panic!("{structure:?}, δ {delta}: {other:?}"),
-                }
-            }
-        }
-    }
-}
+mod tests;

@@ -7,7 +7,7 @@
 //! | [`SymmetricMatrix`] | values on a shared pattern: zero, scatter-add, matvec |
 //! | [`reverse_cuthill_mckee`], [`approximate_minimum_degree`], [`nested_dissection`], [`envelope_stats`] | orderings and their bandwidth/profile |
 //! | [`ProfileLdlt`] | envelope LDLᵀ, RCM ordered, SIMD inner products |
-//! | [`FaerSolver`], [`FaerOrdering`] | faer LDLᵀ / LLᵀ, AMD or nested-dissection ordered, supernodal or simplicial |
+//! | [`FaerSolver`], [`FaerOrdering`], [`FaerSplit`] | faer LDLᵀ / LLᵀ, AMD or nested-dissection ordered, supernodal or simplicial; optionally split at the top separator, halves on two threads |
 //! | [`LinearSolver`], [`SolverKind`] | the common interface; [`Factorization::negative_pivots`] is the inertia |
 //! | [`MemoryBudget`], [`set_memory_budget`] | the bytes a factorisation may take, checked by `analyze` before allocating |
 //!
@@ -45,7 +45,7 @@ mod solver;
 pub use budget::{MemoryBudget, set_memory_budget};
 pub use error::SolverError;
 pub use faer_backend::{
-    FaerMode, FaerOrdering, FaerPrecision, FaerSolver, FaerStructure, MixedStats,
+    FaerMode, FaerOrdering, FaerPrecision, FaerSolver, FaerSplit, FaerStructure, MixedStats,
 };
 pub use matrix::SymmetricMatrix;
 pub use nested::{LEAF_NODES, nested_dissection};

@@ -6,90 +6,29 @@
 //! this large: on 6×6×4 cells even faer's parallel one-column solve (which splits its sums
 //! between threads, hence `SOLVE_PAR`) gave the same bits; here it does not. Its values are a
 //! pseudo-random Σ (element rank-one + diagonal) blocks assembly shifted to be indefinite: bitwise
-//! equality depends on the order of the sums, not on the physics of the values.
+//! equality depends on the order of the sums, not on the physics of the values. Both the
+//! unsplit factor and the split one (`FaerSplit::Halves`: halves on two threads, S on all) are
+//! checked.
 
+mod common;
+
+use common::{box_matrix, lcg};
 use nonlin3d_solver::{
-    FaerMode, FaerOrdering, FaerSolver, FaerStructure, LinearSolver, SymmetricMatrix,
-    SymmetricPattern,
+    FaerMode, FaerOrdering, FaerSolver, FaerSplit, FaerStructure, LinearSolver, SymmetricMatrix,
 };
-use std::sync::Arc;
 
-/// Element DOF lists of a Hex20 box of nx×ny×nz cells (8 corners, 12 midsides per cell).
-fn hex20_lists(nx: usize, ny: usize, nz: usize) -> (usize, Vec<Vec<usize>>) {
-    let (lx, ly) = (2 * nx + 1, 2 * ny + 1);
-    let mut id = vec![usize::MAX; lx * ly * (2 * nz + 1)];
-    let mut count = 0;
-    for k in 0..=2 * nz {
-        for j in 0..ly {
-            for i in 0..lx {
-                if (i % 2) + (j % 2) + (k % 2) <= 1 {
-                    id[(k * ly + j) * lx + i] = count;
-                    count += 1;
-                }
-            }
-        }
-    }
-    let mut lists = Vec::new();
-    for ez in 0..nz {
-        for ey in 0..ny {
-            for ex in 0..nx {
-                let mut l = Vec::new();
-                for k in 2 * ez..=2 * ez + 2 {
-                    for j in 2 * ey..=2 * ey + 2 {
-                        for i in 2 * ex..=2 * ex + 2 {
-                            let node = id[(k * ly + j) * lx + i];
-                            if node != usize::MAX {
-                                l.extend((0..3).map(|d| 3 * node + d));
-                            }
-                        }
-                    }
-                }
-                lists.push(l);
-            }
-        }
-    }
-    (3 * count, lists)
-}
-
-/// A deterministic pseudo-random number in [−1, 1) (64-bit LCG).
-fn lcg(state: &mut u64) -> f64 {
-    *state = state
-        .wrapping_mul(6_364_136_223_846_793_005)
-        .wrapping_add(1_442_695_040_888_963_407);
-    (*state >> 11) as f64 / (1u64 << 52) as f64 - 1.0
-}
-
-/// Σ_e (v_e v_eᵀ + I) over the elements, minus `shift`·I.
-fn box_matrix(shift: f64) -> SymmetricMatrix {
-    let (n, lists) = hex20_lists(10, 10, 6);
-    let p = Arc::new(SymmetricPattern::from_dof_lists(n, &lists).unwrap());
-    let mut a = SymmetricMatrix::zeros(p);
-    let mut seed = 7;
-    for l in &lists {
-        let v: Vec<f64> = l.iter().map(|_| lcg(&mut seed)).collect();
-        let m = l.len();
-        let mut k = vec![0.0; m * m];
-        for i in 0..m {
-            for j in 0..m {
-                k[i * m + j] = v[i] * v[j] + if i == j { 1.0 } else { 0.0 };
-            }
-        }
-        a.scatter_add(l, &k).unwrap();
-    }
-    for i in 0..n {
-        a.add(i, i, -shift).unwrap();
-    }
-    a
-}
-
-/// The solution of A x = b (b pseudo-random) and the inertia on `threads` threads.
-fn solve_on(a: &SymmetricMatrix, threads: usize) -> (Vec<f64>, usize) {
+/// The solution of A x = b (b pseudo-random) and the inertia on `threads` threads, unsplit
+/// or split at the top separator.
+fn solve_on(a: &SymmetricMatrix, threads: usize, split: FaerSplit) -> (Vec<f64>, usize) {
     let mut s = FaerSolver::new(FaerMode::Ldlt)
         .with_structure(FaerStructure::Supernodal)
         .with_ordering(FaerOrdering::NestedDissection)
         .with_threads(threads);
+    s.split = split;
     s.analyze(a.pattern()).unwrap();
+    assert_eq!(s.split_sizes().is_some(), split == FaerSplit::Halves);
     let f = s.factorize(a).unwrap();
+    assert_eq!(s.split_fallback(), None);
     let mut seed = 11;
     let mut x: Vec<f64> = (0..a.n()).map(|_| lcg(&mut seed)).collect();
     s.solve_in_place(&mut x, 1).unwrap();
@@ -101,11 +40,14 @@ fn solve_on(a: &SymmetricMatrix, threads: usize) -> (Vec<f64>, usize) {
 /// Σ(v vᵀ + I) lie below 1.5 and the factor has negative pivots).
 #[test]
 fn factors_and_solutions_are_bitwise_equal_on_1_2_and_3_threads() {
-    for shift in [0.0, 1.5] {
-        let a = box_matrix(shift);
-        let (x1, neg1) = solve_on(&a, 1);
+    for (shift, split) in [0.0, 1.5]
+        .into_iter()
+        .flat_map(|s| [(s, FaerSplit::Off), (s, FaerSplit::Halves)])
+    {
+        let a = box_matrix([10, 10, 6], shift);
+        let (x1, neg1) = solve_on(&a, 1, split);
         for threads in [2, 3] {
-            let (x, neg) = solve_on(&a, threads);
+            let (x, neg) = solve_on(&a, threads, split);
             assert_eq!(neg, neg1, "shift {shift}, {threads} threads");
             let differ = x
                 .iter()
@@ -114,7 +56,7 @@ fn factors_and_solutions_are_bitwise_equal_on_1_2_and_3_threads() {
                 .count();
             assert_eq!(
                 differ, 0,
-                "shift {shift}, {threads} threads: {differ} entries differ"
+                "shift {shift}, {split:?}, {threads} threads: {differ} entries differ"
             );
         }
         if shift > 0.0 {

@@ -58,14 +58,27 @@ impl Graph {
 
 /// Nested-dissection order of `pattern`'s DOFs (`forward[new] = old`).
 pub fn nested_dissection(pattern: &SymmetricPattern) -> Result<Permutation, SolverError> {
+    Ok(nested_dissection_top(pattern)?.0)
+}
+
+/// Nested-dissection order and the DOF counts (n₀, n₁) of the top level's two sides: the
+/// order is side 0 (n₀ DOFs), side 1 (n₁), then the top separator, and no entry of the
+/// pattern couples the two sides. `None` when the top level was not dissected.
+pub(crate) fn nested_dissection_top(
+    pattern: &SymmetricPattern,
+) -> Result<(Permutation, Option<(usize, usize)>), SolverError> {
     let (members, graph) = compress(pattern);
     let ids: Vec<usize> = (0..graph.n()).collect();
-    let order = dissect(&graph, &ids)?;
+    let (order, sides) = dissect_counted(&graph, &ids)?;
+    let dofs = |range: std::ops::Range<usize>| -> usize {
+        order[range].iter().map(|&s| members[s].len()).sum()
+    };
+    let top = sides.map(|(a, b)| (dofs(0..a), dofs(a..a + b)));
     let forward: Vec<usize> = order
         .iter()
         .flat_map(|&s| members[s].iter().copied())
         .collect();
-    Permutation::from_forward(forward)
+    Ok((Permutation::from_forward(forward)?, top))
 }
 
 /// Supervariables and their graph (vertex weight = DOF count, edge weight 1). Consecutive
@@ -139,14 +152,22 @@ fn compress(pattern: &SymmetricPattern) -> (Vec<Vec<usize>>, Graph) {
 /// its subgraph and they are joined in a fixed order, so the result is the same on any number
 /// of threads.
 fn dissect(g: &Graph, ids: &[usize]) -> Result<Vec<usize>, SolverError> {
+    Ok(dissect_counted(g, ids)?.0)
+}
+
+/// An order and the sizes of its top level's two sides (`None`: not dissected).
+type CountedOrder = (Vec<usize>, Option<(usize, usize)>);
+
+/// [`dissect`] and the vertex counts of its two sides (`None` for a leaf).
+fn dissect_counted(g: &Graph, ids: &[usize]) -> Result<CountedOrder, SolverError> {
     if g.n() <= LEAF_NODES {
-        return leaf_order(g, ids);
+        return Ok((leaf_order(g, ids)?, None));
     }
     let side = bisect(g);
     let count = |s: u8| side.iter().filter(|&&x| x == s).count();
     if count(0) == 0 || count(1) == 0 {
         // Nothing to dissect (a clique-like part): minimum degree on the whole.
-        return leaf_order(g, ids);
+        return Ok((leaf_order(g, ids)?, None));
     }
     let half = |s: u8| {
         let (sub, sub_ids) = subgraph(g, ids, &side, s);
@@ -160,7 +181,7 @@ fn dissect(g: &Graph, ids: &[usize]) -> Result<Vec<usize>, SolverError> {
     let mut out = first?;
     out.extend(second?);
     out.extend((0..g.n()).filter(|&v| side[v] == 2).map(|v| ids[v]));
-    Ok(out)
+    Ok((out, Some((count(0), count(1)))))
 }
 
 /// The subgraph of the vertices with `side[v] == s`.

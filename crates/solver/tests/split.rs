@@ -1,0 +1,120 @@
+//! The split LDLᵀ (`FaerSplit::Halves`) against the unsplit factor on the same
+//! nested-dissection order: the same inertia, backward errors of the same size, and solutions
+//! that differ by no more than the condition number allows.
+//!
+//! Tolerance: both solutions x, x̂ of A x = b come from backward-stable factorisations, with
+//! normwise backward errors ω, ω̂ (measured), so ‖x − x̂‖∞ / ‖x‖∞ ≤ κ∞(A)(ω + ω̂) to first
+//! order, with κ∞(A) = ‖A‖∞‖A⁻¹‖∞ estimated by Hager's method (a lower bound, hence the factor
+//! 10 of slack). The split's own backward error must stay within 10× the unsplit one's or
+//! 1e-15 (rounding of the extra sums S = S′₁ + S′₂ − Aₛₛ, of order nₛ ε).
+
+mod common;
+
+use common::{box_matrix, lcg};
+use nonlin3d_solver::{
+    FaerMode, FaerOrdering, FaerSolver, FaerSplit, LinearSolver, SymmetricMatrix,
+};
+
+fn solver(split: FaerSplit) -> FaerSolver {
+    let mut s = FaerSolver::new(FaerMode::Ldlt).with_ordering(FaerOrdering::NestedDissection);
+    s.split = split;
+    s
+}
+
+fn inf_norm(v: &[f64]) -> f64 {
+    v.iter().fold(0.0f64, |m, x| m.max(x.abs()))
+}
+
+/// ‖A‖∞ (row sums of |a_ij| over both triangles).
+fn matrix_norm(a: &SymmetricMatrix) -> f64 {
+    let p = a.pattern();
+    let mut rows = vec![0.0f64; a.n()];
+    for j in 0..a.n() {
+        for (k, &i) in p.column(j).iter().enumerate() {
+            let v = a.values()[p.col_ptr()[j] + k].abs();
+            rows[i] += v;
+            if i != j {
+                rows[j] += v;
+            }
+        }
+    }
+    inf_norm(&rows)
+}
+
+/// ‖b − A x‖∞ / (‖A‖∞‖x‖∞ + ‖b‖∞).
+fn backward_error(a: &SymmetricMatrix, x: &[f64], b: &[f64]) -> f64 {
+    let mut ax = vec![0.0; a.n()];
+    a.matvec(x, &mut ax).unwrap();
+    let r: Vec<f64> = ax.iter().zip(b).map(|(p, q)| q - p).collect();
+    inf_norm(&r) / (matrix_norm(a) * inf_norm(x) + inf_norm(b))
+}
+
+/// Hager's lower estimate of ‖A⁻¹‖₁ (= ‖A⁻¹‖∞, A symmetric), with a factored solver.
+fn inverse_norm(s: &mut FaerSolver, n: usize) -> f64 {
+    let mut x = vec![1.0 / n as f64; n];
+    let mut estimate = 0.0;
+    for _ in 0..5 {
+        s.solve_in_place(&mut x, 1).unwrap();
+        let norm: f64 = x.iter().map(|v| v.abs()).sum();
+        if norm <= estimate {
+            break;
+        }
+        estimate = norm;
+        let mut z: Vec<f64> = x.iter().map(|v| v.signum()).collect();
+        s.solve_in_place(&mut z, 1).unwrap();
+        let (j, _) =
+            z.iter().enumerate().fold(
+                (0, 0.0),
+                |(bj, bv), (j, v)| if v.abs() > bv { (j, v.abs()) } else { (bj, bv) },
+            );
+        x = vec![0.0; n];
+        x[j] = 1.0;
+    }
+    estimate
+}
+
+/// SPD (shift 0) and indefinite (shift 1.5) 6×6×4-cell Hex20 boxes (3 k DOF): the split is
+/// made (the top level is dissected), the inertia is the unsplit one, and the solutions agree
+/// within κ∞(ω + ω̂).
+#[test]
+fn split_matches_the_unsplit_factor() {
+    for shift in [0.0, 1.5] {
+        let a = box_matrix([6, 6, 4], shift);
+        let n = a.n();
+        let mut seed = 5;
+        let b: Vec<f64> = (0..n).map(|_| lcg(&mut seed)).collect();
+        let mut whole = solver(FaerSplit::Off);
+        whole.analyze(a.pattern()).unwrap();
+        let f = whole.factorize(&a).unwrap();
+        let mut x = b.clone();
+        whole.solve_in_place(&mut x, 1).unwrap();
+        let mut split = solver(FaerSplit::Halves);
+        split.analyze(a.pattern()).unwrap();
+        let (n0, n1, ns) = split.split_sizes().expect("the box is dissected");
+        assert_eq!(n0 + n1 + ns, n);
+        assert!(n0 > ns && n1 > ns, "halves {n0}, {n1}, separator {ns}");
+        let g = split.factorize(&a).unwrap();
+        assert_eq!(split.split_fallback(), None);
+        assert_eq!(g.negative_pivots, f.negative_pivots, "shift {shift}");
+        if shift > 0.0 {
+            assert!(
+                f.negative_pivots > 0,
+                "the shifted box should be indefinite"
+            );
+        }
+        let mut y = b.clone();
+        split.solve_in_place(&mut y, 1).unwrap();
+        let (omega, omega_split) = (backward_error(&a, &x, &b), backward_error(&a, &y, &b));
+        assert!(
+            omega_split <= (10.0 * omega).max(1e-15),
+            "shift {shift}: backward error {omega_split:.1e} split, {omega:.1e} unsplit"
+        );
+        let kappa = matrix_norm(&a) * inverse_norm(&mut whole, n);
+        let diff: Vec<f64> = x.iter().zip(&y).map(|(p, q)| p - q).collect();
+        let relative = inf_norm(&diff) / inf_norm(&x);
+        assert!(
+            relative <= 10.0 * kappa * (omega + omega_split),
+            "shift {shift}: ‖x − x̂‖/‖x‖ = {relative:.1e}, κ {kappa:.1e}, ω {omega:.1e} + {omega_split:.1e}"
+        );
+    }
+}
