@@ -44,9 +44,10 @@ fn gaps(faces: &CrackFaces, u: &[f64]) -> Vec<f64> {
     faces.gaps(u, &n)
 }
 
-/// `export` → `solve` gives what `run` gives: at every level the same number of closed pairs,
-/// the closed pairs' normal gaps within the contact tolerance (1e-9 m) in `run`'s state,
-/// and the same displacements. Both solve the same equations (same mesh, 2×2×2 rule, exact
+/// `export` → `solve` gives what `run` gives: at every level the same closed pairs (the deck's
+/// are those whose weighted gap g̃ is within the contact tolerance, 1e-9 m, in `run`'s state,
+/// and as many as `run` reports), and the same displacements. `run` solves a level in one go
+/// (sub-levels of `max_step`), the deck in its *STATIC increments: the same set on both paths. Both solve the same equations (same mesh, 2×2×2 rule, exact
 /// ties, the same active-set update) to Newton's relative tolerance 1e-8 of the force scale,
 /// along different increments (path following against the deck's *STATIC incrementation);
 /// near the buckled branch a force error of 1e-8 moves u by up to ~1e3 times as much in
@@ -83,44 +84,30 @@ fn export_then_solve_gives_the_contact_set_and_displacements_of_run() {
             step.contact_closed.len()
         );
         let expected = level.contact.as_ref().map_or(0, |c| c.pairs_closed);
-        let g = gaps(&faces, &level.displacements);
-        // Pairs closed in run's state (normal gap within the contact tolerance, 1e-9 m).
-        let closed_run = (0..g.len()).filter(|&i| g[i].abs() <= 1e-9).count();
-        if step.contact_closed.len() == expected {
-            assert!(
-                diff <= 1e-5 * scale,
-                "ε = {}: {diff:e} of {scale:e}",
-                level.value
-            );
-        } else {
-            // Known path dependence (docs/VALIDATION.md, "Contact: CalculiX"): the release
-            // test on recovered forces f̂ = T f keeps a corner pair next to closed mid-edge
-            // pairs closed once it is closed, so `run` (a level in one go: every overlapping
-            // pair closed at once) can hold edge pairs that the deck's small increments never
-            // close. Then the deck's set is a subset of run's and u differs as
-            // much as those pairs' forces move it (measured 1.7e-3 of max |u| at −0.003, the
-            // bound of the CalculiX comparison below).
-            assert!(
-                step.contact_closed.len() < expected,
-                "ε = {}: deck {} closed, run {expected}",
-                level.value,
-                step.contact_closed.len()
-            );
-            assert!(
-                diff <= 5e-3 * scale,
-                "ε = {}: {diff:e} of {scale:e}",
-                level.value
-            );
-        }
-        assert!(closed_run >= step.contact_closed.len());
-        for n in &step.contact_closed {
-            let i = up.iter().position(|v| v == n).unwrap();
+        // Pairs whose weighted gap g̃ (the contact test's basis, 0 at a closed pair) is within
+        // the contact tolerance, 1e-9 m, in run's state: run's closed pairs and those that
+        // touch with no force (all before buckling).
+        let g = faces.weighted_gaps(&gaps(&faces, &level.displacements));
+        let closed_deck: Vec<usize> = step
+            .contact_closed
+            .iter()
+            .map(|n| up.iter().position(|v| v == n).unwrap())
+            .collect();
+        // One set whatever the path (a level in one go, or the deck's increments): as many
+        // pairs, each at zero weighted gap in run's state.
+        assert_eq!(step.contact_closed.len(), expected, "ε = {}", level.value);
+        for &i in &closed_deck {
             assert!(
                 g[i].abs() <= 1e-9,
-                "pair {i} closed in the deck, gap {:e} in run",
+                "pair {i} closed in the deck, g̃ {:e} in run",
                 g[i]
             );
         }
+        assert!(
+            diff <= 1e-5 * scale,
+            "ε = {}: {diff:e} of {scale:e}",
+            level.value
+        );
         // The last increment of the step reports the same count in summary.json.
         let last = step.increments.iter().rev().find(|i| i.converged).unwrap();
         assert_eq!(
@@ -227,8 +214,11 @@ fn calculix_with_contact_agrees_with_nonlin3d_on_deflection_and_contact_extent()
             level.value
         );
         let penetration = g_ccx.iter().fold(0.0f64, |a, &g| a.max(-g));
-        let touching =
-            |g: &[f64]| -> Vec<usize> { (0..g.len()).filter(|&i| g[i] < 1e-8).collect() };
+        // Touching in the basis of the contact test: weighted gaps g̃ = T⁻ᵀ g below 1e-8 m.
+        let touching = |g: &[f64]| -> Vec<usize> {
+            let w = faces.weighted_gaps(g);
+            (0..w.len()).filter(|&i| w[i] < 1e-8).collect()
+        };
         let (t_ours, t_ccx) = (touching(&g_ours), touching(&g_ccx));
         eprintln!(
             "ε = {}: centre w nonlin3d {:.6} mm, CalculiX {:.6} mm ({:+.1e}); pairs closed \
@@ -245,17 +235,31 @@ fn calculix_with_contact_agrees_with_nonlin3d_on_deflection_and_contact_extent()
         );
         assert!((w_ccx / w_ours - 1.0).abs() < 5e-3, "ε = {}", level.value);
         assert!(gt_diff <= 1e-2 * gt_max + 1e-9, "ε = {}", level.value);
-        // Every pair that touches in CalculiX touches in nonlin3d. nonlin3d may hold more
-        // at the edge of the contact zone: its release test on recovered forces f̂ = T f keeps
-        // a corner pair next to closed mid-edge pairs closed once closed, and `run` closes
-        // every overlapping pair of a level at once (measured: 2 more at −0.003, 1 at −0.004,
-        // 3 at −0.005; their effect is inside the w and G bounds above). Known defect,
-        // docs/VALIDATION.md "Contact: CalculiX".
+        // Every pair that touches in CalculiX touches (is closed) in nonlin3d; nonlin3d closes
+        // at most 3 more, at the edge of the contact zone, where CalculiX leaves them open by
+        // less than 1.5e-6 m (measured: 3, 1, 3 more at −0.003, −0.004, −0.005, open by up to
+        // 8.6e-7 m in CalculiX; 1.5e-6 m is 0.2 % of the centre deflection). The two codes
+        // state contact differently: nonlin3d's g̃ ≥ 0 is a weak (positive-basis) condition
+        // per pair, CalculiX's node-to-surface penalty tests each slave node's own gap.
         assert!(
             t_ccx.iter().all(|i| t_ours.contains(i)),
             "ε = {}: touching nonlin3d {t_ours:?}, CalculiX {t_ccx:?}",
             level.value
         );
+        let extra: Vec<usize> = t_ours
+            .iter()
+            .copied()
+            .filter(|i| !t_ccx.contains(i))
+            .collect();
+        assert!(extra.len() <= 3, "ε = {}: {extra:?}", level.value);
+        for &i in &extra {
+            assert!(
+                g_ccx[i] < 1.5e-6,
+                "ε = {}: pair {i} open by {:e} m in CalculiX",
+                level.value,
+                g_ccx[i]
+            );
+        }
     }
     assert!(
         ours.levels
