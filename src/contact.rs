@@ -5,7 +5,8 @@
 //!   "buckled into the base" error stay);
 //! - `on`: every level is solved by the active-set loop from the first level on;
 //! - `auto` (default): a level is solved without contact; if any crack-face pair then overlaps
-//!   by more than the tolerance, the active-set loop starts from that overlapping state (the
+//!   by more than the tolerance (measured as the loop measures it: the weighted normal gaps
+//!   g̃ of the deformed faces, [`max_overlap`]), the active-set loop starts from that overlapping state (the
 //!   overlapping pairs close and the level is re-solved at the same load; followed again from
 //!   its start only if that fails), and all later levels are solved by the loop (the set may
 //!   open again there). A level without overlap is therefore solved exactly as with `off`. A
@@ -23,7 +24,7 @@ use crate::problem::build_problem;
 pub use crate::results::{ContactPass, ContactSummary};
 pub use crate::scene::{ContactModeName, ContactOptions, CrackFacesName, DEFAULT_TOLERANCE_MM};
 use crate::{Error, Scene};
-use nonlin3d_contact::{Contact, ContactLevel, ContactSettings, Mode};
+use nonlin3d_contact::{Contact, ContactLevel, ContactSettings, CrackFaces, Mode};
 use nonlin3d_mesh::names::{CRACK_LOWER, CRACK_UPPER};
 use nonlin3d_newton::{LevelReport, NewtonSettings, PathSolver, Stepping, StructuralProblem};
 
@@ -60,9 +61,13 @@ impl ContactStage {
         self.options.crack_faces == CrackFacesName::On || self.engaged.is_some()
     }
 
-    /// Whether a state overlaps beyond the tolerance (`auto`'s trigger).
+    /// Whether a state overlaps beyond the tolerance (`auto`'s trigger), measured as the loop
+    /// measures it ([`max_overlap`]): engaging means the loop's first pass closes a pair. A
+    /// lower face without normals (degenerate) engages, and the loop reports it.
     pub(crate) fn overlaps(&self, model: &Model, u: &[f64]) -> bool {
-        self.enabled() && max_overlap(model, u) > self.options.tolerance() * 1e-3
+        self.enabled()
+            && max_overlap(model, u, self.options.mode)
+                .map_or(true, |o| o > self.options.tolerance() * 1e-3)
     }
 
     /// Solves one level with the contact loop, building the contact system on first use. `u`
@@ -207,15 +212,22 @@ fn summary(level: &ContactLevel) -> ContactSummary {
     }
 }
 
-/// The largest overlap w(lower) − w(upper) over the crack-face pairs, m (0: none).
-pub fn max_overlap(model: &Model, u: &[f64]) -> f64 {
+/// The largest overlap over the crack-face pairs, m (0: none), as the contact loop's closing
+/// test reads it (`nonlin3d_contact::update`): −g̃ with g̃ = T⁻ᵀ g the weighted normal gaps
+/// (two-body), −g the normal gaps g = n·(x_up − x_low) (thesis mode), n the deformed lower
+/// face's normal. Errors: a mesh whose crack faces the contact crate refuses, a degenerate
+/// deformed lower face.
+pub fn max_overlap(model: &Model, u: &[f64], mode: ContactModeName) -> Result<f64, Error> {
     let sets = &model.mesh.node_sets;
-    match (sets.get(CRACK_UPPER), sets.get(CRACK_LOWER)) {
-        (Some(up), Some(lo)) => up
-            .iter()
-            .zip(lo)
-            .map(|(&a, &b)| u[3 * b + 2] - u[3 * a + 2])
-            .fold(0.0, f64::max),
-        _ => 0.0,
+    if !(sets.contains_key(CRACK_UPPER) && sets.contains_key(CRACK_LOWER)) {
+        return Ok(0.0);
     }
+    let faces = CrackFaces::from_mesh(&model.mesh)?;
+    let normals = faces.normals(u)?;
+    let gaps = faces.gaps(u, &normals);
+    let gaps = match mode {
+        ContactModeName::TwoBody => faces.weighted_gaps(&gaps),
+        ContactModeName::Thesis => gaps,
+    };
+    Ok(gaps.iter().fold(0.0, |m: f64, &g| m.max(-g)))
 }

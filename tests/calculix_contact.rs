@@ -4,8 +4,8 @@
 //!
 //! The case is the 30 mm circle of thesis §5.1 (Fig. 5.1.3) with contact `on`, coarsened to
 //! slices = 4 (1123 nodes), swept to ε = −0.005: without contact its faces overlap from
-//! ε = −0.003 on (tests/contact.rs); with contact 8 pairs close behind the front on the load
-//! axis and the centre deflection at −0.005 is 5.5 % larger (0.7831 mm against 0.7424 mm).
+//! ε = −0.003 on (tests/contact.rs); with contact 12 pairs close behind the front on the load
+//! axis and the centre deflection at −0.005 is 5.4 % larger (0.7821 mm against 0.7424 mm).
 //! CalculiX needs no convergence controls: its default incrementation runs the 10 steps in
 //! 45 s here (2 shared cores), which is why the CalculiX test is a single case.
 
@@ -44,9 +44,10 @@ fn gaps(faces: &CrackFaces, u: &[f64]) -> Vec<f64> {
     faces.gaps(u, &n)
 }
 
-/// `export` → `solve` gives what `run` gives: at every level the same number of closed pairs,
-/// the closed pairs' normal gaps within the contact tolerance (1e-9 m) in `run`'s state,
-/// and the same displacements. Both solve the same equations (same mesh, 2×2×2 rule, exact
+/// `export` → `solve` gives what `run` gives: at every level the same closed pairs (the deck's
+/// are those whose weighted gap g̃ is within the contact tolerance, 1e-9 m, in `run`'s state,
+/// and as many as `run` reports), and the same displacements. `run` solves a level in one go
+/// (sub-levels of `max_step`), the deck in its *STATIC increments: the same set on both paths. Both solve the same equations (same mesh, 2×2×2 rule, exact
 /// ties, the same active-set update) to Newton's relative tolerance 1e-8 of the force scale,
 /// along different increments (path following against the deck's *STATIC incrementation);
 /// near the buckled branch a force error of 1e-8 moves u by up to ~1e3 times as much in
@@ -83,44 +84,30 @@ fn export_then_solve_gives_the_contact_set_and_displacements_of_run() {
             step.contact_closed.len()
         );
         let expected = level.contact.as_ref().map_or(0, |c| c.pairs_closed);
-        let g = gaps(&faces, &level.displacements);
-        // Pairs closed in run's state (normal gap within the contact tolerance, 1e-9 m).
-        let closed_run = (0..g.len()).filter(|&i| g[i].abs() <= 1e-9).count();
-        if step.contact_closed.len() == expected {
-            assert!(
-                diff <= 1e-5 * scale,
-                "ε = {}: {diff:e} of {scale:e}",
-                level.value
-            );
-        } else {
-            // Known path dependence (docs/VALIDATION.md, "Contact: CalculiX"): the release
-            // test on recovered forces f̂ = T f keeps a corner pair next to closed mid-edge
-            // pairs closed once it is closed, so `run` (a level in one go: every overlapping
-            // pair closed at once) can hold edge pairs that the deck's small increments never
-            // close. Then the deck's set is a subset of run's and u differs as
-            // much as those pairs' forces move it (measured 1.7e-3 of max |u| at −0.003, the
-            // bound of the CalculiX comparison below).
-            assert!(
-                step.contact_closed.len() < expected,
-                "ε = {}: deck {} closed, run {expected}",
-                level.value,
-                step.contact_closed.len()
-            );
-            assert!(
-                diff <= 5e-3 * scale,
-                "ε = {}: {diff:e} of {scale:e}",
-                level.value
-            );
-        }
-        assert!(closed_run >= step.contact_closed.len());
-        for n in &step.contact_closed {
-            let i = up.iter().position(|v| v == n).unwrap();
+        // Pairs whose weighted gap g̃ (the contact test's basis, 0 at a closed pair) is within
+        // the contact tolerance, 1e-9 m, in run's state: run's closed pairs and those that
+        // touch with no force (all before buckling).
+        let g = faces.weighted_gaps(&gaps(&faces, &level.displacements));
+        let closed_deck: Vec<usize> = step
+            .contact_closed
+            .iter()
+            .map(|n| up.iter().position(|v| v == n).unwrap())
+            .collect();
+        // One set whatever the path (a level in one go, or the deck's increments): as many
+        // pairs, each at zero weighted gap in run's state.
+        assert_eq!(step.contact_closed.len(), expected, "ε = {}", level.value);
+        for &i in &closed_deck {
             assert!(
                 g[i].abs() <= 1e-9,
-                "pair {i} closed in the deck, gap {:e} in run",
+                "pair {i} closed in the deck, g̃ {:e} in run",
                 g[i]
             );
         }
+        assert!(
+            diff <= 1e-5 * scale,
+            "ε = {}: {diff:e} of {scale:e}",
+            level.value
+        );
         // The last increment of the step reports the same count in summary.json.
         let last = step.increments.iter().rev().find(|i| i.converged).unwrap();
         assert_eq!(
@@ -166,19 +153,19 @@ fn ccx_u(dat: &str, nodes: usize) -> Vec<(f64, Vec<f64>)> {
 /// CalculiX with contact against nonlin3d with contact, on the exported deck. Two measures at
 /// every level:
 /// - centre deflection (the `center_top` node): within 0.5 %, a tenth of what contact changes
-///   at ε = −0.005 (5.5 %), so a run without contact on either side fails; measured 3e-4 at
-///   ε = −0.002 and 5e-7 at −0.005 (CalculiX's penalty against nonlin3d's exact ties, and
-///   each code's residual tolerance);
-/// - contact extent: the pairs whose faces touch, w_up − w_low < 1e-8 m in CalculiX and the
-///   normal gap < 1e-8 m in nonlin3d, are the same pairs. 1e-8 m separates the two kinds with
-///   margin on both sides: at ε = −0.005 the touching pairs are within 3e-9 m of zero
-///   (CalculiX's penalty overclosure reaches 1.5e-9 m), the nearest open pair is 3.2e-7 m
-///   apart in both codes. (Before buckling every pair touches with no force: all touch in
-///   both.)
+///   at ε = −0.005 (5.4 %), so a run without contact on either side fails; measured 7e-6,
+///   2.9e-4, 2.9e-4 and 1.2e-3 at ε = −0.002 … −0.005 (CalculiX's penalty against nonlin3d's
+///   exact ties, and the edge pairs nonlin3d closes more);
+/// - contact extent: the pairs whose faces touch, weighted gap g̃ = T⁻ᵀ g < 1e-8 m (the basis
+///   of nonlin3d's contact test; g from w_up − w_low in CalculiX, the normal gaps in
+///   nonlin3d): CalculiX's are among nonlin3d's, which has at most 3 more (assertion below).
+///   1e-8 m separates the kinds with margin: nonlin3d's closed pairs are within 1e-12 m of
+///   zero, CalculiX's penalty overclosure reaches 1.5e-9 m. (Before buckling every pair
+///   touches with no force: all touch in both.)
 /// - G_T along the front, by nonlin3d's VCCT (`front_table`, no contact applied) from each
 ///   code's displacements: max |ΔG_T| within 1 % of the largest G_T (G goes as the square of
-///   the deflection, so twice the deflection's 0.5 %); measured 2.1e-3, 5.6e-4, 1.5e-4 and
-///   1.4e-5 of it at ε = −0.002 … −0.005.
+///   the deflection, so twice the deflection's 0.5 %); measured 4.0e-3, 1.7e-3, 3.7e-3 and
+///   2.8e-3 of it at ε = −0.002 … −0.005.
 #[test]
 fn calculix_with_contact_agrees_with_nonlin3d_on_deflection_and_contact_extent() {
     if !common::ccx::available() {
@@ -227,8 +214,11 @@ fn calculix_with_contact_agrees_with_nonlin3d_on_deflection_and_contact_extent()
             level.value
         );
         let penetration = g_ccx.iter().fold(0.0f64, |a, &g| a.max(-g));
-        let touching =
-            |g: &[f64]| -> Vec<usize> { (0..g.len()).filter(|&i| g[i] < 1e-8).collect() };
+        // Touching in the basis of the contact test: weighted gaps g̃ = T⁻ᵀ g below 1e-8 m.
+        let touching = |g: &[f64]| -> Vec<usize> {
+            let w = faces.weighted_gaps(g);
+            (0..w.len()).filter(|&i| w[i] < 1e-8).collect()
+        };
         let (t_ours, t_ccx) = (touching(&g_ours), touching(&g_ccx));
         eprintln!(
             "ε = {}: centre w nonlin3d {:.6} mm, CalculiX {:.6} mm ({:+.1e}); pairs closed \
@@ -245,17 +235,31 @@ fn calculix_with_contact_agrees_with_nonlin3d_on_deflection_and_contact_extent()
         );
         assert!((w_ccx / w_ours - 1.0).abs() < 5e-3, "ε = {}", level.value);
         assert!(gt_diff <= 1e-2 * gt_max + 1e-9, "ε = {}", level.value);
-        // Every pair that touches in CalculiX touches in nonlin3d. nonlin3d may hold more
-        // at the edge of the contact zone: its release test on recovered forces f̂ = T f keeps
-        // a corner pair next to closed mid-edge pairs closed once closed, and `run` closes
-        // every overlapping pair of a level at once (measured: 2 more at −0.003, 1 at −0.004,
-        // 3 at −0.005; their effect is inside the w and G bounds above). Known defect,
-        // docs/VALIDATION.md "Contact: CalculiX".
+        // Every pair that touches in CalculiX touches (is closed) in nonlin3d; nonlin3d closes
+        // at most 3 more, at the edge of the contact zone, where CalculiX leaves them open by
+        // less than 1.5e-6 m (measured: 3, 1, 3 more at −0.003, −0.004, −0.005, open by up to
+        // 8.6e-7 m in CalculiX; 1.5e-6 m is 0.2 % of the centre deflection). The two codes
+        // state contact differently: nonlin3d's g̃ ≥ 0 is a weak (positive-basis) condition
+        // per pair, CalculiX's node-to-surface penalty tests each slave node's own gap.
         assert!(
             t_ccx.iter().all(|i| t_ours.contains(i)),
             "ε = {}: touching nonlin3d {t_ours:?}, CalculiX {t_ccx:?}",
             level.value
         );
+        let extra: Vec<usize> = t_ours
+            .iter()
+            .copied()
+            .filter(|i| !t_ccx.contains(i))
+            .collect();
+        assert!(extra.len() <= 3, "ε = {}: {extra:?}", level.value);
+        for &i in &extra {
+            assert!(
+                g_ccx[i] < 1.5e-6,
+                "ε = {}: pair {i} open by {:e} m in CalculiX",
+                level.value,
+                g_ccx[i]
+            );
+        }
     }
     assert!(
         ours.levels

@@ -101,7 +101,12 @@ fn circle_30mm_deflection_and_release_rates_follow_figs_5_1_1_and_5_1_3() {
 #[test]
 fn ellipse_and_larger_circle_follow_figs_5_1_4_and_5_1_5() {
     let circle = solve(&scene("fig_5_1_3_circle_30mm.toml"));
-    let ellipse = solve(&scene("fig_5_1_4_ellipse_30x60mm.toml"));
+    // The thesis's Fig. 5.1.4 is without contact. With contact (`auto`, the default) the
+    // ellipse's faces overlap along the deformed normals at −0.005 and 4 pairs close: G_II max
+    // 190.94 > G_I max 188.94 J/m² there (without: 185.21 < 188.97).
+    let mut e = scene("fig_5_1_4_ellipse_30x60mm.toml");
+    e.contact.crack_faces = nonlin3d::contact::CrackFacesName::Off;
+    let ellipse = solve(&e);
     let big = solve(&scene("fig_5_1_5_circle_60mm.toml"));
     for l in &ellipse.levels {
         let (si, sii) = (peak_s(l, |f| f.g_i), peak_s(l, |f| f.g_ii));

@@ -5,19 +5,19 @@
 //! The pairs are one [`Contact`] (slave node = "upper", master node = "lower": the gap is
 //! g = n·(x_slave − x_master), n the outward normal of the deformed master face). Every
 //! candidate pair is reserved in the pattern once, so a change of the set costs no new
-//! symbolic analysis. An increment converged by Newton is followed by passes: gaps and contact
-//! forces read, the set changed by [`update`] (pairs with g < −1e-9, in the deck's length unit,
-//! close; pairs whose recovered force f̂ — the release quantity of `run`'s contact, positive
-//! at every node of a compressed quadratic face (`nonlin3d_contact::CrackFaces::recovered`) —
-//! is tensile beyond the Newton tolerance open), the ties installed
-//! with the current normals and Newton re-run at the same step time, until the set does not
-//! change. A set seen before within the increment (a cycle) or more than
-//! [`MAX_PASSES`] passes fail the increment, which is then cut back as a non-converged one,
-//! and so is a re-solve that does not converge. The set carries from increment to increment
-//! and from step to step (CalculiX's contact pairs are model data: they act in every step).
+//! symbolic analysis. An increment converged by Newton is followed by the contact crate's
+//! passes ([`Contact::settle`], the loop `run` uses: pairs whose weighted gap g̃ < −1e-9, in
+//! the deck's length unit, close; pairs whose recovered force f̂ is tensile beyond the Newton
+//! tolerance open — one complementarity, `nonlin3d_contact::update`; a stable set that
+//! overlaps along the current normals is held again with them), Newton re-run at the same
+//! step time, until the set does not change. A set seen before within the increment (a
+//! cycle) or more than [`MAX_PASSES`] passes fail the increment, which is then cut back as a
+//! non-converged one, and so is a re-solve that does not converge. The set carries from
+//! increment to increment and from step to step (CalculiX's contact pairs are model data:
+//! they act in every step).
 
 use crate::Error;
-use nonlin3d_contact::{Contact, ContactSettings, CrackFaces, Tolerances, update};
+use nonlin3d_contact::{Contact, ContactError, ContactSettings, CrackFaces};
 use nonlin3d_mesh::{InpModel, Mesh};
 use nonlin3d_newton::{NewtonSettings, PathSolver, StructuralProblem};
 use serde::Serialize;
@@ -120,9 +120,11 @@ impl DeckContact {
         Ok(())
     }
 
-    /// The passes at a converged increment (state `u` at λ = 1 of the increment). On failure
-    /// the set is back to what it was at the start, installed with the normals of `start`,
-    /// and `u` is `start`.
+    /// The passes at a converged increment (state `u` at λ = 1 of the increment): the
+    /// contact crate's loop ([`Contact::settle`]: set changes, refresh passes, cycle and pass
+    /// limits, Newton re-solves at the same step time). A cycle, the pass limit or a re-solve
+    /// that does not converge is a failed attempt: the set is back to what it was at the
+    /// start, installed with the normals of `start`, and `u` is `start`.
     pub(crate) fn settle(
         &mut self,
         problem: &mut StructuralProblem,
@@ -132,46 +134,23 @@ impl DeckContact {
         session: &mut PathSolver,
     ) -> Result<Settled, Error> {
         let initial = self.contact.active();
-        let mut seen = vec![initial.clone()];
-        let (mut passes, mut iterations) = (0, 0);
-        let failed = loop {
-            let state = self.contact.state(problem, u, 1.0, newton)?;
-            let tol = Tolerances {
-                gap: self.contact.settings().gap_tolerance,
-                force: state.force_tolerance,
-            };
-            let change = update(&state.gaps, &state.recovered, &state.active, tol);
-            if change.is_empty() {
+        let failed = match self.contact.settle(problem, u, 1.0, newton, session) {
+            Ok(level) => {
+                let s = &level.state;
                 return Ok(Settled::Stable(IncrementContact {
-                    pairs_closed: state.active.iter().filter(|&&a| a).count(),
-                    passes,
-                    iterations,
-                    max_force: state.forces.iter().copied().fold(0.0, f64::max),
-                    max_overlap: state.gaps.iter().map(|&g| -g).fold(0.0, f64::max),
+                    pairs_closed: s.active.iter().filter(|&&a| a).count(),
+                    passes: level.passes.len(),
+                    iterations: level.passes.iter().map(|p| p.iterations).sum(),
+                    max_force: s.forces.iter().copied().fold(0.0, f64::max),
+                    max_overlap: s.penetration(),
                 }));
             }
-            let mut next = state.active.clone();
-            change.apply(&mut next);
-            if seen.contains(&next) {
-                break format!("the contact set repeats after {passes} passes (a cycle)");
-            }
-            if passes >= MAX_PASSES {
-                break format!("the contact set still changes after {passes} passes");
-            }
-            seen.push(next.clone());
-            self.contact.install(problem, u, &next)?;
-            let report = session.solve_at(problem, u, 1.0, newton)?;
-            passes += 1;
-            iterations += report.iterations.len();
-            if !report.converged() {
-                break format!(
-                    "the re-solve of contact pass {passes} ({} closed, {} opened) did not \
-                     converge ({})",
-                    change.added.len(),
-                    change.released.len(),
-                    report.termination
-                );
-            }
+            Err(
+                e @ (ContactError::Cycle { .. }
+                | ContactError::Passes { .. }
+                | ContactError::Resolve { .. }),
+            ) => e.to_string(),
+            Err(e) => return Err(e.into()),
         };
         u.clear();
         u.extend_from_slice(start);

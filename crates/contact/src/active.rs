@@ -3,8 +3,11 @@
 //!
 //! An inactive pair whose gap is below −tol_g (overlap) is added; an active pair whose contact
 //! force is below −tol_f (tensile: the faces pull on each other) is released. The driver passes
-//! the recovered forces f̂ (`recover`), whose sign is that of the pressure on linear and
-//! quadratic faces alike. An added pair is
+//! the recovered forces f̂ = T f (`recover`), whose sign is that of the pressure on linear and
+//! quadratic faces alike, and the gaps in the same basis, g̃ = T⁻ᵀ g, so that f̂·g̃ = f·g: the
+//! test is the one complementarity f̂ ≥ 0, g̃ ≥ 0, f̂·g̃ = 0 (docs/THEORY.md, "One basis for
+//! closing and release"), which a closed pair meets by its tie g̃_i = 0 and an open pair by
+//! f̂_i = 0. An added pair is
 //! inactive and a released one active, so no pair is both. The thesis alternates the two checks
 //! (overlap first, then tension, each after a solution); here both are read from the same
 //! solution, which needs no more passes when the set is right and fewer when it is not.
@@ -137,6 +140,34 @@ mod tests {
             };
             prop_assert_eq!(back(&cs.added), c.added);
             prop_assert_eq!(back(&cs.released), c.released);
+        }
+    }
+
+    proptest! {
+        /// Larger tolerances change a subset of what smaller ones change: a pair added with
+        /// tolerances (a, b) is added with any (a′ ≤ a, b′ ≤ b), and so is a released one.
+        #[test]
+        fn larger_tolerances_change_less(s in state(), k in 1.0..10.0f64) {
+            let (g, p, a) = split(&s);
+            let wide = Tolerances { gap: k * TOL.gap, force: k * TOL.force };
+            let (c, w) = (update(&g, &p, &a, TOL), update(&g, &p, &a, wide));
+            prop_assert!(w.added.iter().all(|i| c.added.contains(i)));
+            prop_assert!(w.released.iter().all(|i| c.released.contains(i)));
+        }
+
+        /// One complementarity: a state with f̂ ≥ 0, g̃ ≥ 0 and f̂_i g̃_i = 0 at every pair, the
+        /// set being the pairs with g̃_i = 0 and f̂_i > 0 (a closed pair at zero force may be
+        /// either), is a fixed point whatever the sizes of f̂ and g̃.
+        #[test]
+        fn a_complementary_state_is_a_fixed_point(
+            s in prop::collection::vec((0.0..1e3f64, any::<bool>()), 0..40)
+        ) {
+            let g: Vec<f64> = s.iter().map(|&(x, c)| if c { 0.0 } else { x * 1e-6 }).collect();
+            let p: Vec<f64> = s.iter().map(|&(x, c)| if c { x } else { 0.0 }).collect();
+            let a: Vec<bool> = s.iter().map(|&(_, c)| c).collect();
+            prop_assert!(update(&g, &p, &a, TOL).is_empty());
+            let exact = Tolerances { gap: 0.0, force: 0.0 };
+            prop_assert!(update(&g, &p, &a, exact).is_empty());
         }
     }
 

@@ -8,18 +8,20 @@
 //! again at the same load factor; a set seen before at the level is a cycle and ends the level
 //! with [`ContactError::Cycle`].
 
-use crate::active::{Change, Tolerances, update};
-use crate::tie::{candidate_tie, contact_force, contact_tie, slave_component};
-use crate::{ContactError, CrackFaces, Pair};
+use crate::tie::{candidate_tie, contact_force, slave_component, weighted_tie};
+use crate::{ALPHA, ContactError, CrackFaces, Pair};
 use nonlin3d_assembly::SystemBuilder;
 use nonlin3d_mesh::Mesh;
 use nonlin3d_newton::{
     LevelReport, NewtonSettings, NonlinearProblem, PathSolver, Stepping, StructuralProblem,
-    follow_path_with, solve_level,
+    solve_level,
 };
 use std::time::Instant;
 
 mod settings;
+
+/// Refresh passes over which the overlap must shrink tenfold ([`Contact::check_refresh`]).
+const REFRESH_WINDOW: usize = 5;
 pub use settings::{ContactSettings, Mode};
 
 /// Gaps, forces and the set at a state: the results of contact.
@@ -29,8 +31,14 @@ pub struct ContactState {
     pub normals: Vec<[f64; 3]>,
     /// Gap of each pair, m (negative: overlap).
     pub gaps: Vec<f64>,
-    /// Contact force of each pair, N (compressive positive; 0 at open pairs): the nodal force,
-    /// which on a quadratic face is tensile at the corners of a compressed patch.
+    /// Gaps in the basis of the recovered forces, g̃ = T⁻ᵀ g, m
+    /// ([`CrackFaces::weighted_gaps`]; the gaps themselves in [`Mode::External`]): the
+    /// closing test's quantity, conjugate to `recovered` (f̂·g̃ = f·g).
+    pub weighted_gaps: Vec<f64>,
+    /// Contact force of each pair, N (compressive positive): the nodal force, which on a
+    /// quadratic face is tensile at the corners of a compressed patch, and is −α p at an open
+    /// corner pair at the end of a closed mid-edge pair's edge (its tie reads that corner's
+    /// gap); 0 at other open pairs.
     pub forces: Vec<f64>,
     /// Recovered nodal contact forces f̂ = T f, N ([`CrackFaces::recovered`]): positive at every
     /// node of a compressed face; the release test's quantity.
@@ -41,6 +49,9 @@ pub struct ContactState {
     pub active: Vec<bool>,
     /// The force tolerance used (N).
     pub force_tolerance: f64,
+    /// Σ p·n over the ties' forces, each along the normal it acts on (the normal its tie was
+    /// installed with), N.
+    total: [f64; 3],
 }
 
 impl ContactState {
@@ -49,15 +60,16 @@ impl ContactState {
         self.gaps.iter().fold(0.0, |m: f64, &g| m.max(-g))
     }
 
-    /// Σ p·n over the closed pairs: the total force the base exerts on the sublaminate (N).
+    /// The largest overlap −g̃ in the weighted gaps, m (0: none): the closing test's
+    /// quantity ([`CrackFaces::weighted_gaps`]).
+    pub fn weighted_penetration(&self) -> f64 {
+        self.weighted_gaps.iter().fold(0.0, |m: f64, &g| m.max(-g))
+    }
+
+    /// Σ f_i·n_i over the pairs, each nodal force along the normal it acts on: the total force
+    /// the base exerts on the sublaminate (N).
     pub fn total_force(&self) -> [f64; 3] {
-        let mut t = [0.0; 3];
-        for (p, n) in self.forces.iter().zip(&self.normals) {
-            for k in 0..3 {
-                t[k] += p * n[k];
-            }
-        }
-        t
+        self.total
     }
 }
 
@@ -117,11 +129,14 @@ impl ContactLevel {
     }
 }
 
-/// The constraint installed for an active pair: the constrained component and the normal.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// The constraint installed for an active pair: the constrained component, the normal, and
+/// the open end corners its tie reads (mid-edge pairs of quadratic faces: g̃_m = 0).
+#[derive(Debug, Clone, PartialEq)]
 struct Held {
     component: usize,
     normal: [f64; 3],
+    /// The open end corners and the normals their gaps are read along.
+    ends: Vec<(usize, [f64; 3])>,
 }
 
 /// Crack-face contact of one model: the pairs, the settings, the active set and what holds it.
@@ -162,13 +177,17 @@ impl Contact {
     }
 
     /// Reserves every candidate pair's couplings in the system to be built (both whole nodes of
-    /// each pair): any active set then fits the pattern.
+    /// each pair and, for a mid-edge pair, of the pairs at its edge's ends): any active set
+    /// then fits the pattern.
     pub fn reserve(&self, builder: SystemBuilder) -> SystemBuilder {
-        let ties: Vec<_> = self
-            .faces
-            .pairs()
+        let pairs = self.faces.pairs();
+        let ties: Vec<_> = pairs
             .iter()
-            .map(|&p| candidate_tie(p))
+            .enumerate()
+            .map(|(i, &p)| {
+                let ends: Vec<Pair> = self.faces.ends(i).iter().map(|&c| pairs[c]).collect();
+                candidate_tie(p, &ends)
+            })
             .collect();
         builder.reserve_ties(&ties)
     }
@@ -229,10 +248,24 @@ impl Contact {
                     let n = normals[i];
                     let k = slave_component(p, n, |d| !constraints.is_constrained(d))
                         .ok_or_else(|| unheld(p.upper))?;
-                    ties.push(contact_tie(p, n, g0[i], k));
+                    // g̃_i = 0: a mid-edge pair reads the gaps of its open end corners (the
+                    // closed ones are zero by their own ties).
+                    let ends: Vec<(usize, [f64; 3])> = self
+                        .faces
+                        .ends(i)
+                        .iter()
+                        .filter(|&&c| !active[c])
+                        .map(|&c| (c, normals[c]))
+                        .collect();
+                    let others: Vec<_> = ends
+                        .iter()
+                        .map(|&(c, m)| (pairs[c], m, g0[c], -ALPHA))
+                        .collect();
+                    ties.push(weighted_tie(p, n, g0[i], k, &others));
                     held[i] = Some(Held {
                         component: k,
                         normal: n,
+                        ends,
                     });
                 }
                 Mode::External => {
@@ -249,6 +282,7 @@ impl Contact {
                     held[i] = Some(Held {
                         component: 2,
                         normal: [0.0, 0.0, 1.0],
+                        ends: Vec::new(),
                     });
                 }
             }
@@ -273,13 +307,25 @@ impl Contact {
         let mut r = vec![0.0; problem.n()];
         let scale = problem.evaluate(u, lambda, &mut r, None)?;
         let reactions = problem.reactions();
-        let forces = self
-            .faces
-            .pairs()
-            .iter()
-            .zip(&self.held)
-            .map(|(&p, h)| h.map_or(0.0, |h| contact_force(reactions, p, h.normal, h.component)))
-            .collect::<Vec<f64>>();
+        // The nodal forces: p = R_s/n_k on a held pair, and −α p on each open end corner its
+        // tie reads (the tie g_m − α Σ g_c = 0 pulls on them with weight −α).
+        let mut forces = vec![0.0; self.faces.len()];
+        let mut total = [0.0; 3];
+        for ((&p, h), i) in self.faces.pairs().iter().zip(&self.held).zip(0..) {
+            if let Some(h) = h {
+                let f = contact_force(reactions, p, h.normal, h.component);
+                forces[i] += f;
+                for k in 0..3 {
+                    total[k] += f * h.normal[k];
+                }
+                for &(c, n) in &h.ends {
+                    forces[c] -= ALPHA * f;
+                    for k in 0..3 {
+                        total[k] -= ALPHA * f * n[k];
+                    }
+                }
+            }
+        }
         // In External mode the normal of a closed pair is the direction it is held in (z), and
         // its gap is measured along it.
         let normals: Vec<[f64; 3]> = self
@@ -293,13 +339,19 @@ impl Contact {
             })
             .collect();
         let gaps = self.faces.gaps(u, &normals);
+        let weighted_gaps = match self.settings.mode {
+            Mode::TwoBody => self.faces.weighted_gaps(&gaps),
+            Mode::External => gaps.clone(),
+        };
         Ok(ContactState {
             normals,
             gaps,
+            weighted_gaps,
             recovered: self.faces.recovered(&forces),
             pressures: self.faces.pressures(&forces),
             forces,
             active: self.active(),
+            total,
             force_tolerance: self
                 .settings
                 .force_tolerance
@@ -407,162 +459,16 @@ impl Contact {
         self.passes(
             problem,
             u,
-            (&start, from, to),
+            to,
             (first, first_seconds),
             newton,
-            stepping,
             session,
+            Some((&start, from, stepping)),
         )
-    }
-
-    /// The passes of a level whose first solve was made elsewhere: `u` is a converged state at
-    /// `to` with the current set (typically a solve without contact whose faces overlap, which
-    /// `auto` would otherwise repeat with the loop from the level's start), `start` the state
-    /// at `from` to follow again from if a re-solve fails, `first` what that solve reported
-    /// (kept in the result; its time is `first_seconds`). The passes as in
-    /// [`solve_level`](Self::solve_level).
-    #[allow(clippy::too_many_arguments)]
-    pub fn continue_level(
-        &mut self,
-        problem: &mut StructuralProblem,
-        u: &mut Vec<f64>,
-        (start, from, to): (&[f64], f64, f64),
-        (first, first_seconds): (LevelReport, f64),
-        newton: &NewtonSettings,
-        stepping: &Stepping,
-        session: &mut PathSolver,
-    ) -> Result<ContactLevel, ContactError> {
-        self.passes(
-            problem,
-            u,
-            (start, from, to),
-            (first, first_seconds),
-            newton,
-            stepping,
-            session,
-        )
-    }
-
-    /// The loop of passes after the first solve (module docs).
-    #[allow(clippy::too_many_arguments)]
-    fn passes(
-        &mut self,
-        problem: &mut StructuralProblem,
-        u: &mut Vec<f64>,
-        (start, from, to): (&[f64], f64, f64),
-        (first, first_seconds): (LevelReport, f64),
-        newton: &NewtonSettings,
-        stepping: &Stepping,
-        session: &mut PathSolver,
-    ) -> Result<ContactLevel, ContactError> {
-        let mut passes = Vec::new();
-        let mut seen = vec![self.active()];
-        loop {
-            let state = self.state(problem, u, to, newton)?;
-            let tol = Tolerances {
-                gap: self.settings.gap_tolerance,
-                force: state.force_tolerance,
-            };
-            let change = update(&state.gaps, &state.recovered, &state.active, tol);
-            // A held pair's gap is zero along the normal it was tied with; the re-solve turns
-            // the lower face, so along the current normal it may overlap: such a set is held
-            // again with the current normals (a refresh: same set, no cycle).
-            let refresh = change.is_empty() && state.penetration() > tol.gap;
-            if change.is_empty() && !refresh {
-                return Ok(ContactLevel {
-                    lambda: to,
-                    first,
-                    first_seconds,
-                    passes,
-                    state,
-                });
-            }
-            let t = Instant::now();
-            let mut next = state.active.clone();
-            change.apply(&mut next);
-            if refresh {
-                self.check_progress(to, &[], &next, passes.len(), &change)?;
-            } else {
-                self.check_progress(to, &seen, &next, passes.len(), &change)?;
-                seen.push(next.clone());
-            }
-            self.install(problem, u, &next)?;
-            let (iterations, redone) =
-                self.resolve(problem, u, (start, from, to), newton, stepping, session)?;
-            passes.push(PassReport {
-                closed: change.added,
-                opened: change.released,
-                refresh,
-                iterations,
-                redone,
-                seconds: t.elapsed().as_secs_f64(),
-            });
-        }
-    }
-
-    /// Refuses a set `next` seen before at the level (a cycle: the pairs whose state differs
-    /// among the sets since its first visit flip) and a pass beyond the limit.
-    fn check_progress(
-        &self,
-        lambda: f64,
-        seen: &[Vec<bool>],
-        next: &[bool],
-        passes: usize,
-        change: &Change,
-    ) -> Result<(), ContactError> {
-        if let Some(first) = seen.iter().position(|s| s == next) {
-            let pairs: Vec<Pair> = (0..next.len())
-                .filter(|&i| seen[first..].iter().any(|s| s[i] != next[i]))
-                .map(|i| self.faces.pairs()[i])
-                .collect();
-            return Err(ContactError::Cycle {
-                lambda,
-                passes,
-                pairs,
-            });
-        }
-        if passes >= self.settings.max_passes {
-            return Err(ContactError::Passes {
-                lambda,
-                passes,
-                closed: change.added.len(),
-                opened: change.released.len(),
-            });
-        }
-        Ok(())
-    }
-
-    /// The re-solve of a pass at λ = `to`: Newton from `u` with the session's solver; if it
-    /// does not converge, path following from the level's start (`start` at `from`). Returns
-    /// the Newton iterations and whether the level was followed again.
-    fn resolve(
-        &mut self,
-        problem: &mut StructuralProblem,
-        u: &mut Vec<f64>,
-        (start, from, to): (&[f64], f64, f64),
-        newton: &NewtonSettings,
-        stepping: &Stepping,
-        session: &mut PathSolver,
-    ) -> Result<(usize, bool), ContactError> {
-        let mut trial = u.clone();
-        let report = session.solve_at(problem, &mut trial, to, newton)?;
-        let mut iterations = report.iterations.len();
-        if report.converged() {
-            *u = trial;
-            return Ok((iterations, false));
-        }
-        u.clear();
-        u.extend_from_slice(start);
-        session.invalidate();
-        let path = follow_path_with(problem, u, from, &[to], newton, stepping, session)?;
-        iterations += path
-            .attempts
-            .iter()
-            .map(|a| a.iterations.len())
-            .sum::<usize>();
-        Ok((iterations, true))
     }
 }
+
+mod passes;
 
 #[cfg(test)]
 mod tests;

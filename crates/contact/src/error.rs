@@ -74,6 +74,49 @@ pub enum ContactError {
         /// Pairs opened by the last change.
         opened: usize,
     },
+    /// A re-solve at the same load with a new set did not converge (passes without a fallback
+    /// to path following: [`Contact::settle`](crate::Contact::settle)).
+    #[error(
+        "contact at λ = {lambda}: the re-solve of pass {pass} ({closed} closed, {opened} opened) did not converge ({why})"
+    )]
+    Resolve {
+        /// The load factor.
+        lambda: f64,
+        /// The pass (1-based).
+        pass: usize,
+        /// Pairs closed by the pass's change.
+        closed: usize,
+        /// Pairs opened by it.
+        opened: usize,
+        /// Newton's termination.
+        why: String,
+    },
+    /// Holding the same set again with the current normals (refresh passes) does not remove
+    /// the overlap.
+    #[error(
+        "contact at λ = {lambda}: {passes} refresh passes (the same set held again) do not remove the overlap at {pair}: {:.2e} → {:.2e} mm over the last 5{}",
+        before * 1e3,
+        overlap * 1e3,
+        if *external {
+            "; in the thesis's approximation (mode = \"thesis\") the held upper node drags its lower node along through the front cell, so holding it at the lower node's height never catches up: use mode = \"two_body\" or a longer front cell"
+        } else {
+            ""
+        }
+    )]
+    Refresh {
+        /// The load factor.
+        lambda: f64,
+        /// Refresh passes in a row.
+        passes: usize,
+        /// The pair that overlaps most.
+        pair: Pair,
+        /// The overlap 5 refresh passes before, m.
+        before: f64,
+        /// The overlap now, m.
+        overlap: f64,
+        /// Whether the thesis's approximation ([`Mode::External`](crate::Mode::External)).
+        external: bool,
+    },
     /// Path following or a re-solve failed.
     #[error(transparent)]
     Newton(#[from] nonlin3d_newton::NewtonError),

@@ -17,6 +17,9 @@ pub(crate) struct Basis {
     pub(crate) mid: bool,
     /// Pairs whose lower node is a mid-edge node next to this corner (on an edge from it).
     pub(crate) next: Vec<usize>,
+    /// Mid-edge node: the pairs whose lower node is a corner at an end of its edge (a front
+    /// node at an end is no pair and is not listed: its gap is zero).
+    pub(crate) ends: Vec<usize>,
     /// ∫ N̂_i dA over the reference facets around the node (m², > 0).
     pub(crate) weight: f64,
 }

@@ -16,7 +16,11 @@
 //! - the release test reads the forces recovered with a face basis of positive integrals,
 //!   f̂ = T f ([`CrackFaces::recovered`], [`CrackFaces::pressures`]): on quadratic faces the
 //!   nodal forces of a uniform pressure are tensile at the corners, f̂ is not — `recover`;
-//! - the active set changes by [`update`] (Fig. 2.7.2): inactive pairs with g < −tol_g close,
+//! - closing is tested in the same basis, on the weighted gaps g̃ = T⁻ᵀ g
+//!   ([`CrackFaces::weighted_gaps`]: f̂·g̃ = f·g), and a closed mid-edge pair is held at
+//!   g̃ = 0 (its tie reads its open end corners' gaps, [`weighted_tie`]): f̂ ≥ 0, g̃ ≥ 0,
+//!   f̂·g̃ = 0 is one complementarity, so the stable set does not depend on the path;
+//! - the active set changes by [`update`] (Fig. 2.7.2): inactive pairs with g̃ < −tol_g close,
 //!   active pairs with f̂ < −tol_f open; the set is re-solved at the same load until it does not
 //!   change, a repeated set being a cycle ([`ContactError::Cycle`]); a stable set whose held
 //!   pairs overlap along the current normals is held again with them (a refresh) —
@@ -67,4 +71,4 @@ pub use driver::{Contact, ContactLevel, ContactSettings, ContactState, Mode, Pas
 pub use error::ContactError;
 pub use pairs::{CrackFaces, Pair};
 pub use recover::ALPHA;
-pub use tie::{candidate_tie, contact_force, contact_tie, slave_component};
+pub use tie::{candidate_tie, contact_force, contact_tie, slave_component, weighted_tie};

@@ -221,6 +221,19 @@ impl CrackFaces {
         crate::recover::transformed(&self.basis, forces)
     }
 
+    /// The gaps in the basis of the recovered forces, g̃ = T⁻ᵀ g (m, `active`): f̂·g̃ = f·g,
+    /// g̃ = g at corners and on linear faces, (g_m − α Σ_ends g_c)/(1 − 2α) at mid-edge
+    /// pairs; the closing test's quantity. `gaps`: the gaps g, one per pair.
+    pub fn weighted_gaps(&self, gaps: &[f64]) -> Vec<f64> {
+        crate::recover::weighted_gaps(&self.basis, gaps)
+    }
+
+    /// The pairs at the ends of pair `i`'s edge when its lower node is a mid-edge node of a
+    /// quadratic face (empty otherwise): the pairs its weighted gap g̃ reads.
+    pub fn ends(&self, i: usize) -> &[usize] {
+        self.basis.get(i).map_or(&[], |b| b.ends.as_slice())
+    }
+
     /// The contact pressure p̂_i = f̂_i / ∫N̂_i dA at each pair (Pa, compressive positive; the
     /// reference face's area) from the nodal contact forces `forces` (N): exact for a uniform
     /// pressure at every node.

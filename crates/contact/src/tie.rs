@@ -30,28 +30,59 @@ pub fn slave_component(pair: Pair, n: [f64; 3], free: impl Fn(usize) -> bool) ->
 
 /// The tie n·(u_up − u_low) = −g₀ of `pair` with slave component `k` (module docs).
 pub fn contact_tie(pair: Pair, n: [f64; 3], g0: f64, k: usize) -> Tie {
+    weighted_tie(pair, n, g0, k, &[])
+}
+
+/// The tie g(pair) + Σ_t w_t g(pair_t) = 0 of the gaps g = n·(u_up − u_low) + g₀ of `pair`
+/// (slave component `k` of its upper node) and of the pairs `others` = (pair_t, n_t, g₀_t, w_t):
+/// the constraint g̃_m = 0 of a mid-edge pair whose end corners are open (w_t = −α, docs of
+/// `active`). Slave value u_s = Σ c_j u_j + offset with c = −n_j/n_k (upper), +n_j/n_k (lower)
+/// and −w_t n_t,j/n_k, +w_t n_t,j/n_k on the others' nodes, offset −(g₀ + Σ w_t g₀_t)/n_k.
+pub fn weighted_tie(
+    pair: Pair,
+    n: [f64; 3],
+    g0: f64,
+    k: usize,
+    others: &[(Pair, [f64; 3], f64, f64)],
+) -> Tie {
     let nk = n[k];
-    let mut masters = Vec::with_capacity(5);
+    let mut masters = Vec::with_capacity(5 + 6 * others.len());
     for j in (0..3).filter(|&j| j != k && n[j] != 0.0) {
         masters.push((3 * pair.upper + j, -n[j] / nk));
     }
     for j in (0..3).filter(|&j| n[j] != 0.0) {
         masters.push((3 * pair.lower + j, n[j] / nk));
     }
+    let mut offset = g0;
+    for &(q, m, g0q, w) in others {
+        for j in (0..3).filter(|&j| m[j] != 0.0) {
+            masters.push((3 * q.upper + j, -w * m[j] / nk));
+            masters.push((3 * q.lower + j, w * m[j] / nk));
+        }
+        offset += w * g0q;
+    }
     Tie {
         slave: 3 * pair.upper + k,
         masters,
-        offset: -g0 / nk,
+        offset: -offset / nk,
     }
 }
 
-/// A tie that couples both whole nodes of `pair` (slave the upper node's z, masters the lower
-/// node's three DOFs): reserving it reserves what any contact tie of the pair needs, whatever
-/// its normal and slave component (the pattern is node-blocked).
-pub fn candidate_tie(pair: Pair) -> Tie {
+/// A tie that couples both whole nodes of `pair` and of the pairs `others` (slave the upper
+/// node's z, masters the lower node's three DOFs and every DOF of the others' nodes):
+/// reserving it reserves what any contact tie of the pair needs, whatever its normal, slave
+/// component and open end corners (the pattern is node-blocked).
+pub fn candidate_tie(pair: Pair, others: &[Pair]) -> Tie {
+    let mut masters: Vec<(usize, f64)> = (0..3).map(|j| (3 * pair.lower + j, 1.0)).collect();
+    for q in others {
+        for j in 0..3 {
+            masters.push((3 * q.upper + j, 1.0));
+            masters.push((3 * q.lower + j, 1.0));
+        }
+    }
     Tie {
         slave: 3 * pair.upper + 2,
-        masters: (0..3).map(|j| (3 * pair.lower + j, 1.0)).collect(),
+        masters,
         offset: 0.0,
     }
 }
@@ -88,6 +119,32 @@ mod tests {
         u[t.slave] = t.masters.iter().map(|&(m, c)| c * u[m]).sum::<f64>() + t.offset;
         let rel: f64 = (0..3).map(|j| n[j] * (u[15 + j] - u[6 + j])).sum();
         assert_relative_eq!(rel, -g0, epsilon = 1e-16);
+    }
+
+    /// The weighted tie makes g(pair) − α Σ g(ends) exactly zero for any masters' values, the
+    /// gaps g = n·(u_up − u_low) + g₀ each along its own normal.
+    #[test]
+    fn the_weighted_tie_closes_the_weighted_gap() {
+        let pair = Pair { upper: 5, lower: 2 };
+        let a = Pair { upper: 4, lower: 1 };
+        let b = Pair { upper: 3, lower: 0 };
+        let n = [0.0, 0.6, 0.8];
+        let (na, nb) = ([0.6, 0.0, 0.8], [0.0, 0.0, 1.0]);
+        let (g0, ga, gb) = (1e-4, -2e-4, 3e-4);
+        let alpha = crate::ALPHA;
+        let t = weighted_tie(pair, n, g0, 2, &[(a, na, ga, -alpha), (b, nb, gb, -alpha)]);
+        let mut u: Vec<f64> = (0..18)
+            .map(|d| 1e-3 * ((d * 37 % 11) as f64 - 5.0))
+            .collect();
+        u[t.slave] = t.masters.iter().map(|&(m, c)| c * u[m]).sum::<f64>() + t.offset;
+        let gap = |p: Pair, n: [f64; 3], g0: f64| -> f64 {
+            (0..3)
+                .map(|j| n[j] * (u[3 * p.upper + j] - u[3 * p.lower + j]))
+                .sum::<f64>()
+                + g0
+        };
+        let c = gap(pair, n, g0) - alpha * (gap(a, na, ga) + gap(b, nb, gb));
+        assert!(c.abs() < 1e-16, "{c:e}");
     }
 
     /// Forces p·n on the upper node and −p·n on the lower node, folded through the tie, leave

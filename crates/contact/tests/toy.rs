@@ -125,6 +125,19 @@ struct Run {
 /// One level 0 → 1 starting with every pair closed (the free plate needs contact to be held
 /// at all).
 fn run(mesh: &Mesh, faces: CrackFaces, top: &[usize], weights: &[f64], mode: Mode) -> Run {
+    let all = vec![true; faces.len()];
+    run_from(mesh, faces, top, weights, mode, &all)
+}
+
+/// [`run`] starting with the pairs of `initial` closed.
+fn run_from(
+    mesh: &Mesh,
+    faces: CrackFaces,
+    top: &[usize],
+    weights: &[f64],
+    mode: Mode,
+    initial: &[bool],
+) -> Run {
     let settings = ContactSettings {
         mode,
         ..ContactSettings::default()
@@ -134,8 +147,7 @@ fn run(mesh: &Mesh, faces: CrackFaces, top: &[usize], weights: &[f64], mode: Mod
     let newton = NewtonSettings::default();
     let mut session = PathSolver::new(&problem, newton.solver).unwrap();
     let mut u = vec![0.0; problem.n()];
-    let all = vec![true; contact.faces().len()];
-    contact.install(&mut problem, &u, &all).unwrap();
+    contact.install(&mut problem, &u, initial).unwrap();
     let level = contact
         .solve_level(
             &mut problem,
@@ -357,4 +369,59 @@ fn a_pressed_hex20_plate_keeps_its_corner_pairs_closed() {
     for &p in &s.pressures {
         assert!((p - mean).abs() < 0.15 * mean, "{} MPa", p * 1e-6);
     }
+}
+
+/// Hex20 under a point load at the plate's centre (issue 19, defect 1: closing and release in
+/// one basis). The plate's rim lifts; the stable set is the one complementarity of
+/// docs/THEORY.md ("One basis for closing and release"): every closed pair has weighted gap
+/// g̃ = 0 (its tie, to the gap tolerance 1e-9 m), every open pair carries no recovered force
+/// (f̂ = 0 to the force tolerance ε_r·F: an open corner at the end of a closed mid-edge pair
+/// carries the nodal force −α p, which T cancels), f̂ ≥ 0 and g̃ ≥ 0 within the tolerances.
+/// Started from every pair closed and from only the pairs within 2.5 mm of the centre closed
+/// (the plate must be held from the start), the loop ends on the same set: the set does not
+/// depend on where the loop starts. (Releasing on f̂ and closing on nodal gaps, an open corner
+/// next to a closed mid-edge pair has f̂_c = α f_m > 0 and fails the first check.)
+#[test]
+fn a_point_loaded_hex20_plate_ends_on_one_complementary_set_from_any_start() {
+    let (mesh, up, lo, top) = toy_of(ElementKind::Hex20);
+    let centre: Vec<f64> = top
+        .iter()
+        .map(|&v| (mesh.nodes[v][0] == 0.0 && mesh.nodes[v][1] == 0.0) as u8 as f64)
+        .collect();
+    let faces = CrackFaces::from_sets(&mesh, &up, &lo).unwrap();
+    let near: Vec<bool> = up
+        .iter()
+        .map(|&v| mesh.nodes[v][0].hypot(mesh.nodes[v][1]) <= 2.5e-3 + 1e-12)
+        .collect();
+    let all = vec![true; faces.len()];
+    let mut sets = Vec::new();
+    for initial in [&all, &near] {
+        let mut r = run_from(&mesh, faces.clone(), &top, &centre, Mode::TwoBody, initial);
+        check(&mut r, 45);
+        let s = &r.level.state;
+        let gap_tol = ContactSettings::default().gap_tolerance;
+        println!(
+            "Hex20 point load from {} closed: passes {}, closed {}, opened {}, active {:?}",
+            initial.iter().filter(|&&a| a).count(),
+            r.level.passes.len(),
+            r.level.closed(),
+            r.level.opened(),
+            s.active
+        );
+        for i in 0..s.active.len() {
+            let (f, g) = (s.recovered[i], s.weighted_gaps[i]);
+            assert!(
+                f >= -s.force_tolerance && g >= -gap_tol,
+                "pair {i}: f̂ {f}, g̃ {g}"
+            );
+            if s.active[i] {
+                assert!(g.abs() <= gap_tol, "closed pair {i}: g̃ {g:e}");
+            } else {
+                assert!(f.abs() <= s.force_tolerance, "open pair {i}: f̂ {f:e}");
+            }
+        }
+        assert!(s.active.iter().any(|&a| !a) && s.active.iter().any(|&a| a));
+        sets.push(s.active.clone());
+    }
+    assert_eq!(sets[0], sets[1]);
 }

@@ -1,5 +1,6 @@
 //! Tests of the contact loop (`driver`).
 use super::*;
+use crate::Change;
 use crate::pairs::tests::stacked;
 
 /// A level is split into the fewest equal steps of at most `max_step`: one level to λ = 1

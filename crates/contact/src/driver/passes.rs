@@ -1,0 +1,238 @@
+//! The passes of the contact loop (Fig. 2.7.2) after a level's first solve: read the state,
+//! change the set, install, re-solve at the same load, until the set is stable; the refresh
+//! passes, the cycle, pass and refresh limits, and the door for callers that follow the load
+//! themselves ([`Contact::settle`]).
+
+use super::{Contact, ContactLevel, ContactState, Mode, PassReport, REFRESH_WINDOW};
+use crate::active::{Change, Tolerances, update};
+use crate::{ContactError, Pair};
+use nonlin3d_newton::{
+    LevelReport, NewtonSettings, PathSolver, Stepping, StructuralProblem, follow_path_with,
+};
+use std::time::Instant;
+
+impl Contact {
+    /// The passes of a level whose first solve was made elsewhere: `u` is a converged state at
+    /// `to` with the current set (typically a solve without contact whose faces overlap, which
+    /// `auto` would otherwise repeat with the loop from the level's start), `start` the state
+    /// at `from` to follow again from if a re-solve fails, `first` what that solve reported
+    /// (kept in the result; its time is `first_seconds`). The passes as in
+    /// [`solve_level`](Self::solve_level).
+    #[allow(clippy::too_many_arguments)]
+    pub fn continue_level(
+        &mut self,
+        problem: &mut StructuralProblem,
+        u: &mut Vec<f64>,
+        (start, from, to): (&[f64], f64, f64),
+        (first, first_seconds): (LevelReport, f64),
+        newton: &NewtonSettings,
+        stepping: &Stepping,
+        session: &mut PathSolver,
+    ) -> Result<ContactLevel, ContactError> {
+        self.passes(
+            problem,
+            u,
+            to,
+            (first, first_seconds),
+            newton,
+            session,
+            Some((start, from, stepping)),
+        )
+    }
+
+    /// The passes at a state `u` converged at λ = `lambda` with the current set, each re-solve
+    /// Newton at the same λ and nothing else: a re-solve that does not converge is
+    /// [`ContactError::Resolve`] (the caller cuts its increment back; `u` is then the failed
+    /// iterate). The door for callers that follow the load themselves (a deck's increments).
+    /// Otherwise as [`continue_level`](Self::continue_level), the first solve reported as an
+    /// empty level report.
+    pub fn settle(
+        &mut self,
+        problem: &mut StructuralProblem,
+        u: &mut Vec<f64>,
+        lambda: f64,
+        newton: &NewtonSettings,
+        session: &mut PathSolver,
+    ) -> Result<ContactLevel, ContactError> {
+        let first = LevelReport {
+            attempts: Vec::new(),
+            perturbed: false,
+            negative_pivots: None,
+        };
+        self.passes(problem, u, lambda, (first, 0.0), newton, session, None)
+    }
+
+    /// The loop of passes after the first solve (module docs); `fallback`: the level's start
+    /// state, its load factor and the stepping to follow it again with when a re-solve fails
+    /// (None: the failure is [`ContactError::Resolve`]).
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn passes(
+        &mut self,
+        problem: &mut StructuralProblem,
+        u: &mut Vec<f64>,
+        to: f64,
+        (first, first_seconds): (LevelReport, f64),
+        newton: &NewtonSettings,
+        session: &mut PathSolver,
+        fallback: Option<(&[f64], f64, &Stepping)>,
+    ) -> Result<ContactLevel, ContactError> {
+        let mut passes = Vec::new();
+        let mut seen = vec![self.active()];
+        // The overlap at each pass of the current run of refresh passes.
+        let mut refreshes: Vec<f64> = Vec::new();
+        loop {
+            let state = self.state(problem, u, to, newton)?;
+            let tol = Tolerances {
+                gap: self.settings.gap_tolerance,
+                force: state.force_tolerance,
+            };
+            let change = update(&state.weighted_gaps, &state.recovered, &state.active, tol);
+            // A held pair's (weighted) gap is zero along the normals it was tied with; the
+            // re-solve turns the lower face, so along the current normals it may overlap: such
+            // a set is held again with the current normals (a refresh: same set, no cycle).
+            let refresh = change.is_empty()
+                && state.penetration().max(state.weighted_penetration()) > tol.gap;
+            if change.is_empty() && !refresh {
+                return Ok(ContactLevel {
+                    lambda: to,
+                    first,
+                    first_seconds,
+                    passes,
+                    state,
+                });
+            }
+            let t = Instant::now();
+            let mut next = state.active.clone();
+            change.apply(&mut next);
+            if refresh {
+                self.check_progress(to, &[], &next, passes.len(), &change)?;
+                refreshes.push(state.penetration().max(state.weighted_penetration()));
+                self.check_refresh(to, &state, &refreshes)?;
+            } else {
+                refreshes.clear();
+                self.check_progress(to, &seen, &next, passes.len(), &change)?;
+                seen.push(next.clone());
+            }
+            self.install(problem, u, &next)?;
+            let Some((iterations, redone)) =
+                self.resolve(problem, u, to, newton, session, fallback)?
+            else {
+                return Err(ContactError::Resolve {
+                    lambda: to,
+                    pass: passes.len() + 1,
+                    closed: change.added.len(),
+                    opened: change.released.len(),
+                    why: "no convergence at the same load".into(),
+                });
+            };
+            passes.push(PassReport {
+                closed: change.added,
+                opened: change.released,
+                refresh,
+                iterations,
+                redone,
+                seconds: t.elapsed().as_secs_f64(),
+            });
+        }
+    }
+
+    /// Refuses a run of refresh passes that does not converge: after [`REFRESH_WINDOW`] of them
+    /// the overlap must have shrunk at least tenfold over the last [`REFRESH_WINDOW`] (a
+    /// refresh of a two-body tie corrects the turn of the normal, a second-order quantity; in
+    /// [`Mode::External`] a held upper node joined to its lower node through a short front
+    /// cell drags it along, and the refresh is a fixed-point iteration that contracts by a few
+    /// per cent a pass). The error names the pair that overlaps most and the overlaps.
+    fn check_refresh(
+        &self,
+        lambda: f64,
+        state: &ContactState,
+        overlaps: &[f64],
+    ) -> Result<(), ContactError> {
+        let n = overlaps.len();
+        if n <= REFRESH_WINDOW || overlaps[n - 1] * 10.0 <= overlaps[n - 1 - REFRESH_WINDOW] {
+            return Ok(());
+        }
+        let worst = (0..state.gaps.len())
+            .max_by(|&a, &b| {
+                let o = |i: usize| (-state.gaps[i]).max(-state.weighted_gaps[i]);
+                o(a).total_cmp(&o(b))
+            })
+            .unwrap_or(0);
+        Err(ContactError::Refresh {
+            lambda,
+            passes: n,
+            pair: self.faces.pairs()[worst],
+            before: overlaps[n - 1 - REFRESH_WINDOW],
+            overlap: overlaps[n - 1],
+            external: self.settings.mode == Mode::External,
+        })
+    }
+
+    /// Refuses a set `next` seen before at the level (a cycle: the pairs whose state differs
+    /// among the sets since its first visit flip) and a pass beyond the limit.
+    pub(super) fn check_progress(
+        &self,
+        lambda: f64,
+        seen: &[Vec<bool>],
+        next: &[bool],
+        passes: usize,
+        change: &Change,
+    ) -> Result<(), ContactError> {
+        if let Some(first) = seen.iter().position(|s| s == next) {
+            let pairs: Vec<Pair> = (0..next.len())
+                .filter(|&i| seen[first..].iter().any(|s| s[i] != next[i]))
+                .map(|i| self.faces.pairs()[i])
+                .collect();
+            return Err(ContactError::Cycle {
+                lambda,
+                passes,
+                pairs,
+            });
+        }
+        if passes >= self.settings.max_passes {
+            return Err(ContactError::Passes {
+                lambda,
+                passes,
+                closed: change.added.len(),
+                opened: change.released.len(),
+            });
+        }
+        Ok(())
+    }
+
+    /// The re-solve of a pass at λ = `to`: Newton from `u` with the session's solver; if it
+    /// does not converge, path following from the level's start (`fallback`: the state at its
+    /// load factor, the stepping), or None without a fallback (`u` is then the last iterate).
+    /// Returns the Newton iterations and whether the level was followed again.
+    fn resolve(
+        &mut self,
+        problem: &mut StructuralProblem,
+        u: &mut Vec<f64>,
+        to: f64,
+        newton: &NewtonSettings,
+        session: &mut PathSolver,
+        fallback: Option<(&[f64], f64, &Stepping)>,
+    ) -> Result<Option<(usize, bool)>, ContactError> {
+        let mut trial = u.clone();
+        let report = session.solve_at(problem, &mut trial, to, newton)?;
+        let mut iterations = report.iterations.len();
+        if report.converged() {
+            *u = trial;
+            return Ok(Some((iterations, false)));
+        }
+        let Some((start, from, stepping)) = fallback else {
+            *u = trial;
+            return Ok(None);
+        };
+        u.clear();
+        u.extend_from_slice(start);
+        session.invalidate();
+        let path = follow_path_with(problem, u, from, &[to], newton, stepping, session)?;
+        iterations += path
+            .attempts
+            .iter()
+            .map(|a| a.iterations.len())
+            .sum::<usize>();
+        Ok(Some((iterations, true)))
+    }
+}
