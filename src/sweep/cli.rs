@@ -11,9 +11,9 @@ use std::path::{Path, PathBuf};
 /// `nonlin3d sweep …`.
 #[derive(Debug, Clone, clap::Subcommand)]
 pub enum SweepCommand {
-    /// Expand a scene's [sweep] into DIR/cases/NNNN/scene.toml and DIR/plan.json.
+    /// Expand a scene's `[sweep]` into DIR/cases/NNNN/scene.toml and DIR/plan.json.
     Plan {
-        /// The scene (TOML) with a [sweep] table.
+        /// The scene (TOML) with a `[sweep]` table.
         scene: PathBuf,
         /// The study folder (new, or empty, or holding this same plan).
         #[arg(long)]

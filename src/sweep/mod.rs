@@ -14,8 +14,8 @@
 //!
 //! The lists combine as a Cartesian product, the last field varying fastest; the fields of a
 //! `zip` group vary together (lists of one length) and count as one factor. A study is three
-//! steps on disk, each of which can be repeated or run elsewhere ([`plan`], [`run`],
-//! [`merge`]): `DIR/plan.json` with the resolved scenes `DIR/cases/NNNN/scene.toml`; each
+//! steps on disk, each of which can be repeated or run elsewhere ([`plan()`], [`run()`],
+//! [`merge()`]): `DIR/plan.json` with the resolved scenes `DIR/cases/NNNN/scene.toml`; each
 //! case's results (results.json, front CSVs, …) beside its scene, written as `nonlin3d run`
 //! writes them (a case whose results.json says `"complete": true` is never run again); and
 //! `DIR/study.csv`, `DIR/study.json`, `DIR/study.svg`.
@@ -24,10 +24,12 @@ pub mod cli;
 pub mod merge;
 pub mod plan;
 mod plot;
+mod row;
 pub mod run;
 
-pub use merge::{Row, merge};
+pub use merge::merge;
 pub use plan::{Case, Plan, plan};
+pub use row::Row;
 pub use run::{CaseState, RunOptions, run, status};
 
 use crate::Error;

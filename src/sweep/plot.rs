@@ -4,8 +4,8 @@
 //! vary with `x` (its `zip` group does). An `x` whose
 //! values are not numbers (layups) is plotted at its values' positions 0, 1, 2, …
 
-use super::merge::Row;
 use super::plan::Plan;
+use super::row::Row;
 use crate::Error;
 use plotters::prelude::*;
 use serde_json::Value;
