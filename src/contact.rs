@@ -136,8 +136,22 @@ impl ContactStage {
                 &mut e.session,
             ),
         };
+        // Stability counted on the pairs that hold: a closed pair without compressive force
+        // would open, so its tie must not hide a mode that lifts the faces apart
+        // (`Contact::holding_inertia`).
+        let holding = match &level {
+            Ok(l) => e
+                .contact
+                .holding_inertia(&mut e.problem, u, to, &l.state, &mut e.session)
+                .map_err(Error::from),
+            Err(_) => Ok(None),
+        };
         self.engaged = Some(e);
-        let level = level?;
+        let mut level = level?;
+        if let Some(p) = holding? {
+            let tied = level.first.negative_pivots.unwrap_or(0);
+            level.first.negative_pivots = Some(tied.max(p));
+        }
         let summary = summary(&level);
         Ok((level, summary))
     }

@@ -276,3 +276,33 @@ fn the_thesis_approximation_on_a_graded_mesh_ends_in_a_located_error() {
         "{m}"
     );
 }
+
+/// Stability is counted on the pairs that hold (`Contact::holding_inertia`). Hex8 with the
+/// selective-reduced rule on the default 8-slice circle: the perturbation at −0.002 sends the
+/// sublaminate towards the base, all 52 pairs close with zero force and hold it flat
+/// (w ≈ 0.003 mm, G = 0 everywhere). Counted with every closed pair tied, that state looked
+/// stable; a pair without compressive force would open, so without their ties the tangent has
+/// the negative pivots of the buckling modes the bifurcation at −0.0016 brought, and the levels
+/// must say unstable (and the run warn), not report a flat, stable, G-free laminate.
+#[test]
+fn faces_that_touch_without_force_do_not_make_a_buckled_state_stable() {
+    use nonlin3d::scene::{ElementName, RuleName};
+    let mut s = scene(&[-0.001, -0.002, -0.003], CrackFacesName::Auto);
+    s.mesh.slices = None;
+    s.mesh.element = Some(ElementName::Hex8);
+    s.analysis.integration = RuleName::SelectiveReduced;
+    let r = run(&s);
+    let after: Vec<_> = r.levels.iter().skip(1).collect();
+    for l in &after {
+        let c = l.contact.as_ref().expect("contact engaged");
+        assert!(c.pairs_closed > 0 && c.max_force_n < 1e-6, "{c:?}");
+        assert_eq!(l.convergence.stable, Some(false), "level {}", l.value);
+    }
+    assert!(
+        r.stability_warnings()
+            .iter()
+            .any(|w| w.contains("the run ends on an unstable state")),
+        "{:?}",
+        r.stability_warnings()
+    );
+}

@@ -468,6 +468,7 @@ impl Contact {
     }
 }
 
+mod holding;
 mod passes;
 
 #[cfg(test)]
