@@ -284,6 +284,15 @@ fn read_scene(path: Option<&Path>) -> Result<nonlin3d::Scene, nonlin3d::Error> {
                 path: p.to_path_buf(),
                 source,
             })?;
+            // A study is not one scene: say what to do instead of toml's "unknown field".
+            if nonlin3d::sweep::has_sweep(&text) {
+                return Err(nonlin3d::Error::Scene(format!(
+                    "{}: this scene has a [sweep] table, so it is a study, not one scene: \
+                     `nonlin3d run` runs it, `nonlin3d sweep plan` writes one scene per case \
+                     (cases/NNNN/scene.toml), which this command takes",
+                    p.display()
+                )));
+            }
             // "scene: FILE: what", not "scene: FILE: scene: what".
             nonlin3d::Scene::from_toml(&text).map_err(|e| {
                 let what = match e {

@@ -273,3 +273,26 @@ fn bad_studies_are_refused_naming_the_field_and_leave_nothing() {
     let o = nonlin3d(&["sweep", "status", p(&d)]);
     assert_eq!(o.status.code(), Some(2));
 }
+
+/// `export` (and every command that takes one scene) refuses a study by saying what it is and
+/// what to run, not with toml's "unknown field `sweep`"; a planned case's scene.toml exports.
+#[test]
+fn export_of_a_study_says_what_to_do() {
+    let d = tmp("export");
+    let path = scene(&d, STUDY);
+    let inp = d.join("study.inp");
+    let o = nonlin3d(&["export", p(&path), "--inp", p(&inp)]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("[sweep] table") && err.contains("sweep plan"),
+        "{err}"
+    );
+    assert!(!err.contains("unknown field"), "{err}");
+    assert!(!inp.exists());
+    let plan = d.join("plan");
+    ok(&["sweep", "plan", p(&path), "--out", p(&plan)]);
+    let case = plan.join("cases/0000/scene.toml");
+    ok(&["export", p(&case), "--inp", p(&inp)]);
+    assert!(inp.exists());
+}
