@@ -120,36 +120,6 @@ fn export_then_solve_gives_the_contact_set_and_displacements_of_run() {
     assert!(closed_at_end > 0);
 }
 
-/// The displacements (u, v, w of each node in turn) at the ends of the steps in a CalculiX .dat
-/// file: (total time, displacements by DOF).
-fn ccx_u(dat: &str, nodes: usize) -> Vec<(f64, Vec<f64>)> {
-    let mut out = Vec::new();
-    for block in dat.split("displacements").skip(1) {
-        let mut lines = block.lines();
-        let time = lines
-            .next()
-            .and_then(|h| h.split_whitespace().last())
-            .and_then(|t| t.parse::<f64>().ok())
-            .unwrap_or(f64::NAN);
-        let mut u = vec![f64::NAN; 3 * nodes];
-        for line in lines {
-            let f: Vec<&str> = line.split_whitespace().collect();
-            if f.len() != 4 {
-                if !f.is_empty() {
-                    break;
-                }
-                continue;
-            }
-            let Ok(id) = f[0].parse::<usize>() else { break };
-            for k in 0..3 {
-                u[3 * (id - 1) + k] = f[k + 1].parse::<f64>().unwrap_or(f64::NAN);
-            }
-        }
-        out.push((time, u));
-    }
-    out
-}
-
 /// CalculiX with contact against nonlin3d with contact, on the exported deck. Two measures at
 /// every level:
 /// - centre deflection (the `center_top` node): within 0.5 %, a tenth of what contact changes
@@ -179,7 +149,8 @@ fn calculix_with_contact_agrees_with_nonlin3d_on_deflection_and_contact_extent()
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     std::fs::write(dir.join("contact.inp"), &text).unwrap();
-    let blocks = ccx_u(&common::ccx::run(&dir, "contact"), model.mesh.nodes.len());
+    let blocks =
+        common::ccx::displacements(&common::ccx::run(&dir, "contact"), model.mesh.nodes.len());
     let problem = nonlin3d::analysis::build_problem(&s, model).unwrap();
     let faces = CrackFaces::from_mesh(&model.mesh).unwrap();
     let pairs = faces.pairs();

@@ -52,3 +52,33 @@ pub fn run(dir: &Path, name: &str) -> String {
     );
     std::fs::read_to_string(dir.join(format!("{name}.dat"))).unwrap()
 }
+
+/// The displacements (u, v, w of each node in turn) at the ends of the steps in a CalculiX .dat
+/// file: (total time, displacements by DOF).
+pub fn displacements(dat: &str, nodes: usize) -> Vec<(f64, Vec<f64>)> {
+    let mut out = Vec::new();
+    for block in dat.split("displacements").skip(1) {
+        let mut lines = block.lines();
+        let time = lines
+            .next()
+            .and_then(|h| h.split_whitespace().last())
+            .and_then(|t| t.parse::<f64>().ok())
+            .unwrap_or(f64::NAN);
+        let mut u = vec![f64::NAN; 3 * nodes];
+        for line in lines {
+            let f: Vec<&str> = line.split_whitespace().collect();
+            if f.len() != 4 {
+                if !f.is_empty() {
+                    break;
+                }
+                continue;
+            }
+            let Ok(id) = f[0].parse::<usize>() else { break };
+            for k in 0..3 {
+                u[3 * (id - 1) + k] = f[k + 1].parse::<f64>().unwrap_or(f64::NAN);
+            }
+        }
+        out.push((time, u));
+    }
+    out
+}
