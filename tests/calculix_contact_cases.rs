@@ -8,7 +8,7 @@
 
 mod common;
 
-use nonlin3d::results::Results;
+use nonlin3d::results::{Faces, Results};
 use nonlin3d::scene::Scene;
 use nonlin3d_contact::CrackFaces;
 use std::path::Path;
@@ -91,6 +91,11 @@ fn both(s: &Scene, name: &str) -> (Results, Measures, Measures) {
         .unwrap_or_else(|| panic!("no CalculiX output at the end of step {end}"));
     let faces = CrackFaces::from_mesh(&model.mesh).unwrap();
     let level = ours.levels.last().unwrap();
+    // With contact no front point overlaps, and a closed one has G_I = 0.
+    assert_eq!(level.overlapped(), 0, "{name}");
+    for row in level.front.iter().filter(|r| r.faces == Faces::Closed) {
+        assert_eq!(row.g_i, 0.0, "{name}: S = {} mm", row.s_mm);
+    }
     let n = faces.normals(&level.displacements).unwrap();
     let g_ours = faces.gaps(&level.displacements, &n);
     let g_ccx = faces
@@ -200,15 +205,10 @@ fn thick_sublaminate_against_calculix() {
         &[-0.012],
     );
     let (ours, a, b) = both(&s, "thick");
-    let closed = ours
-        .levels
-        .last()
-        .unwrap()
-        .contact
-        .as_ref()
-        .unwrap()
-        .pairs_closed;
-    assert!(closed > 0);
+    let level = ours.levels.last().unwrap();
+    assert!(level.contact.as_ref().unwrap().pairs_closed > 0);
+    // The corner on the load axis (S = 23.41 mm) is held closed.
+    assert!(level.front.iter().any(|r| r.faces == Faces::Closed));
     check("thick", &a, &b, 1, 0.75);
 }
 
