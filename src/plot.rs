@@ -13,19 +13,25 @@ mod legend;
 
 use crate::Error;
 use crate::results::{Faces, FrontRow, Results};
+pub(crate) use legend::series_legend;
 use legend::{Entry, Icon, draw_legend};
 use plotters::coord::Shift;
+use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
+use std::ops::Range;
 use std::path::Path;
 
 /// The drawing surface of every plot.
-type Area<'a> = DrawingArea<SVGBackend<'a>, Shift>;
+pub(crate) type Area<'a> = DrawingArea<SVGBackend<'a>, Shift>;
+
+/// A chart of f64 against f64 on an [`Area`] borrowed for `'a`.
+type Chart<'a, 'b> = ChartContext<'a, SVGBackend<'b>, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
 
 /// Points of a curve, (x, y) in the chart's units.
 type Curve = [(f64, f64)];
 
 /// A drawing error, as text (plotters' error types are generic over the backend).
-type Drawn = Result<(), String>;
+pub(crate) type Drawn = Result<(), String>;
 
 /// One colour per level, cycled (matplotlib's "tab10": distinct on white and in grey print).
 const COLOURS: [RGBColor; 10] = [
@@ -44,15 +50,16 @@ const COLOURS: [RGBColor; 10] = [
 /// Width of the legend panel beside a chart, px.
 const LEGEND_W: u32 = 370;
 
-fn plot_err(path: &Path, reason: String) -> Error {
+/// The error of a plot that could not be drawn or written to `path`: what plotters said.
+pub(crate) fn plot_err(path: &Path, reason: impl std::fmt::Display) -> Error {
     Error::Plot {
         path: path.to_path_buf(),
-        reason,
+        reason: reason.to_string(),
     }
 }
 
 /// Maps any displayable drawing error to text.
-fn text<E: std::fmt::Display>(e: E) -> String {
+pub(crate) fn text<E: std::fmt::Display>(e: E) -> String {
     e.to_string()
 }
 
@@ -135,6 +142,32 @@ fn marker_entries<'a>(rows: impl Iterator<Item = &'a FrontRow> + Clone) -> Vec<E
     out
 }
 
+/// A chart on `area` under `caption` (none if empty) with its x and y ranges and axis labels.
+fn axes<'a, 'b>(
+    area: &'a Area<'b>,
+    caption: &str,
+    (x, x_desc): (Range<f64>, &str),
+    (y, y_desc): (Range<f64>, &str),
+) -> Result<Chart<'a, 'b>, String> {
+    let mut builder = ChartBuilder::on(area);
+    if !caption.is_empty() {
+        builder.caption(caption, ("sans-serif", 15));
+    }
+    let mut chart = builder
+        .margin(12)
+        .x_label_area_size(45)
+        .y_label_area_size(70)
+        .build_cartesian_2d(x, y)
+        .map_err(text)?;
+    chart
+        .configure_mesh()
+        .x_desc(x_desc)
+        .y_desc(y_desc)
+        .draw()
+        .map_err(text)?;
+    Ok(chart)
+}
+
 /// One front quantity against S, a line per level, markers by face state: `y` of each row
 /// (None: not drawn, e.g. no failure index where the faces overlap); a dashed red line at
 /// `threshold` when given. Returns the largest `y` drawn.
@@ -154,22 +187,15 @@ fn front_chart(
     // The onset line only where the curves come near it (else it would flatten them).
     let threshold = threshold.filter(|(t, _)| largest >= 0.2 * t);
     let (y_lo, y_hi) = range(rows().filter_map(y).chain(threshold.map(|(t, _)| 1.05 * t)));
-    let mut builder = ChartBuilder::on(&chart_area);
-    if !caption.is_empty() {
-        builder.caption(caption, ("sans-serif", 15));
-    }
-    let mut chart = builder
-        .margin(12)
-        .x_label_area_size(45)
-        .y_label_area_size(70)
-        .build_cartesian_2d(0.0..s_hi, y_lo..y_hi)
-        .map_err(text)?;
-    chart
-        .configure_mesh()
-        .x_desc("S, arc length along the front from the x axis (mm)")
-        .y_desc(y_desc)
-        .draw()
-        .map_err(text)?;
+    let mut chart = axes(
+        &chart_area,
+        caption,
+        (
+            0.0..s_hi,
+            "S, arc length along the front from the x axis (mm)",
+        ),
+        (y_lo..y_hi, y_desc),
+    )?;
     let mut entries = Vec::new();
     for (k, level) in results.levels.iter().enumerate() {
         let colour = COLOURS[k % COLOURS.len()].to_rgba();
@@ -237,22 +263,12 @@ fn deflection_chart(area: &Area, results: &Results, caption: &str) -> Drawn {
     let separation = series(|l| l.max_face_separation_mm);
     let x_hi = range(centre.iter().map(|p| p.0)).1;
     let y_hi = range(centre.iter().chain(&separation).map(|p| p.1)).1;
-    let mut builder = ChartBuilder::on(area);
-    if !caption.is_empty() {
-        builder.caption(caption, ("sans-serif", 15));
-    }
-    let mut chart = builder
-        .margin(12)
-        .x_label_area_size(45)
-        .y_label_area_size(70)
-        .build_cartesian_2d(0.0..x_hi, 0.0..y_hi)
-        .map_err(text)?;
-    chart
-        .configure_mesh()
-        .x_desc(applied_axis(results))
-        .y_desc("deflection (mm)")
-        .draw()
-        .map_err(text)?;
+    let mut chart = axes(
+        area,
+        caption,
+        (0.0..x_hi, applied_axis(results)),
+        (0.0..y_hi, "deflection (mm)"),
+    )?;
     let lines: [(&str, &Curve, RGBAColor); 2] = [
         (
             "|w| at the centre, sublaminate top (base included)",
@@ -277,14 +293,23 @@ fn deflection_chart(area: &Area, results: &Results, caption: &str) -> Drawn {
             .draw_series(pts.iter().map(|&p| Circle::new(p, 3, colour.filled())))
             .map_err(text)?;
     }
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::UpperLeft)
+    series_legend(&mut chart, SeriesLabelPosition::UpperLeft)
         .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
         .label_font(("sans-serif", 13))
         .draw()
         .map_err(text)
+}
+
+/// Draws into an SVG at `path` of `size` px, white, with `draw`, naming the file in any error.
+pub(crate) fn svg_file(
+    path: &Path,
+    size: (u32, u32),
+    draw: impl FnOnce(&Area) -> Drawn,
+) -> Result<(), Error> {
+    let root = SVGBackend::new(path, size).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| plot_err(path, e))?;
+    draw(&root).map_err(|e| plot_err(path, e))?;
+    root.present().map_err(|e| plot_err(path, e))
 }
 
 /// Draws into an SVG at `path` of `size` px under `title` (across the whole width) with
@@ -295,14 +320,9 @@ fn svg(
     title: &str,
     draw: impl FnOnce(&Area) -> Drawn,
 ) -> Result<(), Error> {
-    let root = SVGBackend::new(path, size).into_drawing_area();
-    root.fill(&WHITE)
-        .map_err(|e| plot_err(path, e.to_string()))?;
-    let area = root
-        .titled(title, ("sans-serif", 17))
-        .map_err(|e| plot_err(path, e.to_string()))?;
-    draw(&area).map_err(|e| plot_err(path, e))?;
-    root.present().map_err(|e| plot_err(path, e.to_string()))
+    svg_file(path, size, |root| {
+        draw(&root.titled(title, ("sans-serif", 17)).map_err(text)?)
+    })
 }
 
 /// `label` (J/m²) of each front row, `g`, against S, one line per level (Figs. 5.1.3–5.1.5).

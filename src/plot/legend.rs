@@ -1,7 +1,10 @@
 //! A legend panel beside a chart (never over the data): one row per entry, an icon drawn as
-//! the chart draws it and a text of one or more lines.
+//! the chart draws it and a text of one or more lines; and the look of plotters' own legend
+//! of a chart's labelled series ([`series_legend`]).
 
 use super::{Area, Drawn, text};
+use plotters::chart::SeriesLabelStyle;
+use plotters::coord::CoordTranslate;
 use plotters::element::DashedPathElement;
 use plotters::prelude::*;
 
@@ -94,4 +97,19 @@ pub fn draw_legend(area: &Area, entries: &[Entry]) -> Drawn {
         y += e.text.lines().count() as i32 * LINE + 6;
     }
     Ok(())
+}
+
+/// Plotters' legend of `chart`'s labelled series (`.label(…).legend(…)`) at `position`, in a
+/// black-bordered box of white at 80 % opacity over the data; the caller may restyle it
+/// further, then `.draw()`s it.
+pub(crate) fn series_legend<'a, 'b, DB: DrawingBackend + 'a, CT: CoordTranslate>(
+    chart: &'b mut ChartContext<'a, DB, CT>,
+    position: SeriesLabelPosition,
+) -> SeriesLabelStyle<'a, 'b, DB, CT> {
+    let mut style = chart.configure_series_labels();
+    style
+        .position(position)
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK);
+    style
 }

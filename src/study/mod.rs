@@ -45,33 +45,13 @@ pub struct Common {
     /// `[loads]` fields.
     #[serde(default)]
     pub loads: Option<toml::Table>,
-    /// `[mesh]` fields.
-    #[serde(default)]
-    pub mesh: Option<toml::Table>,
-    /// `[analysis]` fields.
-    #[serde(default)]
-    pub analysis: Option<toml::Table>,
-    /// `[contact]` fields.
-    #[serde(default)]
-    pub contact: Option<toml::Table>,
-    /// `[substructure]` fields.
-    #[serde(default)]
-    pub substructure: Option<toml::Table>,
+    /// The knob tables.
+    #[serde(flatten)]
+    pub knobs: Knobs,
 }
 
-impl Common {
-    /// Its knob tables.
-    pub fn knobs(&self) -> Knobs {
-        Knobs {
-            mesh: self.mesh.clone(),
-            analysis: self.analysis.clone(),
-            contact: self.contact.clone(),
-            substructure: self.substructure.clone(),
-        }
-    }
-}
-
-/// The scene tables a case may change.
+/// The scene tables a case may change (flattened into [`Common`] and [`CaseSpec`], whose
+/// `deny_unknown_fields` refuses any other table).
 #[derive(Debug, Clone, PartialEq, Default, Deserialize, Serialize)]
 pub struct Knobs {
     /// `[mesh]` fields.
@@ -88,6 +68,18 @@ pub struct Knobs {
     pub substructure: Option<toml::Table>,
 }
 
+impl Knobs {
+    /// The scene tables by name, in the order described and merged.
+    fn tables(&self) -> [(&'static str, Option<&toml::Table>); 4] {
+        [
+            ("mesh", self.mesh.as_ref()),
+            ("analysis", self.analysis.as_ref()),
+            ("contact", self.contact.as_ref()),
+            ("substructure", self.substructure.as_ref()),
+        ]
+    }
+}
+
 /// One `[[case]]`.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -101,36 +93,22 @@ pub struct CaseSpec {
     /// Unset: N^(−1/d) with N the DOFs and d = 3 (d = 2 for a through-width strip).
     #[serde(default)]
     pub h: Option<f64>,
-    /// `[mesh]` fields.
-    #[serde(default)]
-    pub mesh: Option<toml::Table>,
-    /// `[analysis]` fields.
-    #[serde(default)]
-    pub analysis: Option<toml::Table>,
-    /// `[contact]` fields.
-    #[serde(default)]
-    pub contact: Option<toml::Table>,
-    /// `[substructure]` fields.
-    #[serde(default)]
-    pub substructure: Option<toml::Table>,
-}
-
-impl CaseSpec {
     /// Its knob tables.
-    pub fn knobs(&self) -> Knobs {
-        Knobs {
-            mesh: self.mesh.clone(),
-            analysis: self.analysis.clone(),
-            contact: self.contact.clone(),
-            substructure: self.substructure.clone(),
-        }
-    }
+    #[serde(flatten)]
+    pub knobs: Knobs,
 }
 
 impl Plan {
-    /// Parses a knobs file; errors name the line and field.
+    /// Parses a knobs file; errors name the line and field, and the case of an unknown one.
     pub fn from_toml(text: &str) -> Result<Self, Error> {
-        let plan: Self = toml::from_str(text).map_err(|e| Error::Scene(e.to_string()))?;
+        let plan: Self = toml::from_str(text).map_err(|e| {
+            // Under `flatten`, toml places an unknown field at its table's header only.
+            let e = e.to_string();
+            match unknown_field(text, &e) {
+                Some(named) => Error::Scene(format!("{named}\n{e}")),
+                None => Error::Scene(e),
+            }
+        })?;
         if plan.cases.is_empty() {
             return Err(Error::Scene("no [[case]]".into()));
         }
@@ -174,12 +152,12 @@ impl Plan {
         if let Some(loads) = &self.common.loads {
             merge(&mut common, "loads", loads);
         }
-        merge_knobs(&mut common, &self.common.knobs());
+        merge_knobs(&mut common, &self.common.knobs);
         self.cases
             .iter()
             .map(|c| {
                 let mut t = common.clone();
-                merge_knobs(&mut t, &c.knobs());
+                merge_knobs(&mut t, &c.knobs);
                 let mut s: Scene = toml::Value::Table(t)
                     .try_into()
                     .map_err(|e| Error::Scene(format!("case '{}': {e}", c.name)))?;
@@ -192,29 +170,56 @@ impl Plan {
     }
 }
 
+/// The fields of `[common]` and of a `[[case]]` besides the knob tables, as their structs name
+/// them (for messages).
+const COMMON_FIELDS: [&str; 1] = ["loads"];
+const CASE_FIELDS: [&str; 3] = ["name", "family", "h"];
+
+/// Where the unknown field of toml's `message` stands in `text`: the table (`[common]` or the
+/// case by name), the field and the fields that table takes.
+fn unknown_field(text: &str, message: &str) -> Option<String> {
+    let field = message.split("unknown field `").nth(1)?.split('`').next()?;
+    let raw: toml::Table = toml::from_str(text).ok()?;
+    let knobs = Knobs::default().tables().map(|(name, _)| name);
+    let check = |table: String, value: &toml::Value, own: &[&str]| {
+        let known = own.contains(&field) || knobs.contains(&field);
+        (!known && value.get(field).is_some()).then(|| {
+            format!(
+                "{table}: unknown field `{field}`; it takes {}, {}",
+                own.join(", "),
+                knobs.join(", ")
+            )
+        })
+    };
+    let common = raw
+        .get("common")
+        .and_then(|c| check("[common]".into(), c, &COMMON_FIELDS));
+    common.or_else(|| {
+        let cases = raw.get("case")?.as_array()?;
+        cases.iter().enumerate().find_map(|(k, c)| {
+            let table = match c.get("name").and_then(toml::Value::as_str) {
+                Some(name) => format!("case '{name}'"),
+                None => format!("case {}", k + 1),
+            };
+            check(table, c, &CASE_FIELDS)
+        })
+    })
+}
+
 /// The knobs of a case as one line (`mesh.slices=8 analysis.newton="bfgs"`).
 pub fn describe(knobs: &Knobs) -> String {
     let mut out = Vec::new();
-    for (name, t) in [
-        ("mesh", &knobs.mesh),
-        ("analysis", &knobs.analysis),
-        ("contact", &knobs.contact),
-        ("substructure", &knobs.substructure),
-    ] {
-        for (k, v) in t.iter().flat_map(|t| t.iter()) {
+    for (name, t) in knobs.tables() {
+        for (k, v) in t.into_iter().flatten() {
             out.push(format!("{name}.{k}={v}"));
         }
     }
     out.join(" ")
 }
 
+/// Merges each knob table given into the scene's table of that name ([`merge`]).
 fn merge_knobs(scene: &mut toml::Table, knobs: &Knobs) {
-    for (name, t) in [
-        ("mesh", &knobs.mesh),
-        ("analysis", &knobs.analysis),
-        ("contact", &knobs.contact),
-        ("substructure", &knobs.substructure),
-    ] {
+    for (name, t) in knobs.tables() {
         if let Some(t) = t {
             merge(scene, name, t);
         }
@@ -387,3 +392,6 @@ pub struct Study {
     /// reference is at least a tenth of the reference G_T max.
     pub worst_over: Vec<&'static str>,
 }
+
+#[cfg(test)]
+mod tests;

@@ -68,7 +68,7 @@ pub fn run(
             });
             let mut case = measure(&scenes[k]);
             case.name = spec.name.clone();
-            case.knobs = describe(&spec.knobs());
+            case.knobs = describe(&spec.knobs);
             case.family = spec.family;
             case.h = spec.h;
             progress(Event::Finished {

@@ -3,6 +3,8 @@
 
 use super::{CaseResult, G_QUANTITIES, QUANTITIES, Study};
 use crate::Error;
+use crate::plot::{series_legend, svg_file, text};
+use crate::report::Csv;
 use plotters::prelude::*;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -22,55 +24,56 @@ pub fn write_all(study: &Study, dir: &Path) -> Result<(), Error> {
     svg(study, &dir.join("study.svg"))
 }
 
-/// A CSV field, quoted when it holds a comma, a quote or a line break.
-fn field(text: &str) -> String {
-    if text.contains([',', '"', '\n']) {
-        format!("\"{}\"", text.replace('"', "\"\""))
-    } else {
-        text.to_string()
-    }
-}
-
 fn opt(x: Option<f64>) -> String {
     x.map(|v| format!("{v:.8e}")).unwrap_or_default()
 }
 
 /// One row per case: name, family, h, DOFs, times, the quantities, their relative errors, the
-/// worst G error, whether on the Pareto front, why it failed, the knobs.
+/// worst G error, whether on the Pareto front, why it failed, the knobs (RFC 4180 quoting).
 pub fn csv(study: &Study) -> String {
-    let mut out = String::from("case,family,h,dofs,wall_s,cpu_s,iterations");
-    for (name, _) in QUANTITIES {
-        let _ = write!(out, ",{name}");
-    }
-    for (name, _) in QUANTITIES {
-        let _ = write!(out, ",error_{name}");
-    }
-    out.push_str(",worst_g_error,pareto,failed,knobs\n");
+    let errors: Vec<String> = QUANTITIES
+        .iter()
+        .map(|(name, _)| format!("error_{name}"))
+        .collect();
+    let mut header = vec![
+        "case",
+        "family",
+        "h",
+        "dofs",
+        "wall_s",
+        "cpu_s",
+        "iterations",
+    ];
+    header.extend(QUANTITIES.iter().map(|(name, _)| *name));
+    header.extend(errors.iter().map(String::as_str));
+    header.extend(["worst_g_error", "pareto", "failed", "knobs"]);
+    let mut t = Csv::new(&header);
     for c in &study.cases {
-        let _ = write!(
-            out,
-            "{},{},{},{},{:.4},{},{}",
-            field(&c.name),
-            c.family,
+        let mut row = vec![
+            c.name.clone(),
+            c.family.to_string(),
             opt(c.h),
-            c.dofs,
-            c.wall_s,
+            c.dofs.to_string(),
+            format!("{:.4}", c.wall_s),
             c.cpu_s.map(|t| format!("{t:.4}")).unwrap_or_default(),
-            c.iterations
+            c.iterations.to_string(),
+        ];
+        row.extend(
+            c.values
+                .values()
+                .into_iter()
+                .chain(c.errors.values())
+                .map(opt),
         );
-        for v in c.values.values().into_iter().chain(c.errors.values()) {
-            let _ = write!(out, ",{}", opt(v));
-        }
-        let _ = writeln!(
-            out,
-            ",{},{},{},{}",
+        row.extend([
             opt(c.worst_g_error),
-            c.pareto,
-            field(c.failed.as_deref().unwrap_or("")),
-            field(&c.knobs)
-        );
+            c.pareto.to_string(),
+            c.failed.clone().unwrap_or_default(),
+            c.knobs.clone(),
+        ]);
+        t.row(row);
     }
-    out
+    t.finish()
 }
 
 /// The labels of the quantities the worst G error is taken over.
@@ -190,13 +193,6 @@ fn significant(v: f64) -> String {
     }
 }
 
-fn plot_err(path: &Path, e: impl std::fmt::Display) -> Error {
-    Error::Plot {
-        path: path.to_path_buf(),
-        reason: e.to_string(),
-    }
-}
-
 /// The Pareto plot: CPU seconds (log) against the worst |relative error| of the G quantities
 /// in %, each case a hollow circle named beside it (the family's filled grey), the front
 /// red and joined by its staircase.
@@ -221,84 +217,75 @@ pub fn svg(study: &Study, path: &Path) -> Result<(), Error> {
     };
     let (t_lo, t_hi) = span(&mut pts.iter().map(|p| p.1));
     let e_hi = 1.1 * pts.iter().map(|p| p.2).fold(0.0, f64::max).max(1e-3);
-    let root = SVGBackend::new(path, (800, 560)).into_drawing_area();
-    root.fill(&WHITE).map_err(|e| plot_err(path, e))?;
-    let mut chart = ChartBuilder::on(&root)
-        .caption(
-            format!("Speed against error — {}", study.title),
-            ("sans-serif", 16),
-        )
-        .margin(14)
-        .x_label_area_size(44)
-        .y_label_area_size(70)
-        .build_cartesian_2d((t_lo..t_hi).log_scale(), 0.0..e_hi)
-        .map_err(|e| plot_err(path, e))?;
-    chart
-        .configure_mesh()
-        .x_labels(8)
-        .y_labels(8)
-        .x_label_formatter(&|v| significant(*v))
-        .y_label_formatter(&|v| significant(*v))
-        .light_line_style(WHITE)
-        .x_desc("CPU time of the case, one thread (s)")
-        .y_desc(format!("largest |error| of {} (%)", worst_labels(study)))
-        .draw()
-        .map_err(|e| plot_err(path, e))?;
-    let at = |e: f64| e;
-    let grey = RGBColor(120, 120, 120);
-    chart
-        .draw_series(
-            pts.iter()
-                .filter(|p| !p.0.pareto)
-                .map(|p| Circle::new((p.1, at(p.2)), 4, BLUE.stroke_width(1))),
-        )
-        .map_err(|e| plot_err(path, e))?
-        .label("case")
-        .legend(|(x, y)| Circle::new((x + 10, y), 4, BLUE.stroke_width(1)));
-    chart
-        .draw_series(
-            pts.iter()
-                .filter(|p| p.0.family)
-                .map(|p| Circle::new((p.1, at(p.2)), 2, grey.filled())),
-        )
-        .map_err(|e| plot_err(path, e))?
-        .label("refinement family (the references)")
-        .legend(move |(x, y)| Circle::new((x + 10, y), 2, grey.filled()));
-    let mut front: Vec<(f64, f64)> = pts
-        .iter()
-        .filter(|p| p.0.pareto)
-        .map(|p| (p.1, at(p.2)))
-        .collect();
-    front.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let mut stairs = Vec::new();
-    for w in front.windows(2) {
-        stairs.extend([w[0], (w[1].0, w[0].1)]);
-    }
-    stairs.extend(front.last());
-    chart
-        .draw_series(LineSeries::new(stairs, RED.stroke_width(1)))
-        .map_err(|e| plot_err(path, e))?;
-    chart
-        .draw_series(front.iter().map(|&p| Circle::new(p, 5, RED.filled())))
-        .map_err(|e| plot_err(path, e))?
-        .label("Pareto front: no case faster and more accurate")
-        .legend(|(x, y)| Circle::new((x + 10, y), 5, RED.filled()));
-    chart
-        .draw_series(pts.iter().map(|p| {
-            Text::new(
-                p.0.name.clone(),
-                (p.1, at(p.2)),
-                ("sans-serif", 11).into_font(),
+    svg_file(path, (800, 560), |root| {
+        let mut chart = ChartBuilder::on(root)
+            .caption(
+                format!("Speed against error — {}", study.title),
+                ("sans-serif", 16),
             )
-        }))
-        .map_err(|e| plot_err(path, e))?;
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::UpperRight)
-        .background_style(WHITE.mix(0.8))
-        .border_style(BLACK)
-        .draw()
-        .map_err(|e| plot_err(path, e))?;
-    root.present().map_err(|e| plot_err(path, e))?;
-    Ok(())
+            .margin(14)
+            .x_label_area_size(44)
+            .y_label_area_size(70)
+            .build_cartesian_2d((t_lo..t_hi).log_scale(), 0.0..e_hi)
+            .map_err(text)?;
+        chart
+            .configure_mesh()
+            .x_labels(8)
+            .y_labels(8)
+            .x_label_formatter(&|v| significant(*v))
+            .y_label_formatter(&|v| significant(*v))
+            .light_line_style(WHITE)
+            .x_desc("CPU time of the case, one thread (s)")
+            .y_desc(format!("largest |error| of {} (%)", worst_labels(study)))
+            .draw()
+            .map_err(text)?;
+        let grey = RGBColor(120, 120, 120);
+        chart
+            .draw_series(
+                pts.iter()
+                    .filter(|p| !p.0.pareto)
+                    .map(|p| Circle::new((p.1, p.2), 4, BLUE.stroke_width(1))),
+            )
+            .map_err(text)?
+            .label("case")
+            .legend(|(x, y)| Circle::new((x + 10, y), 4, BLUE.stroke_width(1)));
+        chart
+            .draw_series(
+                pts.iter()
+                    .filter(|p| p.0.family)
+                    .map(|p| Circle::new((p.1, p.2), 2, grey.filled())),
+            )
+            .map_err(text)?
+            .label("refinement family (the references)")
+            .legend(move |(x, y)| Circle::new((x + 10, y), 2, grey.filled()));
+        let mut front: Vec<(f64, f64)> = pts
+            .iter()
+            .filter(|p| p.0.pareto)
+            .map(|p| (p.1, p.2))
+            .collect();
+        front.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let mut stairs = Vec::new();
+        for w in front.windows(2) {
+            stairs.extend([w[0], (w[1].0, w[0].1)]);
+        }
+        stairs.extend(front.last());
+        chart
+            .draw_series(LineSeries::new(stairs, RED.stroke_width(1)))
+            .map_err(text)?;
+        chart
+            .draw_series(front.iter().map(|&p| Circle::new(p, 5, RED.filled())))
+            .map_err(text)?
+            .label("Pareto front: no case faster and more accurate")
+            .legend(|(x, y)| Circle::new((x + 10, y), 5, RED.filled()));
+        chart
+            .draw_series(
+                pts.iter().map(|p| {
+                    Text::new(p.0.name.clone(), (p.1, p.2), ("sans-serif", 11).into_font())
+                }),
+            )
+            .map_err(text)?;
+        series_legend(&mut chart, SeriesLabelPosition::UpperRight)
+            .draw()
+            .map_err(text)
+    })
 }

@@ -48,24 +48,33 @@ fn case() -> impl Strategy<Value = Case> {
     (2usize..60).prop_flat_map(|n| {
         let list = proptest::collection::btree_set(0..n, 1..=6.min(n))
             .prop_map(|s| s.into_iter().collect::<Vec<_>>());
-        (
-            Just(n),
-            proptest::collection::vec(list, 1..(2 * n)),
-            proptest::collection::vec(-1.0..1.0f64, 36 * 2 * n),
-            proptest::collection::vec(any::<bool>(), n),
-            proptest::collection::vec(-1.0..1.0f64, n),
-        )
-            .prop_map(|(n, lists, raw, signs, rhs)| {
-                let blocks = spd_blocks(&lists, &raw);
-                Case {
-                    n,
-                    lists,
-                    blocks,
-                    signs,
-                    rhs,
-                }
-            })
+        with_lists(n, proptest::collection::vec(list, 1..(2 * n)))
     })
+}
+
+/// Cases of `n` DOFs on the DOF lists that `lists` draws: a block per list ([`spd_blocks`], 36
+/// random numbers each), the signs of the indefinite variant and a right-hand side.
+fn with_lists(
+    n: usize,
+    lists: impl Strategy<Value = Vec<Vec<usize>>>,
+) -> impl Strategy<Value = Case> {
+    (
+        Just(n),
+        lists,
+        proptest::collection::vec(-1.0..1.0f64, 36 * 2 * n),
+        proptest::collection::vec(any::<bool>(), n),
+        proptest::collection::vec(-1.0..1.0f64, n),
+    )
+        .prop_map(|(n, lists, raw, signs, rhs)| {
+            let blocks = spd_blocks(&lists, &raw);
+            Case {
+                n,
+                lists,
+                blocks,
+                signs,
+                rhs,
+            }
+        })
 }
 
 fn assemble(c: &Case, indefinite: bool) -> SymmetricMatrix {
@@ -147,23 +156,7 @@ fn banded_case() -> impl Strategy<Value = Case> {
     (100usize..400).prop_flat_map(|n| {
         let list = (0..n - 8, proptest::collection::btree_set(0usize..8, 2..=6))
             .prop_map(|(s, offs)| offs.into_iter().map(|o| s + o).collect::<Vec<_>>());
-        (
-            Just(n),
-            proptest::collection::vec(list, n..(2 * n)),
-            proptest::collection::vec(-1.0..1.0f64, 36 * 2 * n),
-            proptest::collection::vec(any::<bool>(), n),
-            proptest::collection::vec(-1.0..1.0f64, n),
-        )
-            .prop_map(|(n, lists, raw, signs, rhs)| {
-                let blocks = spd_blocks(&lists, &raw);
-                Case {
-                    n,
-                    lists,
-                    blocks,
-                    signs,
-                    rhs,
-                }
-            })
+        with_lists(n, proptest::collection::vec(list, n..(2 * n)))
     })
 }
 

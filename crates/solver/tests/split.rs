@@ -10,10 +10,11 @@
 
 mod common;
 
-use common::{box_matrix, lcg};
+use common::box_matrix;
 use nonlin3d_solver::{
     FaerMode, FaerOrdering, FaerSolver, FaerSplit, LinearSolver, SymmetricMatrix,
 };
+use nonlin3d_testkit::Lcg;
 
 fn solver(split: FaerSplit) -> FaerSolver {
     let mut s = FaerSolver::new(FaerMode::Ldlt).with_ordering(FaerOrdering::NestedDissection);
@@ -81,8 +82,8 @@ fn split_matches_the_unsplit_factor() {
     for shift in [0.0, 1.5] {
         let a = box_matrix([6, 6, 4], shift);
         let n = a.n();
-        let mut seed = 5;
-        let b: Vec<f64> = (0..n).map(|_| lcg(&mut seed)).collect();
+        let mut rng = Lcg::new(5);
+        let b: Vec<f64> = (0..n).map(|_| rng.uniform(-1.0, 1.0)).collect();
         let mut whole = solver(FaerSplit::Off);
         whole.analyze(a.pattern()).unwrap();
         let f = whole.factorize(&a).unwrap();

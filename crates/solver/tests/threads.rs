@@ -12,10 +12,11 @@
 
 mod common;
 
-use common::{box_matrix, lcg};
+use common::box_matrix;
 use nonlin3d_solver::{
     FaerMode, FaerOrdering, FaerSolver, FaerSplit, FaerStructure, LinearSolver, SymmetricMatrix,
 };
+use nonlin3d_testkit::Lcg;
 
 /// The solution of A x = b (b pseudo-random) and the inertia on `threads` threads, unsplit
 /// or split at the top separator.
@@ -29,8 +30,8 @@ fn solve_on(a: &SymmetricMatrix, threads: usize, split: FaerSplit) -> (Vec<f64>,
     assert_eq!(s.split_sizes().is_some(), split == FaerSplit::Halves);
     let f = s.factorize(a).unwrap();
     assert_eq!(s.split_fallback(), None);
-    let mut seed = 11;
-    let mut x: Vec<f64> = (0..a.n()).map(|_| lcg(&mut seed)).collect();
+    let mut rng = Lcg::new(11);
+    let mut x: Vec<f64> = (0..a.n()).map(|_| rng.uniform(-1.0, 1.0)).collect();
     s.solve_in_place(&mut x, 1).unwrap();
     (x, f.negative_pivots)
 }

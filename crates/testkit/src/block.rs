@@ -89,6 +89,47 @@ impl Block {
     }
 }
 
+/// The DOF lists of a box of n₀ × n₁ × n₂ Hex20 cells (8 corners, 12 mid-edges), 3 DOFs a
+/// node, for sparsity patterns: the nodes are the points of the doubled grid with at most one
+/// odd coordinate, numbered in grid order (x fastest, then y, then z), and each cell lists its
+/// 20 nodes in that order too (not the element's numbering: only which DOFs meet counts).
+/// Returns the number of DOFs and the lists, cells x fastest.
+pub fn hex20_dof_lists([nx, ny, nz]: [usize; 3]) -> (usize, Vec<Vec<usize>>) {
+    let (lx, ly) = (2 * nx + 1, 2 * ny + 1);
+    let mut id = vec![usize::MAX; lx * ly * (2 * nz + 1)];
+    let mut count = 0;
+    for k in 0..=2 * nz {
+        for j in 0..ly {
+            for i in 0..lx {
+                if (i % 2) + (j % 2) + (k % 2) <= 1 {
+                    id[(k * ly + j) * lx + i] = count;
+                    count += 1;
+                }
+            }
+        }
+    }
+    let mut lists = Vec::new();
+    for ez in 0..nz {
+        for ey in 0..ny {
+            for ex in 0..nx {
+                let mut l = Vec::new();
+                for k in 2 * ez..=2 * ez + 2 {
+                    for j in 2 * ey..=2 * ey + 2 {
+                        for i in 2 * ex..=2 * ex + 2 {
+                            let node = id[(k * ly + j) * lx + i];
+                            if node != usize::MAX {
+                                l.extend((0..3).map(|d| 3 * node + d));
+                            }
+                        }
+                    }
+                }
+                lists.push(l);
+            }
+        }
+    }
+    (3 * count, lists)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -111,5 +152,24 @@ mod tests {
         assert_eq!(b.coords[b.cells[5][6]], [3.0, 1.0, 0.25]);
         assert!(b.on_boundary(0));
         assert_eq!(b.cell_dofs()[0][..3], [0, 1, 2]);
+    }
+
+    /// A Hex20 box has a node at every corner and edge middle of its grid, 20 in each cell,
+    /// and cells side by side share the 8 nodes of their common face.
+    #[test]
+    fn a_hex20_box_lists_corners_and_mid_edges() {
+        let [nx, ny, nz] = [3, 2, 1];
+        let (n, lists) = hex20_dof_lists([nx, ny, nz]);
+        let corners = (nx + 1) * (ny + 1) * (nz + 1);
+        let edges = nx * (ny + 1) * (nz + 1) + (nx + 1) * ny * (nz + 1) + (nx + 1) * (ny + 1) * nz;
+        assert_eq!(n, 3 * (corners + edges));
+        assert_eq!(lists.len(), nx * ny * nz);
+        assert!(lists.iter().all(|l| l.len() == 60));
+        let shared = lists[0].iter().filter(|d| lists[1].contains(d)).count();
+        assert_eq!(shared, 3 * 8);
+        let mut all: Vec<usize> = lists.concat();
+        all.sort_unstable();
+        all.dedup();
+        assert_eq!(all, (0..n).collect::<Vec<_>>());
     }
 }

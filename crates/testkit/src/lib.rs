@@ -4,7 +4,8 @@
 //! crate — the element kernels at the bottom as much as the facade at the top — can take it as
 //! a dev-dependency without a second copy of its own types:
 //! - [`block`]: structured blocks of hexahedra from a reference-node pattern (Hex8, Hex20, …),
-//!   the box every crate's tests need;
+//!   the box every crate's tests need, and a Hex20 box's DOF lists for sparsity patterns
+//!   ([`hex20_dof_lists`]);
 //! - [`diff`]: central finite differences, to check a gradient or a tangent against the
 //!   function it derives from;
 //! - [`dense`]: dense oracles (Gaussian elimination with partial pivoting, matrix–vector
@@ -29,7 +30,7 @@ pub mod block;
 pub mod dense;
 pub mod diff;
 
-pub use block::Block;
+pub use block::{Block, hex20_dof_lists};
 
 /// A linear congruential generator (Knuth's MMIX constants): reproducible test data without a
 /// dependency. Not for statistics.

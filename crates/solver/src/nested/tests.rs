@@ -36,39 +36,8 @@ fn grid(nx: usize, ny: usize, nz: usize, dofs: usize) -> SymmetricPattern {
 
 /// Hex20 connectivity (8 corners, 12 midsides) on nx×ny×nz elements, 3 DOFs per node.
 fn hex20(nx: usize, ny: usize, nz: usize) -> SymmetricPattern {
-    let (lx, ly) = (2 * nx + 1, 2 * ny + 1);
-    let mut id = vec![usize::MAX; lx * ly * (2 * nz + 1)];
-    let mut count = 0;
-    for k in 0..=2 * nz {
-        for j in 0..ly {
-            for i in 0..lx {
-                if (i % 2) + (j % 2) + (k % 2) <= 1 {
-                    id[(k * ly + j) * lx + i] = count;
-                    count += 1;
-                }
-            }
-        }
-    }
-    let mut lists = Vec::new();
-    for ez in 0..nz {
-        for ey in 0..ny {
-            for ex in 0..nx {
-                let mut l = Vec::new();
-                for k in 2 * ez..=2 * ez + 2 {
-                    for j in 2 * ey..=2 * ey + 2 {
-                        for i in 2 * ex..=2 * ex + 2 {
-                            let node = id[(k * ly + j) * lx + i];
-                            if node != usize::MAX {
-                                l.extend((0..3).map(|d| 3 * node + d));
-                            }
-                        }
-                    }
-                }
-                lists.push(l);
-            }
-        }
-    }
-    SymmetricPattern::from_dof_lists(3 * count, &lists).unwrap()
+    let (n, lists) = nonlin3d_testkit::hex20_dof_lists([nx, ny, nz]);
+    SymmetricPattern::from_dof_lists(n, &lists).unwrap()
 }
 
 fn lower_nonzeros(p: &Arc<SymmetricPattern>, ordering: FaerOrdering) -> usize {
