@@ -366,9 +366,9 @@ fn sweep(
 /// The arc-length control of a scene with `path = "arc-length"` (None for `load`): the first
 /// arc of a level moves the load factor by at most `max_increment` (the load path's largest
 /// step), arcs grow up to that (in units of the load factor at the level's start), at most
-/// `max_attempts` increments a level; the predictor's sign by the previous increment's
-/// direction, not det K_T's: the trivial path crosses a bifurcation (one eigenvalue through
-/// zero, λ still rising) where the inertia rule would turn back.
+/// `max_attempts` increments a level; the predictor's sign by newton's default
+/// ([`SignRule::Combined`]): the trivial path crosses a bifurcation (one eigenvalue through
+/// zero, λ still rising) where det K_T's sign alone would turn back.
 pub fn arc_length(scene: &Scene) -> Option<ArcLength> {
     let a = &scene.analysis;
     (a.path == PathName::ArcLength).then(|| ArcLength {
@@ -376,7 +376,7 @@ pub fn arc_length(scene: &Scene) -> Option<ArcLength> {
         max: a.max_increment,
         min: 1e-4 * a.max_increment,
         max_increments: a.max_attempts.max(1),
-        sign: SignRule::Direction,
+        sign: SignRule::Combined,
         ..ArcLength::default()
     })
 }

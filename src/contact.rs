@@ -121,6 +121,7 @@ impl ContactStage {
                 u,
                 (start, from, to),
                 first,
+                perturbation,
                 newton,
                 stepping,
                 &mut e.session,

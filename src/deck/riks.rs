@@ -20,7 +20,7 @@ use nonlin3d_newton::{ArcLength, NewtonError, SignRule, StructuralProblem, follo
 
 /// The arc-length control of a Riks step: Abaqus's arc lengths over l_period (so the first
 /// increment moves λ by Δl_in/l_period), `INC=`, λ_end and the monitored node's DOF; the
-/// predictor's sign by the previous increment's direction; `DIRECT` keeps Δl_in (growth 1, no
+/// predictor's sign by [`SignRule::Combined`]; `DIRECT` keeps Δl_in (growth 1, no
 /// cutback: the smallest arc is the initial one).
 pub(crate) fn arc_control(model: &InpModel, k: usize, riks: &RiksData) -> ArcLength {
     let step = &model.steps[k];
@@ -34,10 +34,10 @@ pub(crate) fn arc_control(model: &InpModel, k: usize, riks: &RiksData) -> ArcLen
         monitor: riks
             .monitor
             .map(|(node, dof, value)| (3 * node + usize::from(dof) - 1, value)),
-        // The previous increment's direction, not det K_T's sign: a symmetric deck can pass a
-        // bifurcation (an eigenvalue crosses zero with no turn of λ), where the inertia rule
-        // would send the path back along itself (Crisfield 1983 notes it).
-        sign: SignRule::Direction,
+        // Not det K_T's sign alone: a symmetric deck can pass a bifurcation (an eigenvalue
+        // crosses zero with no turn of λ), where it would send the path back along itself
+        // (Crisfield 1983 notes it); the combined rule takes the direction there.
+        sign: SignRule::Combined,
         ..ArcLength::default()
     };
     if riks.direct {

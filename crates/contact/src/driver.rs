@@ -456,6 +456,7 @@ impl Contact {
             session,
         )?;
         let first_seconds = t.elapsed().as_secs_f64();
+        let again = if first.perturbed { perturbation } else { &[] };
         self.passes(
             problem,
             u,
@@ -463,7 +464,12 @@ impl Contact {
             (first, first_seconds),
             newton,
             session,
-            Some((&start, from, stepping)),
+            Some(passes::Fallback {
+                start: &start,
+                from,
+                stepping,
+                perturbation: again,
+            }),
         )
     }
 }

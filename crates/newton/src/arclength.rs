@@ -22,10 +22,12 @@
 //!
 //! the root whose new increment makes the smaller angle with the current one (the larger
 //! (Δu + δu)·Δu/ℓ² + ψ²·(Δλ + δλ)·Δλ; Crisfield 1981, eq. 13). The predictor is the tangent,
-//! Δλ₁ = ±s/√(δu_t·δu_t/ℓ² + ψ²), Δu₁ = Δλ₁·δu_t, its sign from the inertia of K_T: the sign of
-//! det K_T, (−1)^(negative pivots), flips Δλ when an odd number of eigenvalues crossed zero
-//! since the last increment (Crisfield 1983: a limit point was passed) — or from the previous
-//! increment's direction ([`SignRule::Direction`]). The arc length adapts to the iterations
+//! Δλ₁ = ±s/√(δu_t·δu_t/ℓ² + ψ²), Δu₁ = Δλ₁·δu_t, its sign by [`SignRule`]: by default
+//! ([`SignRule::Combined`]) kept while the count of negative pivots of K_T stays (det K_T's
+//! sign, Crisfield 1983: no eigenvalue crossed zero, λ cannot have turned), and where the count
+//! changed flipped only if δu_t reversed, sign(δu_t,prev·δu_t) < 0 (a limit point; at a
+//! bifurcation δu_t is continuous and λ goes on).
+//! The arc length adapts to the iterations
 //! the last increment took, s ← s·√(I_d/I) (Crisfield 1981, eq. 17), and is cut back on failure.
 
 use crate::error::sig6;
@@ -58,15 +60,34 @@ impl ArcConstraint {
     }
 }
 
-/// How the predictor's sign is chosen.
+/// How the predictor's sign is chosen (the sign of Δλ₁ in Δλ₁ = ±s/√(δu_t·δu_t/ℓ² + ψ²)).
+///
+/// The two classical rules fail in different places. det K_T's sign cannot tell a limit point
+/// from a bifurcation (both move one eigenvalue μ of K_T through zero) and turns the path back
+/// at a bifurcation, where λ goes on. The previous increment's direction inherits the
+/// orientation of the last increment: one whose corrector converged backwards along the path
+/// (past a sharp snap-back) reverses the path for good, while det K_T's rule keeps the
+/// orientation, sign(det K_T)·sign(dλ/ds) being constant along a path without bifurcations.
+/// [`SignRule::Combined`] keeps det K_T's rule and tells the two crossings apart by δu_t.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum SignRule {
     /// The sign of det K_T (Crisfield 1983): the predictor's Δλ keeps the previous predictor's
-    /// sign unless the count of negative pivots changed by an odd number since its start.
+    /// sign unless the count of negative pivots changed by an odd number since its start,
+    /// sign(Δλ₁ⁿ) = sign(Δλ₁ⁿ⁻¹)·(−1)^(pₙ − pₙ₋₁).
     Inertia,
-    /// The previous increment's direction: Δu_prev·δu_t/ℓ² + ψ²·Δλ_prev > 0 keeps Δλ > 0
-    /// along δu_t (the predictor makes an acute angle with the last increment).
+    /// The previous increment's direction (Feng, Perić and Owen 1996):
+    /// sign(Δλ₁) = sign(Δu_prev·δu_t/ℓ² + ψ²·Δλ_prev), the predictor makes an acute angle with
+    /// the last increment.
     Direction,
+    /// det K_T's rule, with the crossing told apart by the tangent: where the count of
+    /// negative pivots is unchanged the sign is kept; where it changed it flips only if δu_t
+    /// reversed, sign(Δλ₁ⁿ) = sign(Δλ₁ⁿ⁻¹)·sign(δu_tⁿ⁻¹·δu_tⁿ). At a limit point
+    /// φᵀq ≠ 0 (φ the mode of μ, q the reference load) and δu_t = K_T⁻¹q ≈ φ·(φᵀq)/μ reverses
+    /// as μ passes zero; at a bifurcation φᵀq = 0 and δu_t stays finite and continuous, so λ
+    /// goes on. The default: it follows the sharp snap-backs det K_T's rule follows and the
+    /// direction rule does not, and the bifurcation where det K_T's rule turns back
+    /// (tests/arc_length.rs).
+    Combined,
 }
 
 /// Increment control of [`follow_arc_length`]; arc lengths s in units of the load factor
@@ -108,7 +129,7 @@ impl Default for ArcLength {
             growth: 2.0,
             cutback: 0.5,
             constraint: ArcConstraint::Cylindrical,
-            sign: SignRule::Inertia,
+            sign: SignRule::Combined,
             max_increments: 100,
             max_lpf: None,
             monitor: None,
@@ -277,6 +298,51 @@ struct Start<'a> {
     sign: f64,
 }
 
+/// The last converged increment, as the next predictor's sign needs it.
+struct Previous {
+    /// Δu over it.
+    du: Vec<f64>,
+    /// Δλ over it.
+    dl: f64,
+    /// Negative pivots of K_T at its start.
+    pivots: usize,
+    /// Its predictor's sign.
+    sign: f64,
+}
+
+/// The predictor's sign at a start with `pivots` negative pivots and tangent `rate` (δu_t)
+/// after `previous` (+1 for the first increment) by `rule` ([`SignRule`]), and whether the
+/// inertia and direction rules agree there. Relative to the previous predictor's sign, not its
+/// converged Δλ (which may have turned already).
+fn predictor_sign(
+    rule: SignRule,
+    previous: Option<&Previous>,
+    pivots: usize,
+    rate: &[f64],
+    l2: f64,
+    psi2: f64,
+) -> (f64, bool) {
+    let Some(prev) = previous else {
+        return (1.0, true);
+    };
+    let flip = |yes: bool| if yes { -prev.sign } else { prev.sign };
+    // sign(Δλ₁) = sign(det K_T) up to the first one's.
+    let inertia = flip((pivots as i64 - prev.pivots as i64).rem_euclid(2) == 1);
+    let along = dot(&prev.du, rate) / l2 + psi2 * prev.dl;
+    let direction = if along >= 0.0 { 1.0 } else { -1.0 };
+    let sign = match rule {
+        SignRule::Inertia => inertia,
+        SignRule::Direction => direction,
+        // The count changed over an increment that kept its predictor's sense: a limit
+        // point or a bifurcation, told apart by the direction. Over one whose Δλ turned
+        // against its predictor (a limit point within it, or a corrector that converged
+        // backwards along the path) det K_T's orientation stands.
+        SignRule::Combined if pivots != prev.pivots && prev.dl * prev.sign > 0.0 => direction,
+        SignRule::Combined => inertia,
+    };
+    (sign, inertia == direction)
+}
+
 /// Refuses arc lengths that are not finite and positive, a growth below 1, a cutback outside
 /// (0, 1), I_d = 0 and ψ < 0.
 fn check(arc: &ArcLength) -> Result<(), NewtonError> {
@@ -347,8 +413,7 @@ pub fn follow_arc_length<P: NonlinearProblem + ?Sized>(
         stop: ArcStop::Increments,
         scale: 0.0,
     };
-    // The previous increment: Δu, Δλ, the negative pivots at its start, its predictor's sign.
-    let mut previous: Option<(Vec<f64>, f64, usize, f64)> = None;
+    let mut previous: Option<Previous> = None;
     while report.increments.len() < arc.max_increments {
         let index = report.increments.len() + 1;
         let pivots = w.factorize().map_err(|why| NewtonError::ArcLength {
@@ -373,22 +438,8 @@ pub fn follow_arc_length<P: NonlinearProblem + ?Sized>(
             report.scale = scale;
         }
         let l2 = scale * scale;
-        // The predictor's sign: det K_T's, and the previous increment's direction.
-        let (by_inertia, by_direction) = match &previous {
-            None => (1.0, 1.0),
-            Some((du, dl, p, predicted)) => {
-                // Relative to the previous predictor's sign (not its converged Δλ, which may
-                // have turned already): sign(Δλ₁) = sign(det K_T) up to the first one's.
-                let flip = (pivots as i64 - *p as i64).rem_euclid(2) == 1;
-                let inertia = predicted * if flip { -1.0 } else { 1.0 };
-                let along = dot(du, &rate) / l2 + psi2 * dl;
-                (inertia, if along >= 0.0 { 1.0 } else { -1.0 })
-            }
-        };
-        let sign = match arc.sign {
-            SignRule::Inertia => by_inertia,
-            SignRule::Direction => by_direction,
-        };
+        let (sign, rules_agree) =
+            predictor_sign(arc.sign, previous.as_ref(), pivots, &rate, l2, psi2);
         let from = Start {
             u,
             lambda,
@@ -439,14 +490,19 @@ pub fn follow_arc_length<P: NonlinearProblem + ?Sized>(
             iterations: records.len(),
             cutbacks,
             negative_pivots: pivots,
-            rules_agree: by_inertia == by_direction,
+            rules_agree,
             residual: records.last().map_or(initial_residual, |r| r.residual),
             initial_residual,
             tolerance,
             records,
             stop,
         };
-        previous = Some((du, dl, pivots, sign));
+        previous = Some(Previous {
+            du,
+            dl,
+            pivots,
+            sign,
+        });
         let asked = observe(&record, u, &mut *w.problem);
         report.increments.push(record);
         // Crisfield 1981, eq. 17: s ← s·√(I_d/I), I at least 1, growth bounded.

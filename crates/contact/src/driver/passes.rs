@@ -8,8 +8,21 @@ use crate::active::{Change, Tolerances, update};
 use crate::{ContactError, Pair};
 use nonlin3d_newton::{
     LevelReport, NewtonSettings, PathSolver, Stepping, StructuralProblem, follow_path_with,
+    perturbed_redo,
 };
 use std::time::Instant;
+
+/// How a level is followed again from its start when a pass's re-solve fails.
+pub(super) struct Fallback<'a> {
+    /// The state at the level's start.
+    pub(super) start: &'a [f64],
+    /// Its load factor.
+    pub(super) from: f64,
+    /// The stepping to follow the level with.
+    pub(super) stepping: &'a Stepping,
+    /// The §3.2 perturbation to follow it with (empty: plain path following).
+    pub(super) perturbation: &'a [(usize, f64)],
+}
 
 impl Contact {
     /// The passes of a level whose first solve was made elsewhere: `u` is a converged state at
@@ -17,7 +30,10 @@ impl Contact {
     /// `auto` would otherwise repeat with the loop from the level's start), `start` the state
     /// at `from` to follow again from if a re-solve fails, `first` what that solve reported
     /// (kept in the result; its time is `first_seconds`). The passes as in
-    /// [`solve_level`](Self::solve_level).
+    /// [`solve_level`](Self::solve_level); if that first solve applied the §3.2 perturbation
+    /// (`first.perturbed`), a re-solve that fails follows the level again by the protocol with
+    /// `perturbation` ([`perturbed_redo`]) instead of plainly, which would return to the
+    /// unbuckled state the perturbation had left.
     #[allow(clippy::too_many_arguments)]
     pub fn continue_level(
         &mut self,
@@ -25,10 +41,12 @@ impl Contact {
         u: &mut Vec<f64>,
         (start, from, to): (&[f64], f64, f64),
         (first, first_seconds): (LevelReport, f64),
+        perturbation: &[(usize, f64)],
         newton: &NewtonSettings,
         stepping: &Stepping,
         session: &mut PathSolver,
     ) -> Result<ContactLevel, ContactError> {
+        let again = if first.perturbed { perturbation } else { &[] };
         self.passes(
             problem,
             u,
@@ -36,7 +54,12 @@ impl Contact {
             (first, first_seconds),
             newton,
             session,
-            Some((start, from, stepping)),
+            Some(Fallback {
+                start,
+                from,
+                stepping,
+                perturbation: again,
+            }),
         )
     }
 
@@ -62,9 +85,8 @@ impl Contact {
         self.passes(problem, u, lambda, (first, 0.0), newton, session, None)
     }
 
-    /// The loop of passes after the first solve (module docs); `fallback`: the level's start
-    /// state, its load factor and the stepping to follow it again with when a re-solve fails
-    /// (None: the failure is [`ContactError::Resolve`]).
+    /// The loop of passes after the first solve (module docs); `fallback`: how to follow the
+    /// level again when a re-solve fails (None: the failure is [`ContactError::Resolve`]).
     #[allow(clippy::too_many_arguments)]
     pub(super) fn passes(
         &mut self,
@@ -74,7 +96,7 @@ impl Contact {
         (first, first_seconds): (LevelReport, f64),
         newton: &NewtonSettings,
         session: &mut PathSolver,
-        fallback: Option<(&[f64], f64, &Stepping)>,
+        fallback: Option<Fallback>,
     ) -> Result<ContactLevel, ContactError> {
         let mut passes = Vec::new();
         let mut seen = vec![self.active()];
@@ -115,7 +137,7 @@ impl Contact {
             }
             self.install(problem, u, &next)?;
             let Some((iterations, redone)) =
-                self.resolve(problem, u, to, newton, session, fallback)?
+                self.resolve(problem, u, to, newton, session, fallback.as_ref())?
             else {
                 return Err(ContactError::Resolve {
                     lambda: to,
@@ -201,8 +223,9 @@ impl Contact {
     }
 
     /// The re-solve of a pass at λ = `to`: Newton from `u` with the session's solver; if it
-    /// does not converge, path following from the level's start (`fallback`: the state at its
-    /// load factor, the stepping), or None without a fallback (`u` is then the last iterate).
+    /// does not converge, path following from the level's start (`fallback`; by the §3.2
+    /// protocol when it carries a perturbation), or None without a fallback (`u` is then the
+    /// last iterate).
     /// Returns the Newton iterations and whether the level was followed again.
     fn resolve(
         &mut self,
@@ -211,7 +234,7 @@ impl Contact {
         to: f64,
         newton: &NewtonSettings,
         session: &mut PathSolver,
-        fallback: Option<(&[f64], f64, &Stepping)>,
+        fallback: Option<&Fallback>,
     ) -> Result<Option<(usize, bool)>, ContactError> {
         let mut trial = u.clone();
         let report = session.solve_at(problem, &mut trial, to, newton)?;
@@ -220,19 +243,19 @@ impl Contact {
             *u = trial;
             return Ok(Some((iterations, false)));
         }
-        let Some((start, from, stepping)) = fallback else {
+        let Some(f) = fallback else {
             *u = trial;
             return Ok(None);
         };
         u.clear();
-        u.extend_from_slice(start);
+        u.extend_from_slice(f.start);
         session.invalidate();
-        let path = follow_path_with(problem, u, from, &[to], newton, stepping, session)?;
-        iterations += path
-            .attempts
-            .iter()
-            .map(|a| a.iterations.len())
-            .sum::<usize>();
+        let attempts = if f.perturbation.is_empty() {
+            follow_path_with(problem, u, f.from, &[to], newton, f.stepping, session)?.attempts
+        } else {
+            perturbed_redo(problem, u, (f.from, to), f.perturbation, newton, f.stepping)?
+        };
+        iterations += attempts.iter().map(|a| a.iterations.len()).sum::<usize>();
         Ok(Some((iterations, true)))
     }
 }

@@ -95,6 +95,16 @@ fn attempt<P: NonlinearProblem + ?Sized>(
         }
         let initial = *first.get_or_insert(norm);
         if norm <= tolerance {
+            // Converged backwards along the path (the constraint's cylinder meets the path
+            // again behind the start: a sharp turn within the arc): refused, so that a
+            // shorter arc takes the turn instead of reversing the path.
+            let ahead = dot(&du, t0) * dl0 / l2 + psi2 * dl * dl0;
+            if ahead < 0.0 {
+                return Ok(Err(format!(
+                    "the corrector converged behind the predictor (the path turns sharply \
+                     within the arc) at iteration {iteration}"
+                )));
+            }
             return Ok(Ok((u, lambda, initial, tolerance)));
         }
         if norm > 1e8 * initial {
