@@ -14,7 +14,7 @@ use nonlin3d::model::{build_model, perturbation_force, perturbation_loads};
 use nonlin3d::newton::{NonlinearProblem, PathSolver, StructuralProblem, solve_level};
 use nonlin3d::vcct::{FaceState, FrontRelease, respect_contact};
 use nonlin3d::{Scene, mesh::names};
-use nonlin3d_contact::{Contact, ContactSettings, Mode};
+use nonlin3d_contact::{Contact, ContactSettings, LevelSettings, Mode};
 use std::time::Instant;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -73,13 +73,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             let (passes, closed, opened, iterations) = if with_contact {
                 let level = contact.solve_level(
                     &mut problem,
-                    &mut u,
-                    from,
-                    lambda,
-                    pert,
-                    &newton,
-                    &stepping,
                     &mut session,
+                    &mut u,
+                    (from, lambda),
+                    &LevelSettings {
+                        newton: &newton,
+                        stepping: &stepping,
+                        perturbation: pert,
+                    },
                 )?;
                 perturbed |= level.first.perturbed;
                 (

@@ -251,7 +251,10 @@ fn sweep(
                 }
                 .is_ok_and(|peak| peak < -0.01 * model.h)
         };
-        let start = u.clone();
+        let mut start = u.clone();
+        // The step of the level solved last without contact (the whole level unless `auto`
+        // solves it in the contact loop's steps).
+        let mut step = (from, lambda);
         let mut solved = Solved::default();
         if !stage.active() {
             solved = match &arc {
@@ -273,16 +276,36 @@ fn sweep(
                     fallback: false,
                 })
                 .map_err(|e| level_error(e.into()))?,
-                None => solve_or_redo(
-                    &mut inward,
-                    problem,
-                    &mut u,
-                    (from, lambda),
-                    pert,
-                    (&newton, &stepping),
-                    &mut session,
-                )
-                .map_err(level_error)?,
+                // `auto`: in the contact loop's steps, up to the first that overlaps
+                // (src/contact.rs).
+                None => {
+                    let mut all = Solved::default();
+                    let mut at = from;
+                    for end in stage.plain_steps(from, lambda) {
+                        start.clone_from(&u);
+                        step = (at, end);
+                        let offered = if all.perturbed { &[][..] } else { pert };
+                        let s = solve_or_redo(
+                            &mut inward,
+                            problem,
+                            &mut u,
+                            step,
+                            offered,
+                            (&newton, &stepping),
+                            &mut session,
+                        )
+                        .map_err(level_error)?;
+                        all.attempts.extend(s.attempts);
+                        all.perturbed |= s.perturbed;
+                        all.pivots = s.pivots;
+                        all.fallback |= s.fallback;
+                        at = end;
+                        if end != lambda && stage.overlaps(model, &u) {
+                            break;
+                        }
+                    }
+                    all
+                }
             };
         }
         // (Contact and substructuring together are refused by the scene checks: the contact
@@ -303,7 +326,7 @@ fn sweep(
                     scene,
                     model,
                     &mut u,
-                    (&start, from, lambda),
+                    (&start, step.0, step.1, lambda),
                     pert,
                     plain,
                     (&newton, &stepping),

@@ -4,17 +4,21 @@
 //! - `off`: the level is solved as without contact (the facade's BFGS inward redo and the
 //!   "buckled into the base" error stay);
 //! - `on`: every level is solved by the active-set loop from the first level on;
-//! - `auto` (default): a level is solved without contact; if any crack-face pair then overlaps
-//!   by more than the tolerance (measured as the loop measures it: the weighted normal gaps
-//!   g̃ of the deformed faces, [`max_overlap`]), the active-set loop starts from that overlapping state (the
-//!   overlapping pairs close and the level is re-solved at the same load; followed again from
-//!   its start only if that fails), and all later levels are solved by the loop (the set may
-//!   open again there). A level without overlap is therefore solved exactly as with `off`. A
-//!   level longer than the contact's largest step (`ContactSettings::max_step`, 0.25 of the
-//!   largest level) is instead followed again from its start in sub-levels with the loop at
-//!   each: passes from a state far past the first contact can settle on another equilibrium
-//!   than the loading path's (one level ε = −0.004 on a graded mesh: centre deflection
-//!   0.721 mm against the path's 0.674).
+//! - `auto` (default): a level is solved without contact, in the loop's own sub-levels (steps
+//!   of at most `ContactSettings::max_step`, 0.25 of the largest level: a sweep's levels are
+//!   one step each) with the overlap checked at the end of each; at the first step whose
+//!   state overlaps by more than the tolerance (measured as the loop measures it: the
+//!   weighted normal gaps g̃ of the deformed faces, [`max_overlap`]), the active-set loop
+//!   starts from that overlapping state (the overlapping pairs close and the step is re-solved
+//!   at the same load; followed again from its start only if that fails) and follows the rest
+//!   of the level in its sub-levels; all later levels are solved by the loop (the set may
+//!   open again there). A level without overlap is therefore solved exactly as with `off` in
+//!   levels at the step ends, and the level where contact engages follows the loop's path
+//!   (sub-levels of at most `max_step`: passes from a state far past the first contact can
+//!   settle on another equilibrium than the loading path's — one level ε = −0.004 on a graded
+//!   mesh: centre deflection 0.721 mm against the path's 0.674) without solving any step
+//!   twice. With arc length the level is solved whole and, if it overlaps and is longer than
+//!   `max_step`, followed again from its start in the loop's sub-levels.
 //!
 //! The contact system (all candidate pairs reserved in its pattern) is built on first use,
 //! beside the level loop's own system, with its own solver session.
@@ -24,7 +28,9 @@ use crate::problem::build_problem;
 pub use crate::results::{ContactPass, ContactSummary};
 pub use crate::scene::{ContactModeName, ContactOptions, CrackFacesName, DEFAULT_TOLERANCE_MM};
 use crate::{Error, Scene};
-use nonlin3d_contact::{Contact, ContactLevel, ContactSettings, CrackFaces, Mode};
+use nonlin3d_contact::{
+    Contact, ContactLevel, ContactSettings, CrackFaces, LevelSettings, Mode, Resumed,
+};
 use nonlin3d_mesh::names::{CRACK_LOWER, CRACK_UPPER};
 use nonlin3d_newton::{LevelReport, NewtonSettings, PathSolver, Stepping, StructuralProblem};
 
@@ -70,19 +76,23 @@ impl ContactStage {
                 .map_or(true, |o| o > self.options.tolerance() * 1e-3)
     }
 
-    /// Solves one level with the contact loop, building the contact system on first use. `u`
-    /// is the level's start (`on`, or `auto` once engaged: path following with the previous
-    /// level's set) or, on the level where `auto` engages, the converged state without
-    /// contact whose faces overlap: the passes then start from it (the overlapping pairs
-    /// close, Newton at the same λ) instead of following the level again from `start`, and
-    /// `plain` (what that solve reported, its time) stands for the first solve.
+    /// Solves one level with the contact loop, building the contact system on first use.
+    /// `(start, from, to)`: the state at `from` and where the first solve goes; `end` the
+    /// level's load factor. `u` is the level's start (`on`, or `auto` once engaged: path
+    /// following with the previous level's set; then `to` = `end`) or, on the level where
+    /// `auto` engages, the converged state without contact at `to` whose faces overlap (`to`
+    /// the end of the first of the [`plain_steps`](Self::plain_steps) that overlaps, `start`
+    /// the state at its start): the passes then start from it (the overlapping pairs close,
+    /// Newton at the same λ) instead of following the step again, `plain` (what that solve
+    /// reported, its time) stands for the first solve, and the loop follows the rest of the
+    /// level (`to` → `end`) in its sub-levels.
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn solve(
         &mut self,
         scene: &Scene,
         model: &Model,
         u: &mut Vec<f64>,
-        (start, from, to): (&[f64], f64, f64),
+        (start, from, to, end): (&[f64], f64, f64, f64),
         perturbation: &[(usize, f64)],
         plain: Option<(LevelReport, f64)>,
         (newton, stepping): (&NewtonSettings, &Stepping),
@@ -106,36 +116,36 @@ impl ContactStage {
             Some(e) => e,
             None => self.engage(scene, model, newton)?,
         };
-        // A level longer than the contact's largest step is followed again from its start in
-        // sub-levels (the passes from a state far past the first contact can settle on
-        // another equilibrium than the loading path's: `ContactSettings::max_step`).
+        // A first solve longer than the contact's largest step (arc length) is followed again
+        // from its start in sub-levels (the passes from a state far past the first contact can
+        // settle on another equilibrium than the loading path's: `ContactSettings::max_step`).
         let engaging = plain.is_some();
         let plain = plain.filter(|_| e.contact.sublevels(from, to) == 1);
         if engaging && plain.is_none() {
             u.clear();
             u.extend_from_slice(start);
         }
+        let settings = LevelSettings {
+            newton,
+            stepping,
+            perturbation,
+        };
         let level = match plain {
-            Some(first) => e.contact.continue_level(
-                &mut e.problem,
-                u,
-                (start, from, to),
-                first,
-                perturbation,
-                newton,
-                stepping,
-                &mut e.session,
-            ),
-            None => e.contact.solve_level(
-                &mut e.problem,
-                u,
-                from,
-                to,
-                perturbation,
-                newton,
-                stepping,
-                &mut e.session,
-            ),
+            Some((first, first_seconds)) => {
+                let first = Resumed {
+                    start,
+                    from,
+                    to,
+                    first,
+                    first_seconds,
+                };
+                e.contact
+                    .continue_level(&mut e.problem, &mut e.session, u, first, end, &settings)
+            }
+            None => {
+                e.contact
+                    .solve_level(&mut e.problem, &mut e.session, u, (from, end), &settings)
+            }
         };
         // Stability counted on the pairs that hold: a closed pair without compressive force
         // would open, so its tie must not hide a mode that lifts the faces apart
@@ -143,7 +153,7 @@ impl ContactStage {
         let holding = match &level {
             Ok(l) => e
                 .contact
-                .holding_inertia(&mut e.problem, u, to, &l.state, &mut e.session)
+                .holding_inertia(&mut e.problem, u, end, &l.state, &mut e.session)
                 .map_err(Error::from),
             Err(_) => Ok(None),
         };
@@ -164,15 +174,7 @@ impl ContactStage {
         model: &Model,
         newton: &NewtonSettings,
     ) -> Result<Engaged, Error> {
-        let settings = ContactSettings {
-            gap_tolerance: self.options.tolerance() * 1e-3,
-            mode: match self.options.mode {
-                ContactModeName::TwoBody => Mode::TwoBody,
-                ContactModeName::Thesis => Mode::External,
-            },
-            ..ContactSettings::default()
-        };
-        let contact = Contact::new(&model.mesh, settings)?;
+        let contact = Contact::new(&model.mesh, self.settings())?;
         let (assembler, constraints) = build_problem(scene, model)?.into_parts()?;
         let problem =
             StructuralProblem::with_contributions(assembler, Vec::new(), constraints, |b| {
@@ -184,6 +186,33 @@ impl ContactStage {
             problem,
             session,
         })
+    }
+
+    /// The contact loop's settings of the scene.
+    fn settings(&self) -> ContactSettings {
+        ContactSettings {
+            gap_tolerance: self.options.tolerance() * 1e-3,
+            mode: match self.options.mode {
+                ContactModeName::TwoBody => Mode::TwoBody,
+                ContactModeName::Thesis => Mode::External,
+            },
+            ..ContactSettings::default()
+        }
+    }
+
+    /// The steps in which a level `from` → `to` not yet in the contact loop is solved without
+    /// contact, as their end load factors: with `auto` (enabled, not engaged) the loop's own
+    /// sub-levels ([`ContactSettings::sublevels`], steps of at most `max_step`), so that the
+    /// overlap is checked where the loop would check it and the step that first overlaps is
+    /// the loop's first solve (nothing is followed twice); otherwise the whole level.
+    pub(crate) fn plain_steps(&self, from: f64, to: f64) -> Vec<f64> {
+        if !self.enabled() || self.active() {
+            return vec![to];
+        }
+        let count = self.settings().sublevels(from, to);
+        (1..=count)
+            .map(|j| ContactSettings::sublevel_end(from, to, j, count))
+            .collect()
     }
 
     /// The closed pairs' upper nodes (empty when contact never engaged).

@@ -21,11 +21,11 @@ fn run(s: &Scene) -> Results {
     nonlin3d::analysis::run(s, &mut |_| Ok(())).unwrap()
 }
 
-/// G along the front of every level, as bits.
+/// G along the front of the last level and the centre deflection, as bits.
 fn bits(r: &Results) -> Vec<[u64; 4]> {
-    r.levels
+    let l = r.levels.last().unwrap();
+    l.front
         .iter()
-        .flat_map(|l| l.front.iter())
         .map(|f| {
             [
                 f.g_i.to_bits(),
@@ -34,6 +34,7 @@ fn bits(r: &Results) -> Vec<[u64; 4]> {
                 f.g_t.to_bits(),
             ]
         })
+        .chain([[l.centre_deflection_mm.to_bits(), 0, 0, 0]])
         .collect()
 }
 
@@ -82,13 +83,46 @@ fn contact_removes_the_overlap_and_closed_points_have_no_mode_i() {
 
 #[test]
 fn auto_leaves_levels_without_overlap_alone() {
-    // ε up to −0.002: the sublaminate buckles outward, no pair overlaps at slices = 4 before
-    // the perturbation's level; auto must give the bits of off.
-    let strains = [-0.001];
-    let off = run(&scene(&strains, CrackFacesName::Off));
-    let auto = run(&scene(&strains, CrackFacesName::Auto));
+    // ε = −0.001: the sublaminate has not buckled, no pair overlaps. `auto` solves the one
+    // level without contact in the loop's sub-levels (steps of at most `max_step` = 0.25,
+    // where it checks the overlap), so it must give the bits of `off` run in levels at those
+    // step ends (λ = 0.25, 0.5, 0.75, 1 exactly in both: −0.00025/−0.001 rounds to 0.25).
+    let off = run(&scene(
+        &[-0.00025, -0.0005, -0.00075, -0.001],
+        CrackFacesName::Off,
+    ));
+    let auto = run(&scene(&[-0.001], CrackFacesName::Auto));
     assert!(auto.levels.iter().all(|l| l.contact.is_none()));
     assert_eq!(bits(&off), bits(&auto));
+}
+
+/// `auto` on one long level whose faces overlap from its middle on (ε = −0.005 at
+/// slices = 4: the overlap appears in the second of the four steps of 0.25): the steps before
+/// the overlap are solved once, without contact, and the loop starts from the first step that
+/// overlaps, so the level follows `on`'s path (the same sub-levels; no step solved twice):
+/// the same Newton iterations, the same closed pairs, and G within 1e-6 relative (the two
+/// runs differ by the contact system's reserved couplings, which reorder the factorisation:
+/// round-off on states converged to Newton's 1e-8 of the force scale). Solved whole without
+/// contact first and then again from its start with the loop, as before, the level took 30
+/// more Newton iterations.
+#[test]
+fn auto_on_a_long_level_follows_the_loops_path_once() {
+    let on = run(&scene(&[-0.005], CrackFacesName::On));
+    let auto = run(&scene(&[-0.005], CrackFacesName::Auto));
+    let (a, o) = (&auto.levels[0], &on.levels[0]);
+    let (ca, co) = (a.contact.as_ref().unwrap(), o.contact.as_ref().unwrap());
+    eprintln!(
+        "iterations auto {} on {}; passes {} {}",
+        a.convergence.iterations, o.convergence.iterations, ca.passes, co.passes
+    );
+    assert_eq!(a.convergence.iterations, o.convergence.iterations);
+    assert_eq!(closed_at_end(&auto), closed_at_end(&on));
+    assert_eq!(ca.pairs_closed, co.pairs_closed);
+    for (fa, fo) in a.front.iter().zip(&o.front) {
+        approx::assert_relative_eq!(fa.g_t, fo.g_t, max_relative = 1e-6, epsilon = 1e-9);
+        approx::assert_relative_eq!(fa.g_i, fo.g_i, max_relative = 1e-6, epsilon = 1e-9);
+        approx::assert_relative_eq!(fa.g_ii, fo.g_ii, max_relative = 1e-6, epsilon = 1e-9);
+    }
 }
 
 #[test]

@@ -13,8 +13,7 @@ use crate::{ALPHA, ContactError, CrackFaces, Pair};
 use nonlin3d_assembly::SystemBuilder;
 use nonlin3d_mesh::Mesh;
 use nonlin3d_newton::{
-    LevelReport, NewtonSettings, NonlinearProblem, PathSolver, Stepping, StructuralProblem,
-    solve_level,
+    LevelReport, NewtonSettings, NonlinearProblem, PathSolver, StructuralProblem, solve_level,
 };
 use std::time::Instant;
 
@@ -22,7 +21,7 @@ mod settings;
 
 /// Refresh passes over which the overlap must shrink tenfold ([`Contact::check_refresh`]).
 const REFRESH_WINDOW: usize = 5;
-pub use settings::{ContactSettings, Mode};
+pub use settings::{ContactSettings, LevelSettings, Mode};
 
 /// Gaps, forces and the set at a state: the results of contact.
 #[derive(Debug, Clone, PartialEq)]
@@ -116,6 +115,20 @@ impl ContactLevel {
             .map(|a| a.iterations.len())
             .sum::<usize>()
             + self.passes.iter().map(|p| p.iterations).sum::<usize>()
+    }
+
+    /// This level followed by `later`, a level that continues it (the next sub-level): the
+    /// attempts and passes of both, in order; the later one's load factor, state and
+    /// negative pivots; perturbed if either applied the perturbation.
+    pub fn then(mut self, later: ContactLevel) -> ContactLevel {
+        self.first.attempts.extend(later.first.attempts);
+        self.first.perturbed |= later.first.perturbed;
+        self.first.negative_pivots = later.first.negative_pivots;
+        self.first_seconds += later.first_seconds;
+        self.passes.extend(later.passes);
+        self.lambda = later.lambda;
+        self.state = later.state;
+        self
     }
 
     /// Pairs closed over the level (counted at each pass).
@@ -360,53 +373,35 @@ impl Contact {
     }
 
     /// One level with contact (Fig. 2.7.2), in [`sublevels`](Self::sublevels) steps of at
-    /// most `max_step` (the perturbation offered to each until one applies it); each step:
-    /// path following from the converged state `u` at its start to its end with the current set ([`solve_level`]: stability test and perturbation as
-    /// there), then passes — the set updated from the gaps and forces, installed with the
-    /// current normals, and the level re-solved at `to` (Newton from the current state; if
-    /// that fails, path following again from the level's start with the new set) — until the
-    /// set does not change. Errors: a set seen before at this level ([`ContactError::Cycle`],
-    /// naming λ and the pairs that flip), more than `max_passes` passes, and what path
-    /// following returns.
-    #[allow(clippy::too_many_arguments)]
+    /// most `max_step` (the perturbation of `settings` offered to each until one applies it);
+    /// each step: path following from the converged state `u` at its start to its end with
+    /// the current set ([`solve_level`]: stability test and perturbation as there), then
+    /// passes — the set updated from the gaps and forces, installed with the current normals,
+    /// and the level re-solved at `to` (Newton from the current state; if that fails, path
+    /// following again from the step's start with the new set) — until the set does not
+    /// change. Errors: a set seen before at this level ([`ContactError::Cycle`], naming λ and
+    /// the pairs that flip), more than `max_passes` passes, and what path following returns.
     pub fn solve_level(
         &mut self,
         problem: &mut StructuralProblem,
-        u: &mut Vec<f64>,
-        from: f64,
-        to: f64,
-        perturbation: &[(usize, f64)],
-        newton: &NewtonSettings,
-        stepping: &Stepping,
         session: &mut PathSolver,
+        u: &mut Vec<f64>,
+        (from, to): (f64, f64),
+        settings: &LevelSettings<'_>,
     ) -> Result<ContactLevel, ContactError> {
         let count = self.sublevels(from, to);
-        let mut perturbation = perturbation;
+        let mut settings = *settings;
         let mut merged: Option<ContactLevel> = None;
         for j in 1..=count {
-            let a = from + (to - from) * (j - 1) as f64 / count as f64;
-            let b = if j == count {
-                to
-            } else {
-                from + (to - from) * j as f64 / count as f64
-            };
-            let level =
-                self.solve_step(problem, u, a, b, perturbation, newton, stepping, session)?;
+            let a = ContactSettings::sublevel_end(from, to, j - 1, count);
+            let b = ContactSettings::sublevel_end(from, to, j, count);
+            let level = self.solve_step(problem, session, u, (a, b), &settings)?;
             if level.first.perturbed {
-                perturbation = &[];
+                settings.perturbation = &[];
             }
             merged = Some(match merged {
                 None => level,
-                Some(mut m) => {
-                    m.first.attempts.extend(level.first.attempts);
-                    m.first.perturbed |= level.first.perturbed;
-                    m.first.negative_pivots = level.first.negative_pivots;
-                    m.first_seconds += level.first_seconds;
-                    m.passes.extend(level.passes);
-                    m.lambda = level.lambda;
-                    m.state = level.state;
-                    m
-                }
+                Some(m) => m.then(level),
             });
         }
         merged.ok_or(ContactError::Setting {
@@ -416,32 +411,24 @@ impl Contact {
     }
 
     /// How many sub-levels [`solve_level`](Self::solve_level) makes of the level `from` → `to`:
-    /// the fewest equal steps of at most `max_step` in load factor. The set changes only
-    /// between solves, so it must follow the load in steps: passes started from a state far
-    /// past the first contact can settle on another equilibrium than the loading path's (see
+    /// the fewest equal steps of at most `max_step` in load factor
+    /// ([`ContactSettings::sublevels`]). The set changes only between solves, so it must
+    /// follow the load in steps: passes started from a state far past the first contact can
+    /// settle on another equilibrium than the loading path's (see
     /// [`ContactSettings::max_step`]).
     pub fn sublevels(&self, from: f64, to: f64) -> usize {
-        let steps = ((to - from).abs() / self.settings.max_step * (1.0 - 1e-12)).ceil();
-        if steps.is_finite() && steps >= 1.0 {
-            steps as usize
-        } else {
-            1
-        }
+        self.settings.sublevels(from, to)
     }
 
     /// One sub-level of [`solve_level`](Self::solve_level): path following with the current
     /// set, then the passes.
-    #[allow(clippy::too_many_arguments)]
     fn solve_step(
         &mut self,
         problem: &mut StructuralProblem,
-        u: &mut Vec<f64>,
-        from: f64,
-        to: f64,
-        perturbation: &[(usize, f64)],
-        newton: &NewtonSettings,
-        stepping: &Stepping,
         session: &mut PathSolver,
+        u: &mut Vec<f64>,
+        (from, to): (f64, f64),
+        settings: &LevelSettings<'_>,
     ) -> Result<ContactLevel, ContactError> {
         let t = Instant::now();
         let start = u.clone();
@@ -450,24 +437,28 @@ impl Contact {
             u,
             from,
             to,
-            perturbation,
-            newton,
-            stepping,
+            settings.perturbation,
+            settings.newton,
+            settings.stepping,
             session,
         )?;
         let first_seconds = t.elapsed().as_secs_f64();
-        let again = if first.perturbed { perturbation } else { &[] };
+        let again = if first.perturbed {
+            settings.perturbation
+        } else {
+            &[]
+        };
         self.passes(
             problem,
             u,
             to,
             (first, first_seconds),
-            newton,
+            settings.newton,
             session,
             Some(passes::Fallback {
                 start: &start,
                 from,
-                stepping,
+                stepping: settings.stepping,
                 perturbation: again,
             }),
         )
@@ -476,6 +467,7 @@ impl Contact {
 
 mod holding;
 mod passes;
+pub use passes::Resumed;
 
 #[cfg(test)]
 mod tests;

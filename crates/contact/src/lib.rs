@@ -36,7 +36,7 @@
 //! | [`Pair`], [`CrackFaces`] | node pairs, deformed normals, gaps |
 //! | [`Tolerances`], [`Change`], [`update`] | the active-set update, a pure function |
 //! | [`contact_tie`], [`contact_force`] | the constraint of a closed pair and its force |
-//! | [`Contact`], [`ContactSettings`], [`Mode`] | the loop around a load level |
+//! | [`Contact`], [`ContactSettings`], [`LevelSettings`], [`Mode`], [`Resumed`] | the loop around a load level |
 //! | [`ContactLevel`], [`PassReport`], [`ContactState`] | per-level report; gaps and forces as results |
 //!
 //! The active-set update alone: of three pairs, an open one overlapping by 2 µm closes, a held
@@ -67,7 +67,9 @@ mod recover;
 mod tie;
 
 pub use active::{Change, Tolerances, update};
-pub use driver::{Contact, ContactLevel, ContactSettings, ContactState, Mode, PassReport};
+pub use driver::{
+    Contact, ContactLevel, ContactSettings, ContactState, LevelSettings, Mode, PassReport, Resumed,
+};
 pub use error::ContactError;
 pub use pairs::{CrackFaces, Pair};
 pub use recover::ALPHA;

@@ -4,7 +4,7 @@
 //! is pulled away.
 
 use nonlin3d_assembly::{Assembler, Constraints};
-use nonlin3d_contact::{Contact, ContactSettings};
+use nonlin3d_contact::{Contact, ContactSettings, LevelSettings};
 use nonlin3d_element::{ElementKind, IntegrationRule, Kinematics};
 use nonlin3d_laminate::{ShearCoupling, materials};
 use nonlin3d_mesh::names::{CRACK_UPPER, X0, Y0, Z0};
@@ -78,13 +78,14 @@ fn a_pushed_sublaminate_closes_onto_its_base() {
     let level = contact
         .solve_level(
             &mut problem,
-            &mut u,
-            0.0,
-            1.0,
-            &[],
-            &newton,
-            &Stepping::default(),
             &mut session,
+            &mut u,
+            (0.0, 1.0),
+            &LevelSettings {
+                newton: &newton,
+                stepping: &Stepping::default(),
+                perturbation: &[],
+            },
         )
         .unwrap();
     let s = &level.state;
@@ -127,13 +128,14 @@ fn a_pulled_sublaminate_opens_every_pair() {
     let level = contact
         .solve_level(
             &mut problem,
-            &mut u,
-            0.0,
-            1.0,
-            &[],
-            &newton,
-            &Stepping::default(),
             &mut session,
+            &mut u,
+            (0.0, 1.0),
+            &LevelSettings {
+                newton: &newton,
+                stepping: &Stepping::default(),
+                perturbation: &[],
+            },
         )
         .unwrap();
     let s = &level.state;
@@ -178,13 +180,14 @@ fn an_initial_gap_is_closed_at_every_level() {
         let level = contact
             .solve_level(
                 &mut problem,
-                &mut u,
-                from,
-                to,
-                &[],
-                &newton,
-                &Stepping::default(),
                 &mut session,
+                &mut u,
+                (from, to),
+                &LevelSettings {
+                    newton: &newton,
+                    stepping: &Stepping::default(),
+                    perturbation: &[],
+                },
             )
             .unwrap();
         let s = &level.state;
@@ -227,13 +230,14 @@ fn held_pairs_are_refreshed_until_the_penetration_is_within_the_tolerance() {
     let level = contact
         .solve_level(
             &mut problem,
-            &mut u,
-            0.0,
-            1.0,
-            &[],
-            &newton,
-            &Stepping::default(),
             &mut session,
+            &mut u,
+            (0.0, 1.0),
+            &LevelSettings {
+                newton: &newton,
+                stepping: &Stepping::default(),
+                perturbation: &[],
+            },
         )
         .unwrap();
     let s = &level.state;

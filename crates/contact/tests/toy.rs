@@ -4,7 +4,7 @@
 //! carry the whole load.
 
 use nonlin3d_assembly::{Assembler, Constraints};
-use nonlin3d_contact::{Contact, ContactLevel, ContactSettings, CrackFaces, Mode};
+use nonlin3d_contact::{Contact, ContactLevel, ContactSettings, CrackFaces, LevelSettings, Mode};
 use nonlin3d_element::{ElementKind, IntegrationRule, Kinematics};
 use nonlin3d_laminate::{ShearCoupling, materials};
 use nonlin3d_mesh::{BoxParams, Mesh, structured_box};
@@ -151,13 +151,14 @@ fn run_from(
     let level = contact
         .solve_level(
             &mut problem,
-            &mut u,
-            0.0,
-            1.0,
-            &[],
-            &newton,
-            &Stepping::default(),
             &mut session,
+            &mut u,
+            (0.0, 1.0),
+            &LevelSettings {
+                newton: &newton,
+                stepping: &Stepping::default(),
+                perturbation: &[],
+            },
         )
         .unwrap();
     Run {

@@ -3,7 +3,7 @@
 //! passes, the cycle, pass and refresh limits, and the door for callers that follow the load
 //! themselves ([`Contact::settle`]).
 
-use super::{Contact, ContactLevel, ContactState, Mode, PassReport, REFRESH_WINDOW};
+use super::{Contact, ContactLevel, ContactState, LevelSettings, Mode, PassReport, REFRESH_WINDOW};
 use crate::active::{Change, Tolerances, update};
 use crate::{ContactError, Pair};
 use nonlin3d_newton::{
@@ -24,43 +24,69 @@ pub(super) struct Fallback<'a> {
     pub(super) perturbation: &'a [(usize, f64)],
 }
 
+/// A level's first solve made elsewhere ([`Contact::continue_level`]): converged at `to` with
+/// the current set, from the state `start` at `from`.
+#[derive(Debug, Clone)]
+pub struct Resumed<'a> {
+    /// The state at `from` (followed again from if a re-solve fails).
+    pub start: &'a [f64],
+    /// Load factor of `start`.
+    pub from: f64,
+    /// Load factor the first solve reached.
+    pub to: f64,
+    /// What the first solve reported.
+    pub first: LevelReport,
+    /// Its wall time, s.
+    pub first_seconds: f64,
+}
+
 impl Contact {
-    /// The passes of a level whose first solve was made elsewhere: `u` is a converged state at
-    /// `to` with the current set (typically a solve without contact whose faces overlap, which
-    /// `auto` would otherwise repeat with the loop from the level's start), `start` the state
-    /// at `from` to follow again from if a re-solve fails, `first` what that solve reported
-    /// (kept in the result; its time is `first_seconds`). The passes as in
-    /// [`solve_level`](Self::solve_level); if that first solve applied the §3.2 perturbation
-    /// (`first.perturbed`), a re-solve that fails follows the level again by the protocol with
-    /// `perturbation` ([`perturbed_redo`]) instead of plainly, which would return to the
-    /// unbuckled state the perturbation had left.
-    #[allow(clippy::too_many_arguments)]
+    /// The passes of a level whose first solve was made elsewhere, then the rest of the level:
+    /// `u` is a converged state at `first.to` with the current set (typically a solve without
+    /// contact whose faces overlap, which `auto` would otherwise repeat with the loop from the
+    /// level's start), `first.start` the state at `first.from` to follow again from if a
+    /// re-solve fails. The passes as in [`solve_level`](Self::solve_level); then, if the
+    /// level goes on to `end` (the first solve covered one of its sub-levels), the loop's
+    /// [`solve_level`](Self::solve_level) from `first.to` to `end` (the perturbation offered
+    /// only if the first solve did not apply it). The result is the whole level.
     pub fn continue_level(
         &mut self,
         problem: &mut StructuralProblem,
-        u: &mut Vec<f64>,
-        (start, from, to): (&[f64], f64, f64),
-        (first, first_seconds): (LevelReport, f64),
-        perturbation: &[(usize, f64)],
-        newton: &NewtonSettings,
-        stepping: &Stepping,
         session: &mut PathSolver,
+        u: &mut Vec<f64>,
+        first: Resumed<'_>,
+        end: f64,
+        settings: &LevelSettings<'_>,
     ) -> Result<ContactLevel, ContactError> {
-        let again = if first.perturbed { perturbation } else { &[] };
-        self.passes(
+        let perturbed = first.first.perturbed;
+        let again = if perturbed { settings.perturbation } else { &[] };
+        let level = self.passes(
             problem,
             u,
-            to,
-            (first, first_seconds),
-            newton,
+            first.to,
+            (first.first, first.first_seconds),
+            settings.newton,
             session,
             Some(Fallback {
-                start,
-                from,
-                stepping,
+                start: first.start,
+                from: first.from,
+                stepping: settings.stepping,
                 perturbation: again,
             }),
-        )
+        )?;
+        if end == first.to {
+            return Ok(level);
+        }
+        let rest = LevelSettings {
+            perturbation: if perturbed {
+                &[]
+            } else {
+                settings.perturbation
+            },
+            ..*settings
+        };
+        let later = self.solve_level(problem, session, u, (first.to, end), &rest)?;
+        Ok(level.then(later))
     }
 
     /// The passes at a state `u` converged at λ = `lambda` with the current set, each re-solve

@@ -1,6 +1,7 @@
 //! How the contact loop holds pairs and when it stops (`driver`).
 
 use nonlin3d_assembly::TieGroup;
+use nonlin3d_newton::{NewtonSettings, Stepping};
 
 /// How an active pair is held.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -41,6 +42,43 @@ pub struct ContactSettings {
     /// equilibrium, centre deflection 0.726 mm against the path's 0.674 mm, without
     /// sub-levels; with them on the path's.
     pub max_step: f64,
+}
+
+impl ContactSettings {
+    /// How many sub-levels the loop makes of the level `from` → `to`: the fewest equal steps
+    /// of at most [`max_step`](Self::max_step) in load factor (at least one).
+    pub fn sublevels(&self, from: f64, to: f64) -> usize {
+        let steps = ((to - from).abs() / self.max_step * (1.0 - 1e-12)).ceil();
+        if steps.is_finite() && steps >= 1.0 {
+            steps as usize
+        } else {
+            1
+        }
+    }
+
+    /// The end of sub-level `j` (1-based) of `count` over `from` → `to`: `to` itself for the
+    /// last, so that the level ends exactly where asked.
+    pub fn sublevel_end(from: f64, to: f64, j: usize, count: usize) -> f64 {
+        if j >= count {
+            to
+        } else {
+            from + (to - from) * j as f64 / count as f64
+        }
+    }
+}
+
+/// How the loop follows a level: Newton's settings, the path's stepping and the perturbation
+/// load offered to its first unstable sub-level ((DOF, force) pairs, N; empty for none; thesis
+/// §3.2). Shared by [`Contact::solve_level`](crate::Contact::solve_level) and
+/// [`Contact::continue_level`](crate::Contact::continue_level).
+#[derive(Debug, Clone, Copy)]
+pub struct LevelSettings<'a> {
+    /// Newton's settings of every solve.
+    pub newton: &'a NewtonSettings,
+    /// The path's increments.
+    pub stepping: &'a Stepping,
+    /// The perturbation offered until a sub-level applies it.
+    pub perturbation: &'a [(usize, f64)],
 }
 
 impl Default for ContactSettings {

@@ -16,6 +16,17 @@ fn long_levels_are_split_into_steps_of_at_most_max_step() {
     assert_eq!(contact.sublevels(0.0, 0.25), 1);
     assert_eq!(contact.sublevels(0.0, 0.26), 2);
     assert_eq!(contact.sublevels(1.0, 1.0), 1);
+    // The step ends: `from` before the first, `to` itself after the last (not a sum that
+    // could miss it by an ulp), equal steps between; the facade's steps without contact use
+    // the same ends, so `auto` hands the loop a step the loop would have made.
+    let ends: Vec<f64> = (0..=3)
+        .map(|j| ContactSettings::sublevel_end(0.1, 0.9, j, 3))
+        .collect();
+    assert_eq!(ends[0], 0.1);
+    assert_eq!(ends[3], 0.9);
+    approx::assert_relative_eq!(ends[1], 0.1 + 0.8 / 3.0, max_relative = 1e-15);
+    approx::assert_relative_eq!(ends[2], 0.1 + 1.6 / 3.0, max_relative = 1e-15);
+    assert_eq!(contact.settings().sublevels(0.0, 1.0), 4);
     for bad in [0.0, -0.1, f64::NAN, f64::INFINITY] {
         let settings = ContactSettings {
             max_step: bad,
