@@ -54,10 +54,20 @@ pub(crate) fn tangent_predictor(
     Ok(Prediction::Moved)
 }
 
+/// An extrapolated start for [`predicted_increment`] ([`Extrapolation::predict`](crate::Extrapolation::predict)).
+#[derive(Debug, Clone, Copy)]
+pub struct Guess<'a> {
+    /// The predicted state (prescribed DOFs are set by the problem at `to`).
+    pub u: &'a [f64],
+    /// Keep it only if ‖r(guess, to)‖∞ ≤ ‖r(u, to)‖∞, the plain start's (two residual
+    /// evaluations, no factorisation); else start from the last converged state.
+    pub guarded: bool,
+}
+
 /// One increment from the state `u` converged at `from` to `to`, for a driver that controls
 /// its own increments (a deck step's automatic incrementation): the tangent predictor when the
 /// prescribed values change (as [`follow_path_with`](crate::follow_path_with) does), else the
-/// secant guess u + f·(u − u_prev) when `secant` = (u_prev, f) is given, then Newton. `u` is
+/// extrapolated `guess` when given (with its residual guard when asked), then Newton. `u` is
 /// replaced by the converged state only if the attempt converged; the session then keeps its
 /// factorisation for the next increment's predictor. No stepping and no inertia guard: a
 /// failed attempt is the caller's to cut back. If the loads or the constrained DOFs change
@@ -67,7 +77,7 @@ pub fn predicted_increment(
     u: &mut Vec<f64>,
     from: f64,
     to: f64,
-    secant: Option<(&[f64], f64)>,
+    guess: Option<Guess<'_>>,
     settings: &crate::NewtonSettings,
     session: &mut PathSolver,
 ) -> Result<crate::IncrementReport, NewtonError> {
@@ -76,10 +86,10 @@ pub fn predicted_increment(
     let apply = !session.cache.serves(settings);
     let prediction = tangent_predictor(problem, &mut trial, from, to, session, apply)?;
     let predicted = prediction == Prediction::Moved;
-    if let (false, Some((u_prev, f))) = (predicted, secant) {
-        for ((t, &a), &b) in trial.iter_mut().zip(u.iter()).zip(u_prev) {
-            *t = a + f * (a - b);
-        }
+    if let (false, Some(g)) = (predicted, guess)
+        && (!g.guarded || no_worse(problem, g.u, &trial, to)?)
+    {
+        trial.copy_from_slice(g.u);
     }
     let PathSolver {
         solver, k, cache, ..
@@ -99,6 +109,25 @@ pub fn predicted_increment(
         session.invalidate();
     }
     Ok(report)
+}
+
+/// Whether ‖r(guess, λ)‖∞ ≤ ‖r(plain, λ)‖∞ (each with the prescribed values at λ): the guard
+/// of an extrapolated start.
+fn no_worse(
+    problem: &mut dyn NonlinearProblem,
+    guess: &[f64],
+    plain: &[f64],
+    lambda: f64,
+) -> Result<bool, NewtonError> {
+    let mut norms = [0.0; 2];
+    let mut r = vec![0.0; problem.n()];
+    for (norm, start) in norms.iter_mut().zip([guess, plain]) {
+        let mut x = start.to_vec();
+        problem.prescribe(&mut x, lambda);
+        problem.evaluate(&x, lambda, &mut r, None)?;
+        *norm = r.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    }
+    Ok(norms[0] <= norms[1])
 }
 
 /// What [`tangent_predictor`] did.
