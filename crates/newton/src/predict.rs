@@ -216,6 +216,65 @@ mod tests {
         }
     }
 
+    /// One DOF under a dead load, r = x + x³ − λ, K = 1 + 3x² (no prescribed values, so the
+    /// guess decides the start). From x = 0 to λ = 1 the plain start has |r| = 1; a guess
+    /// x = 2 has r = 9 (the guard drops it), x = 0.6 has |r| = 0.184 (kept).
+    struct Cubic(Arc<SymmetricPattern>);
+
+    impl NonlinearProblem for Cubic {
+        fn n(&self) -> usize {
+            1
+        }
+        fn pattern(&self) -> Arc<SymmetricPattern> {
+            self.0.clone()
+        }
+        fn prescribe(&self, _u: &mut [f64], _lambda: f64) {}
+        fn evaluate(
+            &mut self,
+            u: &[f64],
+            lambda: f64,
+            r: &mut [f64],
+            tangent: Option<&mut SymmetricMatrix>,
+        ) -> Result<f64, NewtonError> {
+            let x = u[0];
+            r[0] = x + x * x * x - lambda;
+            if let Some(t) = tangent {
+                t.set_zero();
+                t.add(0, 0, 1.0 + 3.0 * x * x).unwrap();
+            }
+            Ok(1.0)
+        }
+    }
+
+    #[test]
+    fn the_guard_keeps_a_better_guess_and_drops_a_worse_one() {
+        let pattern = Arc::new(SymmetricPattern::from_dof_lists(1, &[vec![0]]).unwrap());
+        let settings = NewtonSettings::default();
+        for (guess, guarded, start) in [(2.0, true, 1.0), (2.0, false, 9.0), (0.6, true, 0.184)] {
+            let mut problem = Cubic(pattern.clone());
+            let mut session = crate::PathSolver::new(&problem, settings.solver).unwrap();
+            let mut u = vec![0.0];
+            let g = [guess];
+            let report = crate::predicted_increment(
+                &mut problem,
+                &mut u,
+                0.0,
+                1.0,
+                Some(crate::Guess { u: &g, guarded }),
+                &settings,
+                &mut session,
+            )
+            .unwrap();
+            assert!(
+                (report.initial_residual - start).abs() < 1e-12,
+                "{guess} {guarded}: {report:?}"
+            );
+            assert!(report.converged());
+            // x + x³ = 1: x = 0.6823278038280193.
+            assert!((u[0] - 0.6823278038280193).abs() < 1e-8, "{u:?}");
+        }
+    }
+
     fn one_step(stepping: Stepping) -> (Vec<f64>, crate::PathReport) {
         let settings = NewtonSettings {
             force_tolerance: 1e-12,
