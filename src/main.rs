@@ -170,6 +170,7 @@ fn solve(
     let options = nonlin3d::deck::StepOptions {
         newton,
         initial_increment: increment,
+        start: Default::default(),
     };
     // Bad input (no step, an inverted element, …) and an output folder that cannot be written
     // are found before anything is solved; each increment lands there as it converges.

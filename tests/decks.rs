@@ -65,6 +65,7 @@ fn decks_match_calculix() {
             &StepOptions {
                 newton: settings.clone(),
                 initial_increment: None,
+                ..Default::default()
             },
         )
         .unwrap();
@@ -174,6 +175,7 @@ fn feature_decks_match_calculix_increment_by_increment() {
             ..NewtonSettings::default()
         },
         initial_increment: None,
+        ..Default::default()
     };
     for name in [
         "amplitude_cload",

@@ -7,8 +7,9 @@
 //! (λ = 0) to t1 (λ = 1) and Newton solves λ = 1 from the last state, moved first by the tangent
 //! predictor when prescribed displacements change (K_ff Δu_f = −K_fc Δu_c, as CalculiX does for
 //! displacement-controlled steps: without it a large increment can land on a spurious
-//! equilibrium, docs/VALIDATION.md), else extrapolated by the previous increment's change,
-//! scaled to the new size. An amplitude is evaluated only at
+//! equilibrium, docs/VALIDATION.md), else extrapolated in step time through the step's last
+//! converged states (quadratic through three, linear through two: [`IncrementStart`](super::IncrementStart)). An
+//! amplitude is evaluated only at
 //! increment ends, so it is honoured however the increments fall (an elastic state does not
 //! depend on the path).
 
@@ -18,7 +19,8 @@ use super::{IncrementSummary, StepOptions};
 use crate::Error;
 use nonlin3d_mesh::{InpModel, ReadStep};
 use nonlin3d_newton::{
-    NewtonSettings, PathSolver, StructuralProblem, Termination, predicted_increment,
+    Extrapolation, Guess, NewtonSettings, PathSolver, StructuralProblem, Termination,
+    predicted_increment,
 };
 
 /// The increment control in force in a step: `*CONTROLS, PARAMETERS=TIME INCREMENTATION` or
@@ -49,13 +51,18 @@ impl Control {
 }
 
 /// The Newton settings of a step: `base` with the deck's `*CONTROLS` (I_C → iterations, R_n →
-/// relative residual tolerance, C_n → displacement-correction tolerance).
-pub(crate) fn newton_settings(base: &NewtonSettings, step: &ReadStep) -> NewtonSettings {
+/// relative residual tolerance, C_n → displacement-correction tolerance) and `line_search`.
+pub(crate) fn newton_settings(
+    base: &NewtonSettings,
+    line_search: bool,
+    step: &ReadStep,
+) -> NewtonSettings {
     let c = &step.controls;
     NewtonSettings {
         max_iterations: c.max_iterations.unwrap_or(base.max_iterations),
         relative_tolerance: c.residual_ratio.unwrap_or(base.relative_tolerance),
         displacement_tolerance: c.correction_ratio.unwrap_or(base.displacement_tolerance),
+        line_search,
         ..base.clone()
     }
 }
@@ -88,7 +95,7 @@ pub(crate) fn run_step(
 ) -> Result<(), Error> {
     let step = &model.steps[k];
     let p = &step.procedure;
-    let settings = newton_settings(&options.newton, step);
+    let settings = newton_settings(&options.newton, options.start.line_search, step);
     let control = Control::of(step);
     let period = frame.period;
     let eps = 1e-12 * period;
@@ -105,7 +112,10 @@ pub(crate) fn run_step(
     let mut increment = 0;
     let mut easy_before = false;
     let mut cutbacks = 0;
-    let mut previous: Option<(Vec<f64>, f64)> = None;
+    // The converged states of the step (from its start) for the extrapolated start.
+    let mut path = Extrapolation::new(options.start.extrapolation);
+    path.push(0.0, u);
+    let guarded = options.start.guarded;
     let fail = |reason: String| Error::Step {
         step: k + 1,
         line: step.line,
@@ -122,10 +132,9 @@ pub(crate) fn run_step(
             c.reinstall(problem, u, &mut session)?;
         }
         let start = u.clone();
-        let secant = previous
-            .as_ref()
-            .map(|(u_prev, d_prev)| (u_prev.as_slice(), size / d_prev));
-        let report = predicted_increment(problem, u, 0.0, 1.0, secant, &settings, &mut session)?;
+        let predicted = path.predict(t + size);
+        let guess = predicted.as_deref().map(|g| Guess { u: g, guarded });
+        let report = predicted_increment(problem, u, 0.0, 1.0, guess, &settings, &mut session)?;
         let iterations = report.iterations.len();
         let mut converged = report.converged();
         let mut summary = IncrementSummary::of(&report, increment + 1, t + size, frame.start);
@@ -152,8 +161,8 @@ pub(crate) fn run_step(
                     step.max_increments
                 )));
             }
-            previous = Some((start, size));
             t += size;
+            path.push(t, u);
             cutbacks = 0;
             on_increment(Converged {
                 increment,

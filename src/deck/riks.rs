@@ -65,7 +65,7 @@ pub(crate) fn run_step(
     on_increment: &mut dyn FnMut(Converged<'_>) -> Result<(), Error>,
 ) -> Result<(), Error> {
     let step = &model.steps[k];
-    let settings = newton_settings(&options.newton, step);
+    let settings = newton_settings(&options.newton, options.newton.line_search, step);
     // λ = 0: the values at the step's start, λ = 1: the step's reference values.
     problem.set_constraints(history.constraints(model, frame, 0.0, frame.period)?)?;
     let arc = arc_control(model, k, riks);

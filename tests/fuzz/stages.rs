@@ -510,6 +510,7 @@ fn deck(text: &str) -> Outcome {
             ..NewtonSettings::default()
         },
         initial_increment: None,
+        ..Default::default()
     };
     let steps = match nonlin3d::deck::solve_deck(&model, &options) {
         Ok(s) => s,

@@ -8,6 +8,7 @@
 //! | [`NewtonSettings`], [`solve_increment`] | one load level: full, modified or quasi-Newton (BFGS), line search, convergence records |
 //! | [`TangentCache`], [`solve_increment_with`] | a factorised tangent (and BFGS pairs) kept across increments |
 //! | [`Stepping`], [`follow_path`] | load stepping to a list of targets with cutback and regrowth |
+//! | [`Extrapolation`], [`predicted_increment`], [`Guess`] | an increment's start extrapolated from the last converged states (linear or quadratic in step time), kept only if its residual is not larger than the plain start's |
 //! | [`PathSolver`], [`follow_path_with`] | a solver, tangent and kept factorisation carried over the levels of a sweep |
 //! | [`DeadLoads`], [`perturbed_path`], [`perturbed_step`], [`perturbed_redo`] | the thesis's perturbation load (§3.2) as a dead load, converged with a level and then removed; any problem with dead loads; a level redone by the protocol |
 //! | [`solve_level`], [`LevelReport`] | one level of a sweep: to the level, the stability test there (§2.5) and, past a bifurcation, the perturbation protocol |
@@ -73,6 +74,7 @@ pub const TRACE_TARGET: &str = "nonlin3d_newton";
 mod arclength;
 mod cache;
 mod error;
+mod extrapolate;
 mod guard;
 mod level;
 mod path;
@@ -88,10 +90,11 @@ pub use arclength::{
 };
 pub use cache::TangentCache;
 pub use error::NewtonError;
+pub use extrapolate::Extrapolation;
 pub use level::{LevelReport, perturbed_redo, solve_level};
 pub use path::{PathReport, Stepping, follow_path, follow_path_from, follow_path_with};
 pub use perturb::{DeadLoads, MIN_REMOVAL_PART, perturbed_path, perturbed_step};
-pub use predict::predicted_increment;
+pub use predict::{Guess, predicted_increment};
 pub use problem::{NonlinearProblem, StructuralProblem};
 pub use session::PathSolver;
 pub use solve::{

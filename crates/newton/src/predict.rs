@@ -54,10 +54,20 @@ pub(crate) fn tangent_predictor(
     Ok(Prediction::Moved)
 }
 
+/// An extrapolated start for [`predicted_increment`] ([`Extrapolation::predict`](crate::Extrapolation::predict)).
+#[derive(Debug, Clone, Copy)]
+pub struct Guess<'a> {
+    /// The predicted state (prescribed DOFs are set by the problem at `to`).
+    pub u: &'a [f64],
+    /// Keep it only if ‖r(guess, to)‖∞ ≤ ‖r(u, to)‖∞, the plain start's (two residual
+    /// evaluations, no factorisation); else start from the last converged state.
+    pub guarded: bool,
+}
+
 /// One increment from the state `u` converged at `from` to `to`, for a driver that controls
 /// its own increments (a deck step's automatic incrementation): the tangent predictor when the
 /// prescribed values change (as [`follow_path_with`](crate::follow_path_with) does), else the
-/// secant guess u + f·(u − u_prev) when `secant` = (u_prev, f) is given, then Newton. `u` is
+/// extrapolated `guess` when given (with its residual guard when asked), then Newton. `u` is
 /// replaced by the converged state only if the attempt converged; the session then keeps its
 /// factorisation for the next increment's predictor. No stepping and no inertia guard: a
 /// failed attempt is the caller's to cut back. If the loads or the constrained DOFs change
@@ -67,7 +77,7 @@ pub fn predicted_increment(
     u: &mut Vec<f64>,
     from: f64,
     to: f64,
-    secant: Option<(&[f64], f64)>,
+    guess: Option<Guess<'_>>,
     settings: &crate::NewtonSettings,
     session: &mut PathSolver,
 ) -> Result<crate::IncrementReport, NewtonError> {
@@ -76,10 +86,10 @@ pub fn predicted_increment(
     let apply = !session.cache.serves(settings);
     let prediction = tangent_predictor(problem, &mut trial, from, to, session, apply)?;
     let predicted = prediction == Prediction::Moved;
-    if let (false, Some((u_prev, f))) = (predicted, secant) {
-        for ((t, &a), &b) in trial.iter_mut().zip(u.iter()).zip(u_prev) {
-            *t = a + f * (a - b);
-        }
+    if let (false, Some(g)) = (predicted, guess)
+        && (!g.guarded || no_worse(problem, g.u, &trial, to)?)
+    {
+        trial.copy_from_slice(g.u);
     }
     let PathSolver {
         solver, k, cache, ..
@@ -99,6 +109,25 @@ pub fn predicted_increment(
         session.invalidate();
     }
     Ok(report)
+}
+
+/// Whether ‖r(guess, λ)‖∞ ≤ ‖r(plain, λ)‖∞ (each with the prescribed values at λ): the guard
+/// of an extrapolated start.
+fn no_worse(
+    problem: &mut dyn NonlinearProblem,
+    guess: &[f64],
+    plain: &[f64],
+    lambda: f64,
+) -> Result<bool, NewtonError> {
+    let mut norms = [0.0; 2];
+    let mut r = vec![0.0; problem.n()];
+    for (norm, start) in norms.iter_mut().zip([guess, plain]) {
+        let mut x = start.to_vec();
+        problem.prescribe(&mut x, lambda);
+        problem.evaluate(&x, lambda, &mut r, None)?;
+        *norm = r.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    }
+    Ok(norms[0] <= norms[1])
 }
 
 /// What [`tangent_predictor`] did.
@@ -184,6 +213,65 @@ mod tests {
                 t.add(1, 1, 1.0).unwrap();
             }
             Ok(1.0)
+        }
+    }
+
+    /// One DOF under a dead load, r = x + x³ − λ, K = 1 + 3x² (no prescribed values, so the
+    /// guess decides the start). From x = 0 to λ = 1 the plain start has |r| = 1; a guess
+    /// x = 2 has r = 9 (the guard drops it), x = 0.6 has |r| = 0.184 (kept).
+    struct Cubic(Arc<SymmetricPattern>);
+
+    impl NonlinearProblem for Cubic {
+        fn n(&self) -> usize {
+            1
+        }
+        fn pattern(&self) -> Arc<SymmetricPattern> {
+            self.0.clone()
+        }
+        fn prescribe(&self, _u: &mut [f64], _lambda: f64) {}
+        fn evaluate(
+            &mut self,
+            u: &[f64],
+            lambda: f64,
+            r: &mut [f64],
+            tangent: Option<&mut SymmetricMatrix>,
+        ) -> Result<f64, NewtonError> {
+            let x = u[0];
+            r[0] = x + x * x * x - lambda;
+            if let Some(t) = tangent {
+                t.set_zero();
+                t.add(0, 0, 1.0 + 3.0 * x * x).unwrap();
+            }
+            Ok(1.0)
+        }
+    }
+
+    #[test]
+    fn the_guard_keeps_a_better_guess_and_drops_a_worse_one() {
+        let pattern = Arc::new(SymmetricPattern::from_dof_lists(1, &[vec![0]]).unwrap());
+        let settings = NewtonSettings::default();
+        for (guess, guarded, start) in [(2.0, true, 1.0), (2.0, false, 9.0), (0.6, true, 0.184)] {
+            let mut problem = Cubic(pattern.clone());
+            let mut session = crate::PathSolver::new(&problem, settings.solver).unwrap();
+            let mut u = vec![0.0];
+            let g = [guess];
+            let report = crate::predicted_increment(
+                &mut problem,
+                &mut u,
+                0.0,
+                1.0,
+                Some(crate::Guess { u: &g, guarded }),
+                &settings,
+                &mut session,
+            )
+            .unwrap();
+            assert!(
+                (report.initial_residual - start).abs() < 1e-12,
+                "{guess} {guarded}: {report:?}"
+            );
+            assert!(report.converged());
+            // x + x³ = 1: x = 0.6823278038280193.
+            assert!((u[0] - 0.6823278038280193).abs() < 1e-8, "{u:?}");
         }
     }
 
