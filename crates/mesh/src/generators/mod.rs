@@ -4,6 +4,7 @@
 //! `partition` splits a generated delamination model into the nonlinear and linear
 //! substructures of §2.6 and Fig. 3.2.2.
 
+mod coarse;
 mod embedded;
 mod grading;
 mod partition;
