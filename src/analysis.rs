@@ -20,6 +20,9 @@ use nonlin3d_newton::{
 use nonlin3d_vcct::{FrontRelease, cells_above, release_rates, respect_contact};
 use std::time::Instant;
 
+#[path = "analysis_estimate.rs"]
+mod estimate;
+
 /// G along the front at state `u`.
 pub fn front_table(
     scene: &Scene,
@@ -98,6 +101,9 @@ pub fn run(
     scene: &Scene,
     progress: &mut dyn FnMut(Progress) -> Result<(), Error>,
 ) -> Result<Results, Error> {
+    // `[mesh] accuracy` turned into knobs before anything is sized.
+    let (resolved, choice) = estimate::resolve_accuracy(scene)?;
+    let scene = &resolved;
     // The whole run (tangent and factor too) estimated before meshing.
     crate::budget::check_scene(scene, &crate::budget::limit())?;
     let t0 = Instant::now();
@@ -151,11 +157,14 @@ pub fn run(
             },
         },
         model_data: Some(model),
+        accuracy: None,
         warnings: Vec::new(),
         provenance: None,
     };
     results.warnings = scene.warnings();
     results.warnings.extend(results.stability_warnings());
+    // The error estimate of every level (the companion mesh) and the target's verdict.
+    estimate::attach(scene, choice, &mut results)?;
     Ok(results)
 }
 
