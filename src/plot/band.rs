@@ -11,8 +11,11 @@ use plotters::prelude::*;
 /// The chart the release-rate plots draw on.
 type Chart<'a, 'b> = ChartContext<'a, SVGBackend<'b>, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
 
+/// A front row's G of one mode, and its error.
+type Mode = (fn(&FrontRow) -> f64, fn(&GError) -> f64);
+
 /// Which G a chart shows, from its y-axis description (`G_T, energy release rate …`).
-fn mode(y_desc: &str) -> Option<(fn(&FrontRow) -> f64, fn(&GError) -> f64)> {
+fn mode(y_desc: &str) -> Option<Mode> {
     let name = y_desc.split(',').next()?;
     match name {
         "G_I" => Some((|r| r.g_i, |e| e.g_i)),
