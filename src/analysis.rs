@@ -21,7 +21,7 @@ use nonlin3d_vcct::{FrontRelease, cells_above, release_rates, respect_contact};
 use std::time::Instant;
 
 #[path = "analysis_estimate.rs"]
-mod estimate;
+pub(crate) mod estimate;
 
 /// G along the front at state `u`.
 pub fn front_table(

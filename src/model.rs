@@ -61,9 +61,13 @@ pub struct Model {
 }
 
 /// Builds the mesh and front of a scene (with its imperfection, if any): the embedded
-/// generator for embedded, edge and plate models (thesis §3.1), the strip for through-width.
+/// generator for embedded, edge and plate models (thesis §3.1), the strip for through-width;
+/// `[mesh] accuracy` resolved to knobs first.
 pub fn build_model(scene: &Scene) -> Result<Model, Error> {
     scene.validate()?;
+    // `[mesh] accuracy`: the knobs its table picks (docs/MESH.md), under the scene's own.
+    let (resolved, _) = crate::analysis::estimate::resolve_accuracy(scene)?;
+    let scene = &resolved;
     // Nodes and cells estimated from the scene before anything is allocated.
     crate::budget::check_mesh(scene, &crate::budget::limit())?;
     let materials = scene.stiffnesses()?;
