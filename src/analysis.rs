@@ -161,10 +161,13 @@ pub fn run(
         warnings: Vec::new(),
         provenance: None,
     };
-    results.warnings = scene.warnings();
-    results.warnings.extend(results.stability_warnings());
-    // The error estimate of every level (the companion mesh) and the target's verdict.
+    // The error estimate of every level (the companion mesh) and the target's verdict; its
+    // warnings after the scene's and before the stability ones (a run's end says last).
     estimate::attach(scene, choice, &mut results)?;
+    let estimated = std::mem::take(&mut results.warnings);
+    results.warnings = scene.warnings();
+    results.warnings.extend(estimated);
+    results.warnings.extend(results.stability_warnings());
     Ok(results)
 }
 
