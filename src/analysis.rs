@@ -20,6 +20,9 @@ use nonlin3d_newton::{
 use nonlin3d_vcct::{FrontRelease, cells_above, release_rates, respect_contact};
 use std::time::Instant;
 
+#[path = "analysis_estimate.rs"]
+pub(crate) mod estimate;
+
 /// G along the front at state `u`.
 pub fn front_table(
     scene: &Scene,
@@ -98,6 +101,9 @@ pub fn run(
     scene: &Scene,
     progress: &mut dyn FnMut(Progress) -> Result<(), Error>,
 ) -> Result<Results, Error> {
+    // `[mesh] accuracy` turned into knobs before anything is sized.
+    let (resolved, choice) = estimate::resolve_accuracy(scene)?;
+    let scene = &resolved;
     // The whole run (tangent and factor too) estimated before meshing.
     crate::budget::check_scene(scene, &crate::budget::limit())?;
     let t0 = Instant::now();
@@ -151,10 +157,16 @@ pub fn run(
             },
         },
         model_data: Some(model),
+        accuracy: None,
         warnings: Vec::new(),
         provenance: None,
     };
+    // The error estimate of every level (the companion mesh) and the target's verdict; its
+    // warnings after the scene's and before the stability ones (a run's end says last).
+    estimate::attach(scene, choice, &mut results)?;
+    let estimated = std::mem::take(&mut results.warnings);
     results.warnings = scene.warnings();
+    results.warnings.extend(estimated);
     results.warnings.extend(results.stability_warnings());
     Ok(results)
 }

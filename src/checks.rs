@@ -343,6 +343,14 @@ fn mesh_controls(s: &Scene) -> Result<(), Error> {
              and plate models; a through-width front is straight (refine it with across)"
         ));
     }
+    if let Some(t) = c.accuracy
+        && !(t.is_finite() && t > 0.0 && t < 1.0)
+    {
+        return bad(format!(
+            "mesh.accuracy = {t}: must lie between 0 and 1 (the target relative error of G at \
+             the front, e.g. 0.02)"
+        ));
+    }
     if let Some(g) = c.front_grading
         && !(g.is_finite() && g > 0.0)
     {

@@ -61,9 +61,13 @@ pub struct Model {
 }
 
 /// Builds the mesh and front of a scene (with its imperfection, if any): the embedded
-/// generator for embedded, edge and plate models (thesis §3.1), the strip for through-width.
+/// generator for embedded, edge and plate models (thesis §3.1), the strip for through-width;
+/// `[mesh] accuracy` resolved to knobs first.
 pub fn build_model(scene: &Scene) -> Result<Model, Error> {
     scene.validate()?;
+    // `[mesh] accuracy`: the knobs its table picks (docs/MESH.md), under the scene's own.
+    let (resolved, _) = crate::analysis::estimate::resolve_accuracy(scene)?;
+    let scene = &resolved;
     // Nodes and cells estimated from the scene before anything is allocated.
     crate::budget::check_mesh(scene, &crate::budget::limit())?;
     let materials = scene.stiffnesses()?;
@@ -163,7 +167,7 @@ fn element_kind(scene: &Scene) -> nonlin3d_element::ElementKind {
 /// sublaminate h on the base H, in a quarter model of size W (all in mm): the scene's mesh
 /// controls over the thesis's reference mesh; eq. 3.1.2's modified map for an ellipse unless
 /// the scene asks for the conformal map of eq. 3.1.1.
-fn embedded_params(
+pub(crate) fn embedded_params(
     scene: &Scene,
     shape: Shape,
     a: f64,
@@ -214,7 +218,7 @@ fn embedded_params(
 /// The through-width generator's parameters for a delamination of half-length a in a strip of
 /// length L and width W, the sublaminate h on the base H (all in mm): the scene's mesh
 /// controls over the generator's example mesh. No ply-level layers (refused, naming the field).
-fn through_width_params(
+pub(crate) fn through_width_params(
     scene: &Scene,
     a_mm: f64,
     length_mm: f64,

@@ -236,6 +236,7 @@ impl RunOutput {
                 substructure: None,
             },
             levels: Vec::new(),
+            accuracy: None,
             critical: None,
             timings: Timings {
                 mesh_s: 0.0,

@@ -9,6 +9,7 @@
 //! stretches where they overlap (G not physical without contact, §2.7), triangles where contact
 //! holds them closed (G_I = 0).
 
+mod band;
 mod legend;
 
 use crate::Error;
@@ -196,7 +197,7 @@ fn front_chart(
         ),
         (y_lo..y_hi, y_desc),
     )?;
-    let mut entries = Vec::new();
+    let mut entries = band::draw(&mut chart, results, y_desc)?;
     for (k, level) in results.levels.iter().enumerate() {
         let colour = COLOURS[k % COLOURS.len()].to_rgba();
         entries.push(Entry::new(

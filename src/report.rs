@@ -73,28 +73,45 @@ pub fn front_csv(results: &Results, level: usize) -> String {
         "area_mm2",
         "node",
         "failure_index",
+        "g_i_error_j_m2",
+        "g_ii_error_j_m2",
+        "g_iii_error_j_m2",
+        "g_t_error_j_m2",
     ]);
     if let Some(l) = results.levels.get(level) {
         for r in &l.front {
-            t.row([
-                r.s_mm.to_string(),
-                r.theta_deg.to_string(),
-                r.x_mm.to_string(),
-                r.y_mm.to_string(),
-                r.delta_a_mm.to_string(),
-                format!("{:e}", r.g_i),
-                format!("{:e}", r.g_ii),
-                format!("{:e}", r.g_iii),
-                format!("{:e}", r.g_t),
-                r.faces.as_str().to_string(),
-                format!("{:e}", r.opening_mm),
-                format!("{:e}", r.area_mm2),
-                r.node.to_string(),
-                r.failure_index.map_or(String::new(), |f| format!("{f:e}")),
-            ]);
+            t.row(
+                [
+                    r.s_mm.to_string(),
+                    r.theta_deg.to_string(),
+                    r.x_mm.to_string(),
+                    r.y_mm.to_string(),
+                    r.delta_a_mm.to_string(),
+                    format!("{:e}", r.g_i),
+                    format!("{:e}", r.g_ii),
+                    format!("{:e}", r.g_iii),
+                    format!("{:e}", r.g_t),
+                    r.faces.as_str().to_string(),
+                    format!("{:e}", r.opening_mm),
+                    format!("{:e}", r.area_mm2),
+                    r.node.to_string(),
+                    r.failure_index.map_or(String::new(), |f| format!("{f:e}")),
+                ]
+                .into_iter()
+                .chain(error_fields(r)),
+            );
         }
     }
     t.finish()
+}
+
+/// The ± columns of a front row (J/m², empty without an estimate), after the old columns so
+/// that readers of the old layout keep working.
+fn error_fields(r: &crate::results::FrontRow) -> [String; 4] {
+    match r.error {
+        Some(e) => [e.g_i, e.g_ii, e.g_iii, e.g_t].map(|v| format!("{v:e}")),
+        None => Default::default(),
+    }
 }
 
 /// `yes`, `NO` (unstable: negative pivots) or `?` (not computed).
@@ -225,6 +242,12 @@ pub fn table(results: &Results) -> String {
         s,
         "{head:>9} | w centre top (mm) | max face separation (mm) | G_I max (J/m²) at S (mm) | G_II max (J/m²) at S (mm) | overlapped | stable | iterations"
     );
+    // The ± column only when the levels carry an error estimate.
+    let estimated = results.levels.iter().any(|l| l.error_estimate.is_some());
+    if estimated {
+        s.pop();
+        s.push_str(" | ± G max (J/m², % of G_T max)\n");
+    }
     // The contact column only when contact acted at some level (a run without contact prints
     // the table it always did).
     let contact = results.levels.iter().any(|l| l.contact.is_some());
@@ -252,6 +275,13 @@ pub fn table(results: &Results) -> String {
             stability_word(l),
             l.convergence.iterations
         );
+        if estimated {
+            s.pop();
+            let e = l.error_estimate.map_or("—".to_string(), |e| {
+                format!("±{:.1} ({:.1} %)", e.max_j_m2, 100.0 * e.relative)
+            });
+            let _ = writeln!(s, " | {e:>27}");
+        }
         if contact {
             s.pop();
             let c = l.contact.as_ref().map_or("—".to_string(), |c| {
@@ -270,6 +300,14 @@ pub fn table(results: &Results) -> String {
             "overlapped: front points where the crack faces pass through each other (no contact \
              is modelled); their G is not physical and is left out of the maxima above and of \
              the growth criterion (faces = overlapped in front_K.csv and results.json)"
+        );
+    }
+    if let Some(dofs) = results.accuracy.as_ref().and_then(|a| a.companion_dofs) {
+        let _ = writeln!(
+            s,
+            "± G max: the largest estimated discretisation error of G_I, G_II, G_III, G_T over \
+             the front, from the same levels on a mesh twice as coarse ({dofs} DOFs; per point \
+             in front_K.csv and results.json)"
         );
     }
     let what = head;

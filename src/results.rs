@@ -65,6 +65,81 @@ pub struct FrontRow {
     /// Failure index of the scene's mixed-mode criterion (≥ 1: growth), if one was given and
     /// the faces here are open.
     pub failure_index: Option<f64>,
+    /// The estimated discretisation error of G here, J/m² (`[mesh] error_estimate`,
+    /// docs/ACCURACY.md §3): absent when no estimate was made.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub error: Option<GError>,
+}
+
+/// The estimated discretisation error (±) of each G at a front point, J/m².
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct GError {
+    /// ±G_I.
+    pub g_i: f64,
+    /// ±G_II.
+    pub g_ii: f64,
+    /// ±G_III.
+    pub g_iii: f64,
+    /// ±G_T.
+    pub g_t: f64,
+}
+
+/// A level's error estimate over its front (the points whose faces are not overlapped).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct LevelError {
+    /// The largest ±G over the points and modes, J/m².
+    pub max_j_m2: f64,
+    /// The level's G_T max, J/m², the scale of the relative error.
+    pub g_t_max_j_m2: f64,
+    /// max_j_m2 / g_t_max_j_m2: the level's relative error, compared with `[mesh] accuracy`.
+    pub relative: f64,
+}
+
+/// What `[mesh] accuracy` chose and what the error estimate found (results.json `accuracy`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct AccuracyReport {
+    /// `companion` or `off`.
+    pub error_estimate: String,
+    /// DOFs of the companion mesh (null: no estimate).
+    pub companion_dofs: Option<usize>,
+    /// Seconds the companion run took (null: no estimate).
+    pub companion_s: Option<f64>,
+    /// Why there is no estimate although one was asked for (the companion run failed).
+    pub unavailable: Option<String>,
+    /// The largest relative error estimate over the levels (null: no estimate).
+    pub worst_relative: Option<f64>,
+    /// `[mesh] accuracy`, the target (null: none given).
+    pub target: Option<f64>,
+    /// Whether worst_relative ≤ target (null: no target or no estimate).
+    pub met: Option<bool>,
+    /// The mesh the target chose (null: no target).
+    pub chosen_mesh: Option<MeshChoice>,
+}
+
+/// The knobs `[mesh] accuracy` set (the table's row scaled to the model), after the scene's
+/// explicit knobs overrode them.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct MeshChoice {
+    /// The measured worst error of the chosen row on the reference circle (relative).
+    pub table_error: f64,
+    /// Whether a row of the table meets the target (false: the finest row, short of it).
+    pub table_meets_target: bool,
+    /// Slices.
+    pub slices: usize,
+    /// Rings inside the front.
+    pub inside: usize,
+    /// Rings outside the front.
+    pub outside: usize,
+    /// Sublaminate layers.
+    pub sub_layers: usize,
+    /// Base layers.
+    pub base_layers: usize,
+    /// Front element, mm (null: the thesis grading).
+    pub front_element_mm: Option<f64>,
+    /// Front band `[inside, outside]` (null: none).
+    pub front_band: Option<[usize; 2]>,
+    /// The knobs the scene gave explicitly, which override the table's.
+    pub overridden: Vec<String>,
 }
 
 impl FrontRow {
@@ -89,6 +164,7 @@ impl FrontRow {
             area_mm2: r.area * 1e6,
             node: r.node,
             failure_index: None,
+            error: None,
         }
     }
 
@@ -180,6 +256,9 @@ pub struct LevelResult {
     /// What crack-face contact did at this level (absent when it did not act).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub contact: Option<ContactSummary>,
+    /// The discretisation-error estimate over the front (absent when none was made).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub error_estimate: Option<LevelError>,
     /// Nodal displacements (node-major, m): for VTU output, not serialised.
     #[serde(skip)]
     pub displacements: Vec<f64>,
@@ -220,6 +299,7 @@ impl LevelResult {
             },
             front: front.iter().map(FrontRow::new).collect(),
             contact: None,
+            error_estimate: None,
             displacements,
         }
     }
@@ -391,6 +471,9 @@ pub struct Results {
     pub warnings: Vec<String>,
     /// Critical strain by the scene's criterion, if one was given and reached.
     pub critical: Option<Critical>,
+    /// The error estimate and the mesh `[mesh] accuracy` chose (absent: neither asked for).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub accuracy: Option<AccuracyReport>,
     /// Stage timings.
     pub timings: Timings,
     /// The model (mesh and front), for VTU output; not serialised.

@@ -340,6 +340,27 @@ pub struct MeshControls {
     /// aspect ratio).
     #[serde(default)]
     pub elliptic_map: Option<MapName>,
+    /// The discretisation-error estimate reported with every G (docs/ACCURACY.md §3):
+    /// `companion` (default: the same levels on a mesh twice as coarse, about a tenth of the
+    /// run's time) or `off`.
+    #[serde(default)]
+    pub error_estimate: Option<ErrorEstimateName>,
+    /// Target relative error of G at the front (e.g. 0.02): picks the front-resolving mesh
+    /// from a measured table (docs/MESH.md, "Accuracy"); knobs given beside it override the
+    /// table's, field by field; a warning when the estimate exceeds it.
+    #[serde(default)]
+    pub accuracy: Option<f64>,
+}
+
+/// `[mesh] error_estimate` names.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum ErrorEstimateName {
+    /// No estimate.
+    Off,
+    /// max(|G(M) − G(M/2)|, 0.15·|ΔG_T at the G_T max|) per point and mode.
+    #[default]
+    Companion,
 }
 
 /// Elliptic map names in scenes (thesis §3.1).

@@ -60,6 +60,7 @@ fn results() -> Results {
         },
         levels,
         warnings: vec![],
+        accuracy: None,
         critical: Some(Critical {
             strain: -0.0016,
             after: None,

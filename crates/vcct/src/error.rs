@@ -51,4 +51,10 @@ pub enum VcctError {
         /// Value.
         value: f64,
     },
+    /// The inputs of the error estimate (docs/ACCURACY.md §3) do not fit together.
+    #[error("error estimate: {reason}")]
+    Estimate {
+        /// Which front and why.
+        reason: String,
+    },
 }

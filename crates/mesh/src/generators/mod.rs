@@ -4,12 +4,15 @@
 //! `partition` splits a generated delamination model into the nonlinear and linear
 //! substructures of §2.6 and Fig. 3.2.2.
 
+mod accuracy;
+mod coarse;
 mod embedded;
 mod grading;
 mod partition;
 mod structured;
 mod through_width;
 
+pub use accuracy::{ACCURACY_TABLE, AccuracyRow, REFERENCE_FRONT, quarter_front_length};
 pub use embedded::{
     Centre, EllipticMap, EmbeddedParams, FrontBand, PlyLayout, edge_delamination,
     embedded_delamination, embedded_delamination_with_front, thin_film,

@@ -1,0 +1,283 @@
+//! The discretisation error of G along the front, from the same level solved on a companion
+//! mesh twice as coarse (issue 25; the measured reliability is in docs/ACCURACY.md §3).
+//!
+//! With G(M) the release rates on the run's mesh M and G(M/2) on the companion (every count
+//! halved, the front element doubled), the estimate at each front point of M, per mode k, is
+//!
+//! δG_k(S) = max( |G_k(M; S) − G_k(M/2; S)|, c·|G_T(M; S*) − G_T(M/2; S*)| ),
+//!
+//! with S* the point of M where G_T is largest and c = [`FLOOR`]. The first term is Richardson's
+//! difference of two meshes without dividing by 2^p − 1 (an order p ≈ 1 … 2.4 measured, so the
+//! difference itself is an error bound for any p ≥ 1); the second is a floor relative to the
+//! largest error along the front: where G is small, the difference of two meshes can cross zero
+//! by accident, and an error there matters against G_T max, not against the local G.
+//!
+//! The two fronts have different points; they are matched by their position along the front
+//! (S over the front's length, 0 … 1): the run's G is interpolated linearly to the companion's
+//! points, where the difference is taken, and the differences are interpolated back to the
+//! run's points (the run's front is the finer: interpolating it costs less accuracy than
+//! interpolating the companion's).
+
+use crate::VcctError;
+
+/// The floor's factor c: the error at any point is at least c times the difference of the
+/// two meshes' G_T where G_T is largest. 0.15 is the smallest tenth-multiple with which the
+/// estimate bracketed the true error at every point measured (docs/ACCURACY.md §3).
+pub const FLOOR: f64 = 0.15;
+
+/// G per mode at one front point, J/m² (or their errors).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Modes {
+    /// G_I.
+    pub g_i: f64,
+    /// G_II.
+    pub g_ii: f64,
+    /// G_III.
+    pub g_iii: f64,
+    /// G_T.
+    pub g_t: f64,
+}
+
+impl Modes {
+    /// The four values in order I, II, III, T.
+    fn array(self) -> [f64; 4] {
+        [self.g_i, self.g_ii, self.g_iii, self.g_t]
+    }
+
+    /// From the four values in order I, II, III, T.
+    fn from_array(v: [f64; 4]) -> Self {
+        Self {
+            g_i: v[0],
+            g_ii: v[1],
+            g_iii: v[2],
+            g_t: v[3],
+        }
+    }
+
+    /// The largest of the four (an error's worst mode).
+    pub fn max(self) -> f64 {
+        self.array().into_iter().fold(0.0, f64::max)
+    }
+}
+
+/// G along one front: each point's position along the front (S over the front's length,
+/// increasing from 0 to 1) and G there.
+#[derive(Debug, Clone, Copy)]
+pub struct FrontG<'a> {
+    /// Positions, increasing.
+    pub at: &'a [f64],
+    /// G at each position.
+    pub g: &'a [Modes],
+}
+
+impl FrontG<'_> {
+    /// Checks lengths and order, naming `which` front.
+    fn check(&self, which: &str) -> Result<(), VcctError> {
+        let bad = |reason: String| {
+            Err(VcctError::Estimate {
+                reason: format!("the {which} front: {reason}"),
+            })
+        };
+        if self.at.len() != self.g.len() || self.at.is_empty() {
+            return bad(format!(
+                "{} positions for {} G values (need as many, at least one)",
+                self.at.len(),
+                self.g.len()
+            ));
+        }
+        if let Some(k) = self.at.windows(2).position(|w| w[1] < w[0]) {
+            return bad(format!(
+                "positions must increase along the front; point {} is at {} after {}",
+                k + 1,
+                self.at[k + 1],
+                self.at[k]
+            ));
+        }
+        let values = self.g.iter().flat_map(|g| g.array());
+        if self
+            .at
+            .iter()
+            .copied()
+            .chain(values)
+            .any(|v| !v.is_finite())
+        {
+            return bad("a position or G is not finite".into());
+        }
+        Ok(())
+    }
+
+    /// G linearly interpolated at position `s` (held constant beyond the ends).
+    pub fn at_position(&self, s: f64) -> Modes {
+        let n = self.at.len();
+        let k = self.at.partition_point(|&a| a <= s);
+        if k == 0 {
+            return self.g[0];
+        }
+        if k == n {
+            return self.g[n - 1];
+        }
+        let (a0, a1) = (self.at[k - 1], self.at[k]);
+        let w = if a1 > a0 { (s - a0) / (a1 - a0) } else { 0.0 };
+        let (g0, g1) = (self.g[k - 1].array(), self.g[k].array());
+        Modes::from_array(std::array::from_fn(|m| g0[m] + w * (g1[m] - g0[m])))
+    }
+}
+
+/// The error estimate at each point of `run` (the run's mesh M) from `companion` (the same
+/// level on M/2): δG_k = max(|G_k(M) − G_k(M/2)|, `floor`·|ΔG_T at the G_T max of M|), the
+/// differences taken at the companion's points and interpolated back (module docs).
+pub fn companion(
+    run: FrontG<'_>,
+    companion: FrontG<'_>,
+    floor: f64,
+) -> Result<Vec<Modes>, VcctError> {
+    run.check("run's")?;
+    companion.check("companion's")?;
+    if !(floor.is_finite() && floor >= 0.0) {
+        return Err(VcctError::Estimate {
+            reason: format!("the floor factor {floor} must be finite and ≥ 0"),
+        });
+    }
+    // |G(M) − G(M/2)| at the companion's points.
+    let diffs: Vec<Modes> = companion
+        .at
+        .iter()
+        .zip(companion.g)
+        .map(|(&s, gc)| {
+            let (f, c) = (run.at_position(s).array(), gc.array());
+            Modes::from_array(std::array::from_fn(|m| (f[m] - c[m]).abs()))
+        })
+        .collect();
+    let diff = FrontG {
+        at: companion.at,
+        g: &diffs,
+    };
+    let peak = run
+        .g
+        .iter()
+        .zip(run.at)
+        .max_by(|a, b| a.0.g_t.total_cmp(&b.0.g_t))
+        .map_or(0.0, |(_, &s)| diff.at_position(s).g_t);
+    Ok(run
+        .at
+        .iter()
+        .map(|&s| {
+            let d = diff.at_position(s).array();
+            Modes::from_array(d.map(|v| v.max(floor * peak)))
+        })
+        .collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
+    /// G(S) on a mesh of size h converging as G∞(S) + C(S)·h^p (a closed-form sequence).
+    fn sequence(n: usize, h: f64, p: f64) -> (Vec<f64>, Vec<Modes>) {
+        let at: Vec<f64> = (0..=n).map(|k| k as f64 / n as f64).collect();
+        let g = at
+            .iter()
+            .map(|&s| {
+                let exact = [100.0 * (1.0 - s), 50.0 * s, 5.0, 155.0 - 45.0 * s];
+                let coeff = [-40.0, 30.0 * (1.0 - 2.0 * s), 2.0, -10.0 - 20.0 * s];
+                Modes::from_array(std::array::from_fn(|m| exact[m] + coeff[m] * h.powf(p)))
+            })
+            .collect();
+        (at, g)
+    }
+
+    #[test]
+    fn the_estimate_brackets_the_error_of_a_convergent_sequence() {
+        // Error of M: C·h^p; M − M/2 = C·h^p·(2^p − 1) ≥ C·h^p for p ≥ 1: the plain
+        // difference brackets, exactly at p = 1 and by the factor 2^p − 1 above.
+        for p in [1.0, 1.5, 2.0] {
+            let (h, n) = (0.3, 8);
+            let (fa, fg) = sequence(n, h, p);
+            let (ca, cg) = sequence(n / 2, 2.0 * h, p);
+            let est = companion(FrontG { at: &fa, g: &fg }, FrontG { at: &ca, g: &cg }, 0.0)
+                .unwrap_or_default();
+            let (_, exact) = sequence(n, 0.0, 1.0);
+            assert_eq!(est.len(), n + 1);
+            for (k, (e, (g, x))) in est.iter().zip(fg.iter().zip(&exact)).enumerate() {
+                for (m, (ev, (gv, xv))) in e
+                    .array()
+                    .iter()
+                    .zip(g.array().iter().zip(x.array()))
+                    .enumerate()
+                {
+                    let err = (gv - xv).abs();
+                    // Linear coefficients in S: the interpolation is exact, so the ratio is
+                    // 2^p − 1 to round-off (1e-9 relative, a few ulps of 100 J/m²).
+                    assert!(ev + 1e-9 >= err, "p {p} point {k} mode {m}: {ev} < {err}");
+                    if err > 1e-9 {
+                        assert_relative_eq!(ev / err, 2f64.powf(p) - 1.0, max_relative = 1e-9);
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn the_floor_covers_a_difference_that_crosses_zero() {
+        // G_II's coefficient 30·(1 − 2S) is zero at S = 0.5: the difference there is 0 but the
+        // estimate keeps c times the difference of G_T at its peak (S = 0: |C_T|·h·(2 − 1)).
+        let (h, p, c) = (0.2, 1.0, 0.15);
+        let (fa, fg) = sequence(4, h, p);
+        let (ca, cg) = sequence(2, 2.0 * h, p);
+        let est = companion(FrontG { at: &fa, g: &fg }, FrontG { at: &ca, g: &cg }, c)
+            .unwrap_or_default();
+        let peak = 10.0 * h; // |C_T(0)|·(2h − h)
+        assert_relative_eq!(est[2].g_ii, c * peak, max_relative = 1e-9);
+        // Elsewhere the larger of the two.
+        assert_relative_eq!(est[0].g_i, 40.0 * h, max_relative = 1e-9);
+    }
+
+    #[test]
+    fn fronts_of_different_points_are_matched_by_position() {
+        // A run of 3 points against a companion of 5: the differences interpolated in S.
+        let at = [0.0, 0.5, 1.0];
+        let g = [Modes::default(); 3];
+        let cat = [0.0, 0.25, 0.5, 0.75, 1.0];
+        let cg: Vec<Modes> = cat
+            .iter()
+            .map(|&s| Modes {
+                g_t: 4.0 * s,
+                ..Modes::default()
+            })
+            .collect();
+        let est = companion(FrontG { at: &at, g: &g }, FrontG { at: &cat, g: &cg }, 0.0)
+            .unwrap_or_default();
+        let t: Vec<f64> = est.iter().map(|e| e.g_t).collect();
+        assert_eq!(t, vec![0.0, 2.0, 4.0]);
+    }
+
+    #[test]
+    fn mismatched_or_unordered_fronts_are_refused_with_the_reason() {
+        let g = [Modes::default(); 2];
+        let e = companion(
+            FrontG {
+                at: &[0.0, 1.0, 2.0],
+                g: &g,
+            },
+            FrontG {
+                at: &[0.0, 1.0],
+                g: &g,
+            },
+            0.1,
+        );
+        assert!(e.is_err_and(|e| e.to_string().contains("3 positions for 2 G values")));
+        let e = companion(
+            FrontG {
+                at: &[0.0, 1.0],
+                g: &g,
+            },
+            FrontG {
+                at: &[1.0, 0.0],
+                g: &g,
+            },
+            0.1,
+        );
+        assert!(e.is_err_and(|e| e.to_string().contains("companion's front")));
+    }
+}

@@ -1,0 +1,322 @@
+//! The run's error estimate and its target (issue 25; docs/ACCURACY.md §3, docs/MESH.md
+//! "Accuracy"): orchestration only. The mesh a target picks is the mesh crate's table
+//! ([`nonlin3d_mesh::AccuracyRow`]), the companion mesh its `coarsened()` parameters, the
+//! estimate per point [`nonlin3d_vcct::estimate::companion`].
+
+use crate::Error;
+use crate::model::{embedded_params, through_width_params};
+use crate::results::{AccuracyReport, GError, LevelError, LevelResult, MeshChoice, Results};
+use crate::scene::{ErrorEstimateName, Geometry, MeshControls, Scene, Shape};
+use nonlin3d_mesh::{AccuracyRow, EmbeddedParams};
+use nonlin3d_vcct::estimate::{self, FrontG, Modes};
+use std::time::Instant;
+
+/// A millimetre in metres.
+const MM: f64 = 1e-3;
+
+/// The embedded generator's parameters of a scene (embedded, edge, thin-film, plate), or
+/// `None` for a through-width strip.
+fn embedded_of(scene: &Scene) -> Option<EmbeddedParams> {
+    match scene.geometry {
+        Geometry::Embedded {
+            shape,
+            a_mm,
+            b_mm,
+            h_mm,
+            base_mm,
+            w_mm,
+        }
+        | Geometry::Edge {
+            shape,
+            a_mm,
+            b_mm,
+            h_mm,
+            base_mm,
+            w_mm,
+        }
+        | Geometry::ThinFilm {
+            shape,
+            a_mm,
+            b_mm,
+            h_mm,
+            base_mm,
+            w_mm,
+        } => Some(embedded_params(
+            scene, shape, a_mm, b_mm, h_mm, base_mm, w_mm,
+        )),
+        Geometry::Plate {
+            a_mm,
+            h_mm,
+            base_mm,
+            w_mm,
+        } => Some(embedded_params(
+            scene,
+            Shape::Ellipse,
+            a_mm,
+            a_mm,
+            h_mm,
+            base_mm,
+            w_mm,
+        )),
+        Geometry::ThroughWidth { .. } => None,
+    }
+}
+
+/// Writes the embedded parameters' knobs into mesh controls (every field set).
+fn set_controls(c: &mut MeshControls, p: &EmbeddedParams) {
+    c.slices = Some(p.slices);
+    c.inside = Some(p.radial_inside);
+    c.outside = Some(p.radial_outside);
+    c.sub_layers = Some(p.sub_layers);
+    c.base_layers = Some(p.base_layers);
+    c.front_grading = Some(p.front_grading);
+    c.front_element_mm = p.front_element.map(|e| e / MM);
+    c.front_band = p.front_band.map(|b| [b.inside, b.outside]);
+}
+
+/// The scene with `[mesh] accuracy` turned into knobs (the table's row scaled to the model;
+/// the knobs the scene gives itself override the row's), and what was chosen. A scene
+/// without a target comes back unchanged. Through-width strips have no table: refused.
+pub(crate) fn resolve_accuracy(scene: &Scene) -> Result<(Scene, Option<MeshChoice>), Error> {
+    let Some(target) = scene.mesh.accuracy else {
+        return Ok((scene.clone(), None));
+    };
+    let mut plain = scene.clone();
+    plain.mesh = MeshControls {
+        element: scene.mesh.element,
+        elliptic_map: scene.mesh.elliptic_map,
+        ..MeshControls::default()
+    };
+    let Some(p) = embedded_of(&plain) else {
+        return Err(Error::Scene(format!(
+            "mesh.accuracy = {target}: the accuracy table is measured for embedded, edge and \
+             plate models; a through-width strip takes inside, outside and front_grading"
+        )));
+    };
+    let (row, meets) = AccuracyRow::for_target(target);
+    let chosen = p.with_accuracy_row(&row);
+    let given = &scene.mesh;
+    let overridden: Vec<String> = [
+        ("slices", given.slices.is_some()),
+        ("inside", given.inside.is_some()),
+        ("outside", given.outside.is_some()),
+        ("sub_layers", given.sub_layers.is_some()),
+        ("base_layers", given.base_layers.is_some()),
+        ("front_grading", given.front_grading.is_some()),
+        ("front_element_mm", given.front_element_mm.is_some()),
+        ("front_band", given.front_band.is_some()),
+    ]
+    .iter()
+    .filter(|(_, set)| *set)
+    .map(|(n, _)| (*n).to_string())
+    .collect();
+    let mut c = MeshControls::default();
+    set_controls(&mut c, &chosen);
+    // The scene's own knobs win, field by field.
+    let mut out = scene.clone();
+    let m = &mut out.mesh;
+    m.slices = given.slices.or(c.slices);
+    m.inside = given.inside.or(c.inside);
+    m.outside = given.outside.or(c.outside);
+    m.sub_layers = given.sub_layers.or(c.sub_layers);
+    m.base_layers = given.base_layers.or(c.base_layers);
+    m.front_element_mm = given.front_element_mm.or(c.front_element_mm);
+    m.front_band = given.front_band.or(c.front_band);
+    // A band the explicit ring counts no longer hold is dropped.
+    if let (Some([bi, bo]), Some(i), Some(o)) = (m.front_band, m.inside, m.outside)
+        && (bi >= i || bo >= o)
+        && given.front_band.is_none()
+    {
+        m.front_band = None;
+    }
+    let choice = MeshChoice {
+        table_error: row.worst,
+        table_meets_target: meets,
+        slices: m.slices.unwrap_or(chosen.slices),
+        inside: m.inside.unwrap_or(chosen.radial_inside),
+        outside: m.outside.unwrap_or(chosen.radial_outside),
+        sub_layers: m.sub_layers.unwrap_or(chosen.sub_layers),
+        base_layers: m.base_layers.unwrap_or(chosen.base_layers),
+        front_element_mm: m.front_element_mm,
+        front_band: m.front_band,
+        overridden,
+    };
+    Ok((out, Some(choice)))
+}
+
+/// The companion scene: the same scene on the mesh twice as coarse (`coarsened()` of the
+/// mesh crate), without an estimate or target of its own.
+pub(crate) fn companion_scene(scene: &Scene) -> Result<Scene, Error> {
+    let mut c = scene.clone();
+    c.mesh.error_estimate = Some(ErrorEstimateName::Off);
+    c.mesh.accuracy = None;
+    match embedded_of(scene) {
+        Some(p) => set_controls(&mut c.mesh, &p.coarsened()),
+        None => {
+            let Geometry::ThroughWidth {
+                a_mm,
+                length_mm,
+                width_mm,
+                h_mm,
+                base_mm,
+            } = scene.geometry
+            else {
+                return Err(Error::Scene("no mesh to coarsen".into()));
+            };
+            let p =
+                through_width_params(scene, a_mm, length_mm, width_mm, h_mm, base_mm)?.coarsened();
+            c.mesh.inside = Some(p.inside);
+            c.mesh.outside = Some(p.outside);
+            c.mesh.sub_layers = Some(p.sub_layers);
+            c.mesh.base_layers = Some(p.base_layers);
+        }
+    }
+    Ok(c)
+}
+
+/// A level's front as positions along it (S over the front's length) and G.
+fn front_g(level: &LevelResult) -> (Vec<f64>, Vec<Modes>) {
+    let end = level.front.last().map_or(0.0, |r| r.s_mm);
+    let at = level
+        .front
+        .iter()
+        .map(|r| if end > 0.0 { r.s_mm / end } else { 0.0 })
+        .collect();
+    let g = level
+        .front
+        .iter()
+        .map(|r| Modes {
+            g_i: r.g_i,
+            g_ii: r.g_ii,
+            g_iii: r.g_iii,
+            g_t: r.g_t,
+        })
+        .collect();
+    (at, g)
+}
+
+/// Fills each level's per-point errors and summary from the companion's matching level.
+fn fill_level(level: &mut LevelResult, companion: &LevelResult) -> Result<(), Error> {
+    let (at, g) = front_g(level);
+    let (cat, cg) = front_g(companion);
+    let est = estimate::companion(
+        FrontG { at: &at, g: &g },
+        FrontG { at: &cat, g: &cg },
+        estimate::FLOOR,
+    )
+    .map_err(|e| Error::Scene(e.to_string()))?;
+    for (row, e) in level.front.iter_mut().zip(&est) {
+        row.error = Some(GError {
+            g_i: e.g_i,
+            g_ii: e.g_ii,
+            g_iii: e.g_iii,
+            g_t: e.g_t,
+        });
+    }
+    // The summary over the physical points only (none open: no summary, no verdict).
+    let open = level.front.iter().filter(|r| r.is_open());
+    if open.clone().next().is_none() {
+        return Ok(());
+    }
+    let max = open
+        .clone()
+        .filter_map(|r| r.error)
+        .map(|e| e.g_i.max(e.g_ii).max(e.g_iii).max(e.g_t))
+        .fold(0.0, f64::max);
+    let g_t_max = open.map(|r| r.g_t).fold(0.0, f64::max);
+    level.error_estimate = Some(LevelError {
+        max_j_m2: max,
+        g_t_max_j_m2: g_t_max,
+        relative: if g_t_max > 0.0 { max / g_t_max } else { 0.0 },
+    });
+    Ok(())
+}
+
+/// Runs the companion (when the scene asks for an estimate), fills the per-point errors and
+/// the levels' summaries, and reports them with the target's choice in `results.accuracy`;
+/// a warning when the estimate exceeds the target, or when the companion could not run.
+pub(crate) fn attach(
+    scene: &Scene,
+    choice: Option<MeshChoice>,
+    results: &mut Results,
+) -> Result<(), Error> {
+    let method = scene.mesh.error_estimate.unwrap_or_default();
+    let target = scene.mesh.accuracy;
+    if method == ErrorEstimateName::Off && choice.is_none() {
+        return Ok(());
+    }
+    let mut report = AccuracyReport {
+        error_estimate: match method {
+            ErrorEstimateName::Off => "off",
+            ErrorEstimateName::Companion => "companion",
+        }
+        .into(),
+        companion_dofs: None,
+        companion_s: None,
+        unavailable: None,
+        worst_relative: None,
+        target,
+        met: None,
+        chosen_mesh: choice,
+    };
+    if method == ErrorEstimateName::Companion {
+        let t = Instant::now();
+        let run = companion_scene(scene).and_then(|c| super::run(&c, &mut |_| Ok(())));
+        match run {
+            Ok(c) if c.levels.len() == results.levels.len() => {
+                for (level, cl) in results.levels.iter_mut().zip(&c.levels) {
+                    fill_level(level, cl)?;
+                }
+                report.companion_dofs = Some(c.model.dofs);
+                report.companion_s = Some(t.elapsed().as_secs_f64());
+            }
+            Ok(c) => {
+                report.unavailable = Some(format!(
+                    "the companion mesh solved {} levels of {}",
+                    c.levels.len(),
+                    results.levels.len()
+                ));
+            }
+            Err(e) => report.unavailable = Some(format!("the companion mesh failed: {e}")),
+        }
+    }
+    let worst = results
+        .levels
+        .iter()
+        .filter_map(|l| l.error_estimate)
+        .map(|e| e.relative)
+        .reduce(f64::max);
+    report.worst_relative = worst;
+    report.met = target.zip(worst).map(|(t, w)| w <= t);
+    if let Some(why) = &report.unavailable {
+        results
+            .warnings
+            .push(format!("no error estimate of G: {why}"));
+    }
+    if let (Some(t), Some(false)) = (target, report.met) {
+        let (k, l) = results
+            .levels
+            .iter()
+            .enumerate()
+            .filter_map(|(k, l)| l.error_estimate.map(|e| (k, e)))
+            .max_by(|a, b| a.1.relative.total_cmp(&b.1.relative))
+            .unwrap_or((
+                0,
+                LevelError {
+                    max_j_m2: 0.0,
+                    g_t_max_j_m2: 0.0,
+                    relative: 0.0,
+                },
+            ));
+        results.warnings.push(format!(
+            "the estimated error of G exceeds the target mesh.accuracy = {t}: ±{:.1} J/m² at \
+             level {k} is {:.1} % of its G_T max {:.1} J/m²; refine the mesh (a smaller \
+             accuracy, or front_element_mm, slices, front_band: docs/MESH.md)",
+            l.max_j_m2,
+            100.0 * l.relative,
+            l.g_t_max_j_m2
+        ));
+    }
+    results.accuracy = Some(report);
+    Ok(())
+}

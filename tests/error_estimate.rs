@@ -1,0 +1,172 @@
+//! The error estimate with every result (issue 25, docs/ACCURACY.md §3): results.json and
+//! front_K.csv carry ±G per point, a target tighter than the estimate warns, and
+//! `[mesh] accuracy` picks a finer mesh for a tighter target.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn tmp(name: &str) -> PathBuf {
+    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("error-estimate-{name}"));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn nonlin3d(dir: &Path, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_nonlin3d"))
+        .current_dir(dir)
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+/// The reference circle on a tiny mesh (4 slices, 2 + 3 rings, 1 + 2 layers: 1 773 DOFs, its
+/// companion 2 slices), one level past buckling, the scene's contact (`auto`: without it every
+/// point of so coarse a mesh overlaps and no G is physical), with `extra` lines under `[mesh]`.
+fn scene(dir: &Path, extra: &str) -> PathBuf {
+    let text = nonlin3d::scene::DEFAULT_SCENE
+        .replace(
+            "slices = 8",
+            &format!(
+                "slices = 4\ninside = 2\noutside = 3\nsub_layers = 1\nbase_layers = 2\n{extra}"
+            ),
+        )
+        .replace(
+            "strains = [-0.001, -0.002, -0.003, -0.004, -0.005]",
+            "strains = [-0.004]",
+        );
+    let p = dir.join("scene.toml");
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+fn json(dir: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(dir.join("out/results.json")).unwrap()).unwrap()
+}
+
+#[test]
+fn results_and_csv_carry_the_estimate_and_a_tight_target_warns() {
+    let dir = tmp("tight");
+    let s = scene(&dir, "accuracy = 0.001");
+    let out = nonlin3d(
+        &dir,
+        &["run", s.to_str().unwrap(), "--out", "out", "--threads", "1"],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let r = json(&dir);
+    let acc = &r["accuracy"];
+    assert_eq!(acc["error_estimate"], "companion");
+    // The companion is the 2-slice mesh: fewer DOFs than the run.
+    let dofs = r["model"]["dofs"].as_u64().unwrap();
+    assert!(acc["companion_dofs"].as_u64().unwrap() < dofs / 2);
+    // Every front point has ±G of every mode, non-negative, and G_T's is at least the floor
+    // (0.15 of the error at the G_T max, itself > 0 between meshes this coarse).
+    let level = &r["levels"][0];
+    let front = level["front"].as_array().unwrap();
+    assert!(!front.is_empty());
+    for p in front {
+        for m in ["g_i", "g_ii", "g_iii", "g_t"] {
+            assert!(p["error"][m].as_f64().unwrap() >= 0.0, "{p}");
+        }
+        assert!(p["error"]["g_t"].as_f64().unwrap() > 0.0);
+    }
+    let e = &level["error_estimate"];
+    let rel = e["relative"].as_f64().unwrap();
+    // The relative estimate is the largest ± over G_T max, as the report says.
+    approx::assert_relative_eq!(
+        rel,
+        e["max_j_m2"].as_f64().unwrap() / e["g_t_max_j_m2"].as_f64().unwrap(),
+        max_relative = 1e-12
+    );
+    // 0.001 is tighter than any mesh of the table reaches and than this estimate: not met,
+    // and said so in results.json and on the terminal.
+    assert!(rel > 0.001);
+    assert_eq!(acc["met"], false);
+    assert_eq!(acc["target"], 0.001);
+    let warns = r["warnings"].as_array().unwrap();
+    assert!(
+        warns.iter().any(|w| w
+            .as_str()
+            .unwrap()
+            .contains("exceeds the target mesh.accuracy = 0.001")),
+        "{warns:?}"
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("exceeds the target"), "{stdout}");
+    assert!(stdout.contains("± G max"), "{stdout}");
+    // The explicit knobs override the table's, and results.json says which.
+    let chosen = &acc["chosen_mesh"];
+    assert_eq!(chosen["slices"], 4);
+    assert_eq!(chosen["table_meets_target"], false);
+    assert!(
+        chosen["overridden"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|k| k == "slices")
+    );
+    // The CSV: the four ± columns appended after the old ones, one value per point.
+    let csv = std::fs::read_to_string(dir.join("out/front_0.csv")).unwrap();
+    let mut lines = csv.lines();
+    let head: Vec<&str> = lines.next().unwrap().split(',').collect();
+    assert_eq!(head[13], "failure_index");
+    assert_eq!(
+        head[14..].to_vec(),
+        vec![
+            "g_i_error_j_m2",
+            "g_ii_error_j_m2",
+            "g_iii_error_j_m2",
+            "g_t_error_j_m2"
+        ]
+    );
+    let first: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let g_t_err: f64 = first[17].parse().unwrap();
+    approx::assert_relative_eq!(
+        g_t_err,
+        front[0]["error"]["g_t"].as_f64().unwrap(),
+        max_relative = 1e-15
+    );
+}
+
+#[test]
+fn no_estimate_when_off() {
+    let dir = tmp("off");
+    let s = scene(&dir, "error_estimate = \"off\"");
+    let out = nonlin3d(
+        &dir,
+        &["run", s.to_str().unwrap(), "--out", "out", "--threads", "1"],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let r = json(&dir);
+    assert!(r.get("accuracy").is_none());
+    assert!(r["levels"][0].get("error_estimate").is_none());
+    assert!(r["levels"][0]["front"][0].get("error").is_none());
+}
+
+#[test]
+fn a_tighter_target_picks_a_finer_mesh() {
+    // The model alone (no solve): DOFs of the mesh the target picks, no knob given.
+    let dofs = |accuracy: f64| {
+        let mut s = nonlin3d::Scene::from_toml(nonlin3d::scene::DEFAULT_SCENE).unwrap();
+        s.mesh.slices = None;
+        s.mesh.accuracy = Some(accuracy);
+        let m = nonlin3d::Analysis::new(s).unwrap().model().unwrap();
+        3 * m.mesh.nodes.len()
+    };
+    let (loose, mid, tight) = (dofs(0.1), dofs(0.03), dofs(0.01));
+    // The table's rows on the reference circle: 5 940, 10 035, 14 919 DOFs (docs/ACCURACY.md).
+    assert_eq!((loose, mid, tight), (5940, 10035, 14919));
+    // A target that is not a fraction is refused, naming the field.
+    let mut s = nonlin3d::Scene::from_toml(nonlin3d::scene::DEFAULT_SCENE).unwrap();
+    s.mesh.accuracy = Some(2.0);
+    let e = nonlin3d::Analysis::new(s).unwrap_err().to_string();
+    assert!(e.contains("mesh.accuracy = 2"), "{e}");
+}
