@@ -57,8 +57,12 @@ pub enum SweepCommand {
         /// The study folder.
         dir: PathBuf,
         /// Only this case (0-based id).
-        #[arg(long)]
+        #[arg(long, conflicts_with = "cases")]
         case: Option<usize>,
+        /// Only the cases FIRST-LAST (0-based ids, both included), in one process: a
+        /// job-array task's chunk.
+        #[arg(long, value_name = "FIRST-LAST")]
+        cases: Option<String>,
         /// Cases at once (default: one per core). Each case's solver runs on one thread unless
         /// `--threads` says otherwise.
         #[arg(long, default_value_t = 0)]
@@ -133,11 +137,33 @@ pub fn main(command: SweepCommand, quiet: bool, threads: Option<usize>) -> Resul
             }
             Ok(())
         }
-        SweepCommand::Run { dir, case, jobs } => {
+        SweepCommand::Run {
+            dir,
+            case,
+            cases,
+            jobs,
+        } => {
+            let (case, last) = match cases {
+                None => (case, None),
+                Some(text) => {
+                    let range = text
+                        .split_once('-')
+                        .and_then(|(a, b)| Some((a.trim().parse().ok()?, b.trim().parse().ok()?)));
+                    match range {
+                        Some((a, b)) => (Some(a), Some(b)),
+                        None => {
+                            return Err(input(Error::Sweep(format!(
+                                "--cases '{text}': FIRST-LAST, two case ids, e.g. --cases 10-19"
+                            ))));
+                        }
+                    }
+                }
+            };
             let options = RunOptions {
                 jobs,
                 threads,
                 case,
+                last,
             };
             run_cases(&dir, options, quiet)
         }
@@ -268,7 +294,7 @@ fn merge(dir: &Path, quiet: bool) -> Result<(), Failure> {
 /// Runs the cases with a bar over them (on a terminal) and a line per case.
 fn run_cases(dir: &Path, options: RunOptions, quiet: bool) -> Result<(), Failure> {
     let total = match options.case {
-        Some(_) => 1,
+        Some(k) => options.last.map_or(1, |l| l.saturating_sub(k) + 1),
         None => super::Plan::read(dir).map_err(input)?.cases.len(),
     };
     let bar = if quiet || !std::io::stderr().is_terminal() {

@@ -1,8 +1,9 @@
 //! `nonlin3d sweep plan --slurm`: the study's job-array script, `DIR/slurm/sweep.sbatch`, and
 //! its settings, `DIR/slurm/slurm.json`. Task `i` of the array runs cases `i·N … i·N + N − 1`
-//! (`N` = `--per-task`), each as `nonlin3d sweep run DIR --case K` by the absolute paths of the
-//! program and of DIR, so the script runs from any folder of a shared file system; a case
-//! complete already is skipped by `sweep run` itself. Memory and time are asked for from the
+//! (`N` = `--per-task`) in one process, `nonlin3d sweep run DIR --cases FIRST-LAST --jobs 1`
+//! (for N = 1 the same as `--case K`), by the absolute paths of the program and of DIR, so the
+//! script runs from any folder of a shared file system; a case complete already is skipped by
+//! `sweep run` itself. Memory and time are asked for from the
 //! model size ([`crate::budget::estimate_scene`]) of the largest case, with margins
 //! ([`MEMORY_MARGIN`], [`TIME_MARGIN`]); `--time` replaces the time estimate.
 
@@ -325,11 +326,8 @@ pub fn script(plan: &Plan, s: &Settings) -> String {
          first=$((SLURM_ARRAY_TASK_ID * per_task))\n\
          last=$((first + per_task - 1))\n\
          if [ \"$last\" -ge \"$cases\" ]; then last=$((cases - 1)); fi\n\
-         status=0\n\
-         for k in $(seq \"$first\" \"$last\"); do\n\
-         \x20 \"$program\" sweep run \"$dir\" --case \"$k\" || status=$?\n\
-         done\n\
-         exit \"$status\"\n",
+         # The chunk in one process (a process per case costs its start and cold caches).\n\
+         exec \"$program\" sweep run \"$dir\" --cases \"$first-$last\" --jobs 1\n",
         shell_quote(&s.program),
         shell_quote(&s.dir),
         s.per_task,
