@@ -155,10 +155,11 @@ fn the_script_asks_for_an_array_with_estimated_resources() {
     ] {
         assert!(script.contains(&line), "{line} not in\n{script}");
     }
-    // The script runs anywhere: task 1 (cases 3–5, in one process) by hand, as Slurm would.
+    // The script runs anywhere: task 0 of 3 (cases 0, 3 and 6, in one process) by hand, as
+    // Slurm would.
     let task = Command::new("bash")
         .arg(out.join("slurm/sweep.sbatch"))
-        .env("SLURM_ARRAY_TASK_ID", "1")
+        .env("SLURM_ARRAY_TASK_ID", "0")
         .current_dir(&d)
         .output()
         .unwrap();
@@ -169,15 +170,16 @@ fn the_script_asks_for_an_array_with_estimated_resources() {
             .lines()
             .find(|l| l.trim_start().starts_with(&format!("{k} ")))
             .unwrap();
-        let want = if (3..6).contains(&k) {
-            "complete"
-        } else {
-            "missing"
-        };
+        let want = if k % 3 == 0 { "complete" } else { "missing" };
         assert!(line.contains(want), "case {k}: {status}");
     }
-    let e = refused(&["sweep", "run", p(&out), "--cases", "6-8"], None);
-    assert!(e.contains("--cases 6-8: the study has cases 0 to 7"), "{e}");
+    let e = refused(&["sweep", "run", p(&out), "--cases", "6-8/2"], None);
+    assert!(
+        e.contains("--cases 6-8/2: the study has cases 0 to 7"),
+        "{e}"
+    );
+    let e = refused(&["sweep", "run", p(&out), "--cases", "1-5/0"], None);
+    assert!(e.contains("FIRST-LAST/STEP"), "{e}");
     let settings: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("slurm/slurm.json")).unwrap())
             .unwrap();

@@ -59,9 +59,9 @@ pub enum SweepCommand {
         /// Only this case (0-based id).
         #[arg(long, conflicts_with = "cases")]
         case: Option<usize>,
-        /// Only the cases FIRST-LAST (0-based ids, both included), in one process: a
-        /// job-array task's chunk.
-        #[arg(long, value_name = "FIRST-LAST")]
+        /// Only the cases FIRST-LAST (0-based ids, both included), or every STEP-th of them
+        /// with FIRST-LAST/STEP, in one process: a job-array task's share.
+        #[arg(long, value_name = "FIRST-LAST[/STEP]")]
         cases: Option<String>,
         /// Cases at once (default: one per core). Each case's solver runs on one thread unless
         /// `--threads` says otherwise.
@@ -143,17 +143,21 @@ pub fn main(command: SweepCommand, quiet: bool, threads: Option<usize>) -> Resul
             cases,
             jobs,
         } => {
-            let (case, last) = match cases {
-                None => (case, None),
+            let (case, last, step) = match cases {
+                None => (case, None, 1),
                 Some(text) => {
-                    let range = text
-                        .split_once('-')
-                        .and_then(|(a, b)| Some((a.trim().parse().ok()?, b.trim().parse().ok()?)));
-                    match range {
-                        Some((a, b)) => (Some(a), Some(b)),
+                    let (range, step) = text.split_once('/').unwrap_or((&text, "1"));
+                    let read = || {
+                        let (a, b) = range.split_once('-')?;
+                        let step: usize = step.trim().parse().ok().filter(|&s| s > 0)?;
+                        Some((a.trim().parse().ok()?, b.trim().parse().ok()?, step))
+                    };
+                    match read() {
+                        Some((a, b, step)) => (Some(a), Some(b), step),
                         None => {
                             return Err(input(Error::Sweep(format!(
-                                "--cases '{text}': FIRST-LAST, two case ids, e.g. --cases 10-19"
+                                "--cases '{text}': FIRST-LAST or FIRST-LAST/STEP, case ids and a \
+                                 step of 1 or more, e.g. --cases 10-19 or --cases 3-199/20"
                             ))));
                         }
                     }
@@ -164,6 +168,7 @@ pub fn main(command: SweepCommand, quiet: bool, threads: Option<usize>) -> Resul
                 threads,
                 case,
                 last,
+                step,
             };
             run_cases(&dir, options, quiet)
         }
@@ -294,7 +299,9 @@ fn merge(dir: &Path, quiet: bool) -> Result<(), Failure> {
 /// Runs the cases with a bar over them (on a terminal) and a line per case.
 fn run_cases(dir: &Path, options: RunOptions, quiet: bool) -> Result<(), Failure> {
     let total = match options.case {
-        Some(k) => options.last.map_or(1, |l| l.saturating_sub(k) + 1),
+        Some(k) => options
+            .last
+            .map_or(1, |l| l.saturating_sub(k) / options.step.max(1) + 1),
         None => super::Plan::read(dir).map_err(input)?.cases.len(),
     };
     let bar = if quiet || !std::io::stderr().is_terminal() {

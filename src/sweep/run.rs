@@ -87,6 +87,8 @@ pub struct RunOptions {
     /// … or, with `case`, the cases from it to this one (a job-array task's chunk, run in one
     /// process: a process per case of 0.15 s cost 1.5 × the wall, docs/PERFORMANCE.md).
     pub last: Option<usize>,
+    /// … every `step`-th of them (0 or 1: all).
+    pub step: usize,
 }
 
 /// What became of one case in [`run`].
@@ -103,7 +105,7 @@ pub struct Outcome {
 }
 
 /// Runs every case of the study in `dir` that is not complete (or only `options.case`, or
-/// `case` to `last`),
+/// `case` to `last`, every `step`-th),
 /// `done` told of each as it ends; the outcomes in case order.
 pub fn run(
     dir: &Path,
@@ -116,7 +118,9 @@ pub fn run(
         (None, _) => plan.cases.iter().collect(),
         (Some(k), last) => {
             let l = last.unwrap_or(k);
+            let step = options.step.max(1);
             let what = match last {
+                Some(l) if step > 1 => format!("--cases {k}-{l}/{step}"),
                 Some(l) => format!("--cases {k}-{l}"),
                 None => format!("--case {k}"),
             };
@@ -126,7 +130,7 @@ pub fn run(
                     n.saturating_sub(1)
                 )));
             }
-            plan.cases[k..=l].iter().collect()
+            plan.cases[k..=l].iter().step_by(step).collect()
         }
     };
     let pool = rayon::ThreadPoolBuilder::new()

@@ -1,7 +1,7 @@
 //! `nonlin3d sweep plan --slurm`: the study's job-array script, `DIR/slurm/sweep.sbatch`, and
-//! its settings, `DIR/slurm/slurm.json`. Task `i` of the array runs cases `i·N … i·N + N − 1`
-//! (`N` = `--per-task`) in one process, `nonlin3d sweep run DIR --cases FIRST-LAST --jobs 1`
-//! (for N = 1 the same as `--case K`), by the absolute paths of the program and of DIR, so the
+//! its settings, `DIR/slurm/slurm.json`. Of T = ⌈cases / N⌉ tasks (`N` = `--per-task`), task `i`
+//! runs cases `i, i + T, i + 2T, …` in one process, `nonlin3d sweep run DIR --cases
+//! i-LAST/T --jobs 1` (for N = 1 case `i` alone), by the absolute paths of the program and of DIR, so the
 //! script runs from any folder of a shared file system; a case complete already is skipped by
 //! `sweep run` itself. Memory and time are asked for from the
 //! model size ([`crate::budget::estimate_scene`]) of the largest case, with margins
@@ -123,14 +123,16 @@ impl Settings {
     }
 
     /// The cases of array task `task`.
-    pub fn cases_of(&self, task: usize) -> std::ops::Range<usize> {
-        let first = task * self.per_task;
-        first.min(self.cases)..(first + self.per_task).min(self.cases)
+    /// Strided, `task`, `task + T`, `task + 2T`, … (T tasks), so that every task holds a
+    /// mix of the study (cases along the last field grow or shrink together): contiguous
+    /// chunks of the 200-case study ended with one task running its largest cases alone.
+    pub fn cases_of(&self, task: usize) -> impl Iterator<Item = usize> + use<> {
+        (task..self.cases).step_by(self.tasks.max(1))
     }
 
     /// The array task that runs case `case`.
     pub fn task_of(&self, case: usize) -> usize {
-        case / self.per_task
+        case % self.tasks.max(1)
     }
 }
 
@@ -321,17 +323,17 @@ pub fn script(plan: &Plan, s: &Settings) -> String {
         "set -u\n\
          program={}\n\
          dir={}\n\
-         per_task={}\n\
-         cases={}\n\
-         first=$((SLURM_ARRAY_TASK_ID * per_task))\n\
-         last=$((first + per_task - 1))\n\
-         if [ \"$last\" -ge \"$cases\" ]; then last=$((cases - 1)); fi\n\
-         # The chunk in one process (a process per case costs its start and cold caches).\n\
-         exec \"$program\" sweep run \"$dir\" --cases \"$first-$last\" --jobs 1\n",
+         # per_task={} of cases={}: task i runs cases i, i + tasks, i + 2 tasks, … in one\n\
+         # process (a process per case costs its start and cold caches).\n\
+         tasks={}\n\
+         last={}\n\
+         exec \"$program\" sweep run \"$dir\" --cases \"$SLURM_ARRAY_TASK_ID-$last/$tasks\" --jobs 1\n",
         shell_quote(&s.program),
         shell_quote(&s.dir),
         s.per_task,
-        s.cases
+        s.cases,
+        s.tasks,
+        s.cases.saturating_sub(1)
     );
     o
 }
@@ -409,9 +411,10 @@ mod tests {
             partition: None,
             account: None,
         };
-        assert_eq!(s.cases_of(0), 0..3);
-        assert_eq!(s.cases_of(2), 6..7);
-        assert_eq!(s.task_of(5), 1);
+        let of = |t| s.cases_of(t).collect::<Vec<_>>();
+        assert_eq!(of(0), [0, 3, 6]);
+        assert_eq!(of(1), [1, 4]);
+        assert_eq!(s.task_of(5), 2);
         assert_eq!(shell_quote("a'b c"), r"'a'\''b c'");
     }
 }
