@@ -183,7 +183,7 @@ const ITERATIONS_PER_LEVEL: f64 = 10.0;
 const SECONDS_PER_CELL: f64 = 30e-6;
 
 /// A case's wall time, estimated from its model size (one solver thread): levels × iterations
-/// × (factorisation F²/n flops at [`FACTOR_RATE`] + element work), plus a second of start-up.
+/// × (factorisation F²/n flops at `FACTOR_RATE` + element work), plus a second of start-up.
 /// F²/n is the least Σ c_k² of n columns holding F entries (flops of an LDLᵀ, within 2×).
 pub fn case_seconds(resolved: &Resolved) -> f64 {
     let e = crate::budget::estimate_scene(&resolved.scene);
