@@ -2,13 +2,15 @@
 //! `study.csv`, `study.json` and `study.svg` (G_T max, critical strain and buckling strain
 //! against the swept parameter `x`, one series per combination of the other parameters).
 //! Every number is read back from the cases' results.json and printed the same way, so the
-//! tables do not depend on how (or in how many workers) the cases ran — except `wall_s`.
+//! tables do not depend on how (or in how many workers, or on which machines) the cases ran;
+//! the one thing that does, each case's wall time, goes to `study-wall.csv` alone.
 
 use super::plan::Plan;
 use super::row::Row;
 use super::run::{CaseState, case_state};
 use crate::Error;
 use crate::output::write_atomic;
+use crate::report::Csv;
 use serde_json::Value;
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -90,15 +92,6 @@ pub fn rows(dir: &Path) -> Result<(Plan, Vec<Row>), Error> {
     Ok((plan, rows))
 }
 
-/// A CSV cell: quoted when it holds a comma, a quote or a line break.
-fn cell(text: &str) -> String {
-    if text.contains([',', '"', '\n', '\r']) {
-        format!("\"{}\"", text.replace('"', "\"\""))
-    } else {
-        text.to_string()
-    }
-}
-
 /// A parameter as a cell: strings bare, numbers and lists as JSON.
 fn parameter(v: Option<&Value>) -> String {
     match v {
@@ -108,21 +101,30 @@ fn parameter(v: Option<&Value>) -> String {
     }
 }
 
-/// `study.csv`: a header, then one line per case.
+/// `study.csv`: a header, then one line per case (quoted by the csv crate where a cell needs
+/// it). No wall time: the table is the same byte for byte however the cases ran.
 pub fn csv(plan: &Plan, rows: &[Row]) -> String {
     let num = |x: Option<f64>| x.map(|x| x.to_string()).unwrap_or_default();
-    let mut out = String::from("case,status");
-    for f in &plan.fields {
-        out += &format!(",{}", cell(f));
-    }
-    out += ",strain,g_t_max,g_t_max_s_mm,g_i_s0,g_ii_s0,faces_s0,buckling_from,buckling_to,\
-            critical_strain,critical_s_mm,wall_s,error\n";
+    let mut header = vec!["case", "status"];
+    header.extend(plan.fields.iter().map(String::as_str));
+    header.extend([
+        "strain",
+        "g_t_max",
+        "g_t_max_s_mm",
+        "g_i_s0",
+        "g_ii_s0",
+        "faces_s0",
+        "buckling_from",
+        "buckling_to",
+        "critical_strain",
+        "critical_s_mm",
+        "error",
+    ]);
+    let mut t = Csv::new(&header);
     for r in rows {
-        out += &format!("{},{}", r.case, r.status);
-        for f in &plan.fields {
-            out += &format!(",{}", cell(&parameter(r.parameters.get(f))));
-        }
-        let cells = [
+        let mut cells = vec![r.case.to_string(), r.status.clone()];
+        cells.extend(plan.fields.iter().map(|f| parameter(r.parameters.get(f))));
+        cells.extend([
             num(r.strain),
             num(r.g_t_max),
             num(r.g_t_max_s_mm),
@@ -133,12 +135,24 @@ pub fn csv(plan: &Plan, rows: &[Row]) -> String {
             num(r.buckling_to),
             num(r.critical_strain),
             num(r.critical_s_mm),
-            num(r.wall_s),
-            cell(r.error.as_deref().unwrap_or_default()),
-        ];
-        out += &format!(",{}\n", cells.join(","));
+            r.error.clone().unwrap_or_default(),
+        ]);
+        t.row(cells);
     }
-    out
+    t.finish()
+}
+
+/// `study-wall.csv`: each case's wall time, s (what differs between runs of one study).
+pub fn wall_csv(rows: &[Row]) -> String {
+    let mut t = Csv::new(&["case", "status", "wall_s"]);
+    for r in rows {
+        t.row([
+            r.case.to_string(),
+            r.status.clone(),
+            r.wall_s.map(|x| x.to_string()).unwrap_or_default(),
+        ]);
+    }
+    t.finish()
 }
 
 /// What [`merge`] wrote.
@@ -150,18 +164,19 @@ pub struct Merged {
     pub rows: Vec<Row>,
 }
 
-/// Writes `study.csv`, `study.json` and `study.svg` in `dir` from whatever cases are complete
+/// Writes `study.csv`, `study.json`, `study.svg` and `study-wall.csv` in `dir` from whatever cases are complete
 /// (failed ones with their errors).
 pub fn merge(dir: &Path) -> Result<Merged, Error> {
     let (plan, rows) = rows(dir)?;
     write_atomic(&dir.join("study.csv"), csv(&plan, &rows).as_bytes())?;
+    write_atomic(&dir.join("study-wall.csv"), wall_csv(&rows).as_bytes())?;
     let json = serde_json::json!({
         "title": plan.title,
         "fields": plan.fields,
         "zip": plan.zip,
         "x": plan.x,
-        "units": "G in J/m², S in mm, strains as applied (compression negative), wall_s in s; \
-                  G at each case's last level",
+        "units": "G in J/m², S in mm, strains as applied (compression negative); G at each \
+                  case's last level (wall times in study-wall.csv)",
         "cases": rows,
     });
     write_atomic(

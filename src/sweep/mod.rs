@@ -18,14 +18,16 @@
 //! [`merge()`]): `DIR/plan.json` with the resolved scenes `DIR/cases/NNNN/scene.toml`; each
 //! case's results (results.json, front CSVs, …) beside its scene, written as `nonlin3d run`
 //! writes them (a case whose results.json says `"complete": true` is never run again); and
-//! `DIR/study.csv`, `DIR/study.json`, `DIR/study.svg`.
+//! `DIR/study.csv`, `DIR/study.json`, `DIR/study.svg` (and the wall times, `DIR/study-wall.csv`).
 
 pub mod cli;
+pub mod cluster;
 pub mod merge;
 pub mod plan;
 mod plot;
 mod row;
 pub mod run;
+pub mod slurm;
 
 pub use merge::merge;
 pub use plan::{Case, Plan, plan};

@@ -183,6 +183,17 @@ fn folder(id: usize, count: usize) -> String {
 /// plan already is kept as it is (its results too: the study resumes), a deleted case folder
 /// planned again; one holding anything else is refused.
 pub fn plan(scene: &Path, out: &Path) -> Result<Plan, Error> {
+    plan_with(scene, out, None)
+}
+
+/// What is written into a study folder with its plan (the Slurm script,
+/// [`super::slurm::write`]): called with the folder being written (a temporary one, renamed
+/// into place after, or the study folder itself when it holds this plan already), the study
+/// folder's absolute path, the plan and its cases. An error leaves nothing planned.
+pub type Extra<'a> = &'a dyn Fn(&Path, &Path, &Plan, &[Resolved]) -> Result<(), Error>;
+
+/// [`plan()`], with `extra` written into the folder before it is renamed into place.
+pub fn plan_with(scene: &Path, out: &Path, extra: Option<Extra>) -> Result<Plan, Error> {
     let bytes = std::fs::read(scene).map_err(|source| Error::Io {
         path: scene.to_path_buf(),
         source,
@@ -240,6 +251,13 @@ pub fn plan(scene: &Path, out: &Path) -> Result<Plan, Error> {
                     crate::output::write_atomic(&d.join("scene.toml"), r.text.as_bytes())?;
                 }
             }
+            if let Some(extra) = extra {
+                let abs = out.canonicalize().map_err(|source| Error::Io {
+                    path: out.to_path_buf(),
+                    source,
+                })?;
+                extra(out, &abs, &old, &resolved)?;
+            }
             return Ok(old);
         }
         return bad(format!(
@@ -247,12 +265,17 @@ pub fn plan(scene: &Path, out: &Path) -> Result<Plan, Error> {
             out.display()
         ));
     }
-    write(out, &plan, &resolved)?;
+    write(out, &plan, &resolved, extra)?;
     Ok(plan)
 }
 
 /// Writes the plan into a temporary folder beside `out` and renames it into place.
-fn write(out: &Path, plan: &Plan, resolved: &[Resolved]) -> Result<(), Error> {
+fn write(
+    out: &Path,
+    plan: &Plan,
+    resolved: &[Resolved],
+    extra: Option<Extra>,
+) -> Result<(), Error> {
     let io = |path: &Path| {
         let path = path.to_path_buf();
         move |source| Error::Io { path, source }
@@ -276,6 +299,10 @@ fn write(out: &Path, plan: &Plan, resolved: &[Resolved]) -> Result<(), Error> {
         }
         let p = tmp.join(PLAN);
         std::fs::write(&p, serde_json::to_string_pretty(plan)?).map_err(io(&p))?;
+        if let Some(extra) = extra {
+            let abs = parent.canonicalize().map_err(io(&parent))?.join(&name);
+            extra(&tmp, &abs, plan, resolved)?;
+        }
         // An empty `out` is replaced; anything else in it is refused by the rename.
         std::fs::rename(&tmp, out).map_err(|source| {
             Error::Sweep(format!(

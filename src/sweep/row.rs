@@ -36,7 +36,9 @@ pub struct Row {
     pub critical_strain: Option<f64>,
     /// Where, S in mm.
     pub critical_s_mm: Option<f64>,
-    /// Wall time of the case's run, s (results.json `provenance.wall_s.total`).
+    /// Wall time of the case's run, s (results.json `provenance.wall_s.total`); written to
+    /// `study-wall.csv` only, so that study.csv and study.json do not depend on the run.
+    #[serde(skip)]
     pub wall_s: Option<f64>,
     /// Why a failed case stopped.
     pub error: Option<String>,

@@ -82,8 +82,13 @@ pub struct RunOptions {
     pub jobs: usize,
     /// Solver threads of each case (None: 1, or the scene's own count if it sets one).
     pub threads: Option<usize>,
-    /// Only this case (a job-array task).
+    /// Only this case (a job-array task) …
     pub case: Option<usize>,
+    /// … or, with `case`, the cases from it to this one (a job-array task's chunk, run in one
+    /// process: a process per case of 0.15 s cost 1.5 × the wall, docs/PERFORMANCE.md).
+    pub last: Option<usize>,
+    /// … every `step`-th of them (0 or 1: all).
+    pub step: usize,
 }
 
 /// What became of one case in [`run`].
@@ -99,7 +104,8 @@ pub struct Outcome {
     pub seconds: f64,
 }
 
-/// Runs every case of the study in `dir` that is not complete (or only `options.case`),
+/// Runs every case of the study in `dir` that is not complete (or only `options.case`, or
+/// `case` to `last`, every `step`-th),
 /// `done` told of each as it ends; the outcomes in case order.
 pub fn run(
     dir: &Path,
@@ -107,17 +113,25 @@ pub fn run(
     done: &(dyn Fn(&Case, &Outcome) + Sync),
 ) -> Result<Vec<Outcome>, Error> {
     let plan = Plan::read(dir)?;
-    let cases: Vec<&Case> = match options.case {
-        None => plan.cases.iter().collect(),
-        Some(k) => match plan.cases.get(k) {
-            Some(c) => vec![c],
-            None => {
+    let n = plan.cases.len();
+    let cases: Vec<&Case> = match (options.case, options.last) {
+        (None, _) => plan.cases.iter().collect(),
+        (Some(k), last) => {
+            let l = last.unwrap_or(k);
+            let step = options.step.max(1);
+            let what = match last {
+                Some(l) if step > 1 => format!("--cases {k}-{l}/{step}"),
+                Some(l) => format!("--cases {k}-{l}"),
+                None => format!("--case {k}"),
+            };
+            if k > l || l >= n {
                 return Err(Error::Sweep(format!(
-                    "--case {k}: the study has cases 0 to {}",
-                    plan.cases.len().saturating_sub(1)
+                    "{what}: the study has cases 0 to {}",
+                    n.saturating_sub(1)
                 )));
             }
-        },
+            plan.cases[k..=l].iter().step_by(step).collect()
+        }
     };
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(options.jobs)
