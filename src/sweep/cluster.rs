@@ -282,7 +282,7 @@ pub fn submit(dir: &Path, failed: bool) -> Result<Submitted, Error> {
             script.display()
         )));
     }
-    let (plan, seen, queue) = status(dir)?;
+    let (plan, seen, _queue) = status(dir)?;
     if plan.cases.len() != settings.cases {
         return Err(Error::Sweep(format!(
             "{}: written for {} cases, the plan has {}: plan again with --slurm",
@@ -343,7 +343,6 @@ pub fn submit(dir: &Path, failed: bool) -> Result<Submitted, Error> {
     };
     let mut jobs = Jobs::read(dir)?;
     jobs.jobs.push(job.clone());
-    let _ = queue;
     write_atomic(
         &dir.join(JOBS),
         serde_json::to_string_pretty(&jobs)?.as_bytes(),

@@ -7,17 +7,11 @@
 use super::plan::Plan;
 use super::row::Row;
 use crate::Error;
+use crate::plot::{plot_err, series_legend};
 use plotters::prelude::*;
 use serde_json::Value;
 use std::collections::BTreeMap;
 use std::path::Path;
-
-fn plot_err(path: &Path, e: impl std::fmt::Display) -> Error {
-    Error::Plot {
-        path: path.to_path_buf(),
-        reason: e.to_string(),
-    }
-}
 
 /// The panels: title, y label, the quantity.
 type Panel = (&'static str, &'static str, fn(&Row) -> Option<f64>);
@@ -130,11 +124,7 @@ pub fn study(plan: &Plan, rows: &[Row], path: &Path) -> Result<(), Error> {
         }
         if series.keys().any(|k| !k.is_empty()) {
             // Upper left: x starts at 0, the data sit to the right.
-            chart
-                .configure_series_labels()
-                .position(SeriesLabelPosition::UpperLeft)
-                .background_style(WHITE.mix(0.8))
-                .border_style(BLACK)
+            series_legend(&mut chart, SeriesLabelPosition::UpperLeft)
                 .draw()
                 .map_err(|e| plot_err(path, e))?;
         }

@@ -59,7 +59,11 @@ impl Contact {
         settings: &LevelSettings<'_>,
     ) -> Result<ContactLevel, ContactError> {
         let perturbed = first.first.perturbed;
-        let again = if perturbed { settings.perturbation } else { &[] };
+        let again = if perturbed {
+            settings.perturbation
+        } else {
+            &[]
+        };
         let level = self.passes(
             problem,
             u,
