@@ -86,8 +86,7 @@ pub fn solve_level<P: NonlinearProblem + DeadLoads>(
 }
 
 /// The perturbation protocol's redo of a level (thesis §3.2) from the level's start `u`: the
-/// perturbed step in [`PERTURBED_INCREMENTS`] equal increments with
-/// [`PERTURBED_PATIENCE`] times the iteration limit, the perturbation applied and removed
+/// perturbed step in 4 equal increments with 4 times the iteration limit, the perturbation applied and removed
 /// ([`perturbed_step`]). Shared by [`solve_level`], the arc-length level and callers that
 /// follow a perturbed level again (the contact loop's fallback).
 pub fn perturbed_redo<P: NonlinearProblem + DeadLoads>(
