@@ -212,6 +212,8 @@ fn the_script_asks_for_an_array_with_estimated_resources() {
             "--out",
             p(&again),
             "--slurm",
+            "--per-task",
+            "1",
             "--time",
             "1-00:30:00",
         ],
@@ -252,7 +254,19 @@ fn bad_input_is_refused_and_nothing_is_half_planned_or_submitted() {
         assert_eq!(left.len(), 1, "{left:?}"); // the scene alone
     }
     let s = scene(&d, STUDY);
-    ok(&["sweep", "plan", p(&s), "--out", p(&out), "--slurm"], None);
+    ok(
+        &[
+            "sweep",
+            "plan",
+            p(&s),
+            "--out",
+            p(&out),
+            "--slurm",
+            "--per-task",
+            "1",
+        ],
+        None,
+    );
     let jobs = out.join("slurm/jobs.json");
     // sbatch missing.
     let empty = fake_path(&d.join("none"), &[]);
@@ -432,6 +446,8 @@ fn a_study_runs_through_slurm_and_survives_a_cancelled_task() {
             "--out",
             p(&cluster_dir),
             "--slurm",
+            "--per-task",
+            "1",
             "--max-parallel",
             "2",
         ],

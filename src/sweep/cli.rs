@@ -25,9 +25,10 @@ pub enum SweepCommand {
         /// (docs/CLUSTER.md).
         #[arg(long)]
         slurm: bool,
-        /// Cases per array task (with --slurm).
-        #[arg(long, default_value_t = 1, requires = "slurm")]
-        per_task: usize,
+        /// Cases per array task (with --slurm; default: a minute of estimated work a task,
+        /// and no fewer tasks than --max-parallel).
+        #[arg(long, requires = "slurm")]
+        per_task: Option<usize>,
         /// Slurm partition (with --slurm).
         #[arg(long, requires = "slurm")]
         partition: Option<String>,

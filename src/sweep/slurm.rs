@@ -34,12 +34,18 @@ pub const MEMORY_FLOOR_MIB: u64 = 256;
 pub const TIME_MARGIN: f64 = 3.0;
 /// Least time asked for per task, s (start-up and a loaded node).
 pub const TIME_FLOOR_S: u64 = 300;
+/// Estimated work per array task when `--per-task` is not given, s: Slurm costs about 0.5 s of
+/// a CPU slot per task (scheduling, slurmstepd, a process start: docs/CLUSTER.md), so a task of
+/// a minute's estimated work loses under 1 % to it. Measured on the 200-case study of
+/// docs/CLUSTER.md (0.03–0.1 s a case on an idle node): one case per task took 3× the local
+/// wall, 10 per task 1.85×, 100 per task (as many tasks as slots) 1.02–1.05×.
+pub const TASK_SECONDS: f64 = 60.0;
 
 /// The `--slurm` options of `sweep plan`.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct SlurmOptions {
-    /// Cases per array task (1 or more).
-    pub per_task: usize,
+    /// Cases per array task (1 or more); `None`: [`default_per_task`].
+    pub per_task: Option<usize>,
     /// `--partition`, passed through.
     pub partition: Option<String>,
     /// `--account`, passed through.
@@ -54,7 +60,7 @@ impl SlurmOptions {
     /// Checks the options before anything is planned.
     pub fn check(&self) -> Result<(), Error> {
         let bad = |m: String| Err(Error::Sweep(m));
-        if self.per_task == 0 {
+        if self.per_task == Some(0) {
             return bad("--per-task 0: one case per task or more".into());
         }
         for (flag, v) in [
@@ -200,6 +206,24 @@ pub fn case_seconds(resolved: &Resolved) -> f64 {
     1.0 + levels * ITERATIONS_PER_LEVEL * per_iteration
 }
 
+/// Cases per task when `--per-task` is not given: enough for [`TASK_SECONDS`] of estimated
+/// work, ⌈TASK_SECONDS / case_seconds⌉, but no fewer tasks than `max_parallel` slots (0: no
+/// limit given) so that none idles, and at least one case.
+pub fn default_per_task(cases: usize, case_seconds: f64, max_parallel: usize) -> usize {
+    let cases = cases.max(1);
+    let for_time = if case_seconds > 0.0 {
+        (TASK_SECONDS / case_seconds).ceil() as usize
+    } else {
+        cases
+    };
+    let for_slots = if max_parallel > 0 {
+        cases.div_ceil(max_parallel)
+    } else {
+        cases
+    };
+    for_time.min(for_slots).clamp(1, cases)
+}
+
 /// The settings of a study's script: the largest case's memory and time, with margins.
 pub fn settings(
     dir: &Path,
@@ -215,7 +239,10 @@ pub fn settings(
     let case_seconds = cases.iter().map(case_seconds).fold(0.0, f64::max);
     let mib = (case_bytes as f64 * MEMORY_MARGIN / (1 << 20) as f64).ceil() as u64;
     let mem_mib = mib.max(MEMORY_FLOOR_MIB).div_ceil(64) * 64;
-    let per_task = o.per_task.max(1);
+    let per_task = o
+        .per_task
+        .unwrap_or_else(|| default_per_task(cases.len(), case_seconds, o.max_parallel))
+        .max(1);
     let time = match &o.time {
         Some(t) => format_time(parse_time(t)?),
         None => {
@@ -416,5 +443,18 @@ mod tests {
         assert_eq!(of(1), [1, 4]);
         assert_eq!(s.task_of(5), 2);
         assert_eq!(shell_quote("a'b c"), r"'a'\''b c'");
+    }
+
+    #[test]
+    fn tasks_default_to_a_minute_of_work_and_fill_the_slots() {
+        // 200 cases of 1.2 s: 50 a task by time; 2 slots would take 100 each, so 50.
+        assert_eq!(default_per_task(200, 1.2, 2), 50);
+        // 200 cases of 0.5 s: 120 by time, but 2 slots want 2 tasks of 100.
+        assert_eq!(default_per_task(200, 0.5, 2), 100);
+        // Cases of ten minutes: one a task.
+        assert_eq!(default_per_task(200, 600.0, 0), 1);
+        // No estimate: everything in one task (no slot limit given) or one per slot.
+        assert_eq!(default_per_task(8, 0.0, 0), 8);
+        assert_eq!(default_per_task(8, 0.0, 3), 3);
     }
 }
