@@ -182,7 +182,10 @@ pub fn main(command: SweepCommand, quiet: bool, threads: Option<usize>) -> Resul
             if dir.join(super::cluster::JOBS).is_file() {
                 println!("(from {})", queue.source());
             }
-            println!("{}", counts(states.iter().map(|s| s.name())));
+            println!(
+                "{}",
+                super::cluster::counts(states.iter().map(|s| s.name()))
+            );
             Ok(())
         }
         SweepCommand::Merge { dir } => merge(&dir, quiet),
@@ -265,23 +268,6 @@ fn plan_command(
     Ok(())
 }
 
-/// `3 complete, 1 failed`: how many of each name.
-pub fn counts<'a>(names: impl Iterator<Item = &'a str>) -> String {
-    let mut counts = std::collections::BTreeMap::new();
-    for n in names {
-        *counts.entry(n).or_insert(0) += 1;
-    }
-    summary(&counts)
-}
-
-fn summary(counts: &std::collections::BTreeMap<&str, usize>) -> String {
-    counts
-        .iter()
-        .map(|(k, n)| format!("{n} {k}"))
-        .collect::<Vec<_>>()
-        .join(", ")
-}
-
 fn merge(dir: &Path, quiet: bool) -> Result<(), Failure> {
     let merged = super::merge(dir).map_err(|e| match e {
         Error::Sweep(_) | Error::Io { .. } => input(e),
@@ -291,7 +277,7 @@ fn merge(dir: &Path, quiet: bool) -> Result<(), Failure> {
         println!(
             "{}: study.csv, study.json, study.svg, study-wall.csv ({})",
             dir.display(),
-            summary(&merged.counts)
+            super::cluster::summary(&merged.counts)
         );
     }
     Ok(())

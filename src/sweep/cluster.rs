@@ -321,7 +321,7 @@ pub fn submit(dir: &Path, failed: bool) -> Result<Submitted, Error> {
         })
         .collect();
     if tasks.is_empty() {
-        let counts = super::cli::counts(seen.iter().map(Seen::name));
+        let counts = counts(seen.iter().map(Seen::name));
         return Ok(Submitted::Nothing(format!("nothing to submit ({counts})")));
     }
     // Every case a task will write must take a file: refused here, not in the queue.
@@ -395,4 +395,21 @@ fn sbatch(dir: &Path, array: &str) -> Result<String, Error> {
         )));
     }
     Ok(id)
+}
+
+/// `3 complete, 1 failed`: how many of each name.
+pub(crate) fn counts<'a>(names: impl Iterator<Item = &'a str>) -> String {
+    let mut counts = std::collections::BTreeMap::new();
+    for n in names {
+        *counts.entry(n).or_insert(0) += 1;
+    }
+    summary(&counts)
+}
+
+pub(crate) fn summary(counts: &std::collections::BTreeMap<&str, usize>) -> String {
+    counts
+        .iter()
+        .map(|(k, n)| format!("{n} {k}"))
+        .collect::<Vec<_>>()
+        .join(", ")
 }
