@@ -5,6 +5,8 @@ use nonlin3d_newton::{IncrementReport, Termination};
 use nonlin3d_vcct::FrontRelease;
 use serde::Serialize;
 
+mod overlap;
+
 /// The state of the crack faces one element behind a front point.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
@@ -403,7 +405,8 @@ pub struct Critical {
 }
 
 impl Results {
-    /// Warnings that follow from the levels: every level whose converged state is unstable
+    /// Warnings that follow from the levels: every level whose crack faces pass through each
+    /// other (overlapped front points, §2.7), every level whose converged state is unstable
     /// (negative pivots), and a stronger one when the last level is.
     pub fn stability_warnings(&self) -> Vec<String> {
         let what = if self.quantity == "strain" {
@@ -411,7 +414,7 @@ impl Results {
         } else {
             "load (N)"
         };
-        let mut out = Vec::new();
+        let mut out = overlap::overlap_warnings(&self.levels, what);
         let unstable: Vec<&LevelResult> = self
             .levels
             .iter()

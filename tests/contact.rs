@@ -45,6 +45,13 @@ fn contact_removes_the_overlap_and_closed_points_have_no_mode_i() {
     let off = run(&scene(&SWEEP, CrackFacesName::Off));
     // The case: without contact, front points overlap at the last level.
     assert!(off.levels.last().unwrap().overlapped() > 0);
+    // …and the run says so, naming the level (a G beside overlapped points can look plausible).
+    let said = format!("level at strain {}: the crack faces pass through", SWEEP[4]);
+    assert!(
+        off.warnings.iter().any(|w| w.starts_with(&said)),
+        "{:?}",
+        off.warnings
+    );
     for faces in [CrackFacesName::Auto, CrackFacesName::On] {
         let on = run(&scene(&SWEEP, faces));
         for l in &on.levels {
@@ -60,6 +67,13 @@ fn contact_removes_the_overlap_and_closed_points_have_no_mode_i() {
                 assert!(c.max_force_n >= 0.0 && c.max_pressure_mpa >= 0.0);
             }
         }
+        assert!(
+            !on.warnings
+                .iter()
+                .any(|w| w.contains("pass through each other")),
+            "{:?}",
+            on.warnings
+        );
         let last = on.levels.last().unwrap().contact.clone().unwrap();
         assert!(last.pairs_closed > 0 && last.passes > 0, "{last:?}");
         // Where the faces touch (the points that overlap without contact, S ≥ 11.8 mm at
