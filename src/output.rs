@@ -297,6 +297,9 @@ impl RunOutput {
     /// A level converged: writes its front CSV and VTU, the PVD and `levels.csv` so far, and
     /// `results.json` with every level so far and `"complete": false`.
     pub fn level(&mut self, level: &LevelResult) -> Result<(), Error> {
+        // Every file under the lock the signal handler takes (its exit cannot cut one short).
+        let lock = self.pending.clone();
+        let mut pending = lock.lock().map_err(|_| Error::OutputLock)?;
         let k = self.snapshot.levels.len();
         self.snapshot.model.front_points = level.front.len();
         self.snapshot.levels.push(level.clone());
@@ -309,7 +312,7 @@ impl RunOutput {
         let p = self.dir.join("levels.csv");
         write_atomic(&p, crate::report::levels_csv(&self.snapshot).as_bytes())?;
         self.snapshot.warnings = self.snapshot.stability_warnings();
-        self.write_json()
+        self.write_json_locked(&mut pending)
     }
 
     /// The run failed: `results.json` keeps every converged level, `"complete": false` and the
@@ -328,10 +331,11 @@ impl RunOutput {
             p.finish(self.started.elapsed().as_secs_f64());
             p
         });
+        // Under the lock the signal handler takes, so that its exit cannot cut a file short; a
+        // signal meanwhile waits, then finds the run finished and writes nothing.
+        let mut pending = self.pending.lock().map_err(|_| Error::OutputLock)?;
         crate::report::write_all(results, &self.dir)?;
-        if let Ok(mut p) = self.pending.lock() {
-            p.stopped_json = None;
-        }
+        pending.stopped_json = None;
         self.manifest.write()
     }
 
@@ -345,6 +349,13 @@ impl RunOutput {
 
     /// Writes the snapshot's `results.json` and prepares its interrupted form.
     fn write_json(&mut self) -> Result<(), Error> {
+        let lock = self.pending.clone();
+        let mut pending = lock.lock().map_err(|_| Error::OutputLock)?;
+        self.write_json_locked(&mut pending)
+    }
+
+    /// [`write_json`](Self::write_json) with the signal handler's lock already held.
+    fn write_json_locked(&mut self, pending: &mut Pending) -> Result<(), Error> {
         if let Some(p) = &mut self.snapshot.provenance {
             p.finish(self.started.elapsed().as_secs_f64());
         }
@@ -354,10 +365,9 @@ impl RunOutput {
             value["stopped"] = "interrupted".into();
         }
         let stopped = serde_json::to_string_pretty(&value)?;
-        let mut pending = self.pending.lock().map_err(|_| Error::OutputLock)?;
         write_atomic(&pending.path, now.as_bytes())?;
         pending.stopped_json = Some(stopped);
-        drop(pending);
+        // The manifest under the same lock (a signal's exit must not cut it short).
         self.manifest.write()
     }
 }
@@ -381,19 +391,22 @@ impl InterruptHandle {
     }
 
     /// Under the lock [`stop`](Self::stop) takes: runs `write` (the state's other files),
-    /// writes `now` to the status file, and keeps `stopped` for `stop` (the status with
-    /// `"stopped": "interrupted"`; None once the run is finished).
+    /// writes `now` to the status file, keeps `stopped` for `stop` (the status with
+    /// `"stopped": "interrupted"`; None once the run is finished), then runs `after` (the
+    /// manifest, which lists the status file). Everything under the lock, so a signal's exit
+    /// never cuts a write short (a `.NAME.partial` left behind).
     pub fn publish(
         &self,
         write: impl FnOnce() -> Result<(), Error>,
         now: &str,
         stopped: Option<String>,
+        after: impl FnOnce() -> Result<(), Error>,
     ) -> Result<(), Error> {
         let mut pending = self.pending.lock().map_err(|_| Error::OutputLock)?;
         write()?;
         write_atomic(&pending.path, now.as_bytes())?;
         pending.stopped_json = stopped;
-        Ok(())
+        after()
     }
 
     /// Waits for any `results.json` write in progress, then writes the run's state with

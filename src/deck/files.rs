@@ -362,8 +362,9 @@ impl<'a> DeckOutput<'a> {
             }
             Some(serde_json::to_string_pretty(&value)?)
         };
-        self.handle.publish(write, &now, stopped)?;
-        self.manifest.write()?;
+        let manifest = &self.manifest;
+        self.handle
+            .publish(write, &now, stopped, || manifest.write())?;
         self.output_s += t.elapsed().as_secs_f64();
         Ok(())
     }
