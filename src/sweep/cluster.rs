@@ -165,47 +165,53 @@ fn output(program: &str, args: &[&str]) -> Option<String> {
         .then(|| String::from_utf8_lossy(&o.stdout).into_owned())
 }
 
-/// A case's state on a cluster.
+/// A case's state on a cluster: what its folder says, unless the scheduler knows better.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum Seen {
-    /// results.json says complete.
-    Complete,
-    /// Stopped on an error, or killed (its task left the queue before it finished).
-    Failed(String),
+    /// What results.json says (complete, failed, incomplete with no scheduler to say whether
+    /// it still runs, missing and not queued).
+    Disk(CaseState),
+    /// Started, not finished, and its task has left the queue (cancelled, out of time, node
+    /// failure): failed, with why.
+    Killed(String),
     /// Its task runs it now.
     Running,
     /// Its task waits in the queue (or runs an earlier case of its chunk).
     Pending,
-    /// Started, not finished, and no scheduler to say whether it still runs.
-    Incomplete,
-    /// Not started, and not queued.
-    Missing,
 }
 
 impl Seen {
     /// `complete`, `failed`, `running`, `pending`, `incomplete`, `missing`.
     pub fn name(&self) -> &'static str {
         match self {
-            Self::Complete => "complete",
-            Self::Failed(_) => "failed",
+            Self::Disk(d) => d.name(),
+            Self::Killed(_) => "failed",
             Self::Running => "running",
             Self::Pending => "pending",
-            Self::Incomplete => "incomplete",
-            Self::Missing => "missing",
         }
     }
 
     /// Why a failed case failed.
     pub fn error(&self) -> Option<&str> {
         match self {
-            Self::Failed(e) => Some(e),
+            Self::Disk(d) => d.error(),
+            Self::Killed(e) => Some(e),
             _ => None,
         }
     }
 
     /// A case `submit --failed` runs again.
     pub fn to_resubmit(&self) -> bool {
-        matches!(self, Self::Failed(_) | Self::Incomplete | Self::Missing)
+        matches!(
+            self,
+            Self::Disk(CaseState::Failed(_) | CaseState::Incomplete | CaseState::Missing)
+                | Self::Killed(_)
+        )
+    }
+
+    /// results.json says complete.
+    pub fn is_complete(&self) -> bool {
+        *self == Self::Disk(CaseState::Complete)
     }
 }
 
@@ -229,8 +235,7 @@ pub fn status(dir: &Path) -> Result<(Plan, Vec<Seen>, Queue), Error> {
                 _ => None,
             };
             match (&disk[k], queued) {
-                (CaseState::Complete, _) => Seen::Complete,
-                (CaseState::Failed(e), _) => Seen::Failed(e.clone()),
+                (d @ (CaseState::Complete | CaseState::Failed(_)), _) => Seen::Disk(d.clone()),
                 (_, Some((_, _, TaskState::Pending))) => Seen::Pending,
                 (d, Some((_, t, TaskState::Running))) => {
                     // A task runs its chunk in order: the first unfinished case is the one running.
@@ -246,15 +251,14 @@ pub fn status(dir: &Path) -> Result<(Plan, Vec<Seen>, Queue), Error> {
                     }
                 }
                 (CaseState::Incomplete, Some((j, t, TaskState::Ended(how)))) => {
-                    Seen::Failed(format!(
+                    Seen::Killed(format!(
                         "stopped before it finished: task {}_{t} {} (cancelled, out of time or its \
                          node failed); `nonlin3d sweep submit --failed` runs it again",
                         j.job_id,
                         how.map_or("left the queue".into(), |h| format!("ended {h}"))
                     ))
                 }
-                (CaseState::Incomplete, _) => Seen::Incomplete,
-                _ => Seen::Missing,
+                (d, _) => Seen::Disk(d.clone()),
             }
         })
         .collect();
@@ -315,7 +319,7 @@ pub fn submit(dir: &Path, failed: bool) -> Result<Submitted, Error> {
                 if failed {
                     seen[k].to_resubmit()
                 } else {
-                    seen[k] != Seen::Complete
+                    !seen[k].is_complete()
                 }
             })
         })
