@@ -9,7 +9,8 @@
 //! `-- only=laminate` to run the cases whose name contains that text, `-- noprofile` to leave
 //! out the profile solver, `-- noamd` to leave out faer with AMD, `-- mixed` to add faer ND
 //! with an f32 factor refined in f64, `-- split` to add faer ND split at the top separator
-//! (`FaerSplit::Halves`, halves on two threads), `-- rounds=N` to run every solver of a case N times in
+//! (`FaerSplit::Halves`, halves on two threads), `-- splitmixed` to add the split with f32
+//! halves refined in f64, `-- rounds=N` to run every solver of a case N times in
 //! turn, so that ratios between solvers come from neighbouring runs on a busy machine).
 //! The last column is the normwise backward error ‖b − A x‖∞ / (‖A‖∞‖x‖∞ + ‖b‖∞) of the
 //! solve.
@@ -350,16 +351,23 @@ fn main() {
             }
         }
         let mut mixed: Vec<(FaerSolver, String)> = Vec::new();
-        if has("mixed") {
+        for (flag, split, name) in [
+            ("mixed", FaerSplit::Off, "mixed"),
+            ("splitmixed", FaerSplit::Halves, "split mixed"),
+        ] {
+            if !has(flag) {
+                continue;
+            }
             for threads in [1, 2] {
                 let mut s = FaerSolver::new(FaerMode::Ldlt)
                     .with_ordering(FaerOrdering::NestedDissection)
                     .with_threads(threads);
                 s.precision = FaerPrecision::mixed();
+                s.split = split;
                 mixed.push((
                     s,
                     format!(
-                        "faer LDLᵀ ND mixed f32/f64, {threads} thread{}",
+                        "faer LDLᵀ ND {name} f32/f64, {threads} thread{}",
                         if threads > 1 { "s" } else { "" }
                     ),
                 ));

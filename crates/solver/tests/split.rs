@@ -7,12 +7,18 @@
 //! order, with κ∞(A) = ‖A‖∞‖A⁻¹‖∞ estimated by Hager's method (a lower bound, hence the factor
 //! 10 of slack). The split's own backward error must stay within 10× the unsplit one's or
 //! 1e-15 (rounding of the extra sums S = S′₁ + S′₂ − Aₛₛ, of order nₛ ε).
+//!
+//! Mixed precision inside the split (f32 halves, S in f64, refinement in f64): the f32 factor
+//! must be kept (no fallback: these boxes have cond ≈ 1e2–1e4, so each refinement step gains
+//! cond·ε₃₂ ≤ 1e-3) and refined to the refinement target 1e-14; the same inertia. With a
+//! wrong Schur assembly the f32 split is no approximate inverse, refinement stalls and falls
+//! back, which the test refuses.
 
 mod common;
 
 use common::box_matrix;
 use nonlin3d_solver::{
-    FaerMode, FaerOrdering, FaerSolver, FaerSplit, LinearSolver, SymmetricMatrix,
+    FaerMode, FaerOrdering, FaerPrecision, FaerSolver, FaerSplit, LinearSolver, SymmetricMatrix,
 };
 use nonlin3d_testkit::Lcg;
 
@@ -116,6 +122,47 @@ fn split_matches_the_unsplit_factor() {
         assert!(
             relative <= 10.0 * kappa * (omega + omega_split),
             "shift {shift}: ‖x − x̂‖/‖x‖ = {relative:.1e}, κ {kappa:.1e}, ω {omega:.1e} + {omega_split:.1e}"
+        );
+    }
+}
+
+/// The split with f32 halves on the same boxes: f32 factor kept, refined to 1e-14, the
+/// unsplit inertia, and the f64 answer within κ∞(ω + ω̂).
+#[test]
+fn mixed_split_refines_to_the_f64_answer() {
+    for shift in [0.0, 1.5] {
+        let a = box_matrix([6, 6, 4], shift);
+        let n = a.n();
+        let mut rng = Lcg::new(5);
+        let b: Vec<f64> = (0..n).map(|_| rng.uniform(-1.0, 1.0)).collect();
+        let mut whole = solver(FaerSplit::Off);
+        whole.analyze(a.pattern()).unwrap();
+        let f = whole.factorize(&a).unwrap();
+        let mut x = b.clone();
+        whole.solve_in_place(&mut x, 1).unwrap();
+        let mut split = solver(FaerSplit::Halves);
+        split.precision = FaerPrecision::mixed();
+        split.analyze(a.pattern()).unwrap();
+        assert!(split.split_sizes().is_some(), "the box is dissected");
+        let g = split.factorize(&a).unwrap();
+        assert_eq!(g.negative_pivots, f.negative_pivots, "shift {shift}");
+        let mut y = b.clone();
+        split.solve_in_place(&mut y, 1).unwrap();
+        let m = split.mixed_stats();
+        assert_eq!(
+            (m.single_factorizations, m.double_factorizations),
+            (1, 0),
+            "shift {shift}: {m:?}"
+        );
+        assert_eq!(split.split_fallback(), None);
+        let (omega, omega_split) = (backward_error(&a, &x, &b), backward_error(&a, &y, &b));
+        assert!(omega_split <= 1e-14, "shift {shift}: ω {omega_split:.1e}");
+        let kappa = matrix_norm(&a) * inverse_norm(&mut whole, n);
+        let diff: Vec<f64> = x.iter().zip(&y).map(|(p, q)| p - q).collect();
+        let relative = inf_norm(&diff) / inf_norm(&x);
+        assert!(
+            relative <= 10.0 * kappa * (omega + omega_split),
+            "shift {shift}: ‖x − x̂‖/‖x‖ = {relative:.1e}, κ {kappa:.1e}"
         );
     }
 }

@@ -7,13 +7,17 @@
 //! Mᵢ = [Aᵢᵢ Aᵢₛ; Aₛᵢ Aₛₛ] = Lᵢ Dᵢ Lᵢᵀ, whose trailing block gives back
 //! Lₛₛ Dₛ Lₛₛᵀ = S′ᵢ = Aₛₛ − Aₛᵢ Aᵢᵢ⁻¹ Aᵢₛ (a Schur complement of a principal submatrix of A:
 //! positive definite when A is). The separator's Schur complement S = S′₁ + S′₂ − Aₛₛ is then
-//! factored densely. The pivots are those of the unsplit LDLᵀ in the same order (A₁₁'s, A₂₂'s,
-//! then S's), so the inertia is their sum (Haynsworth). Solves: forward through each half
-//! (its rows of the separator collect −Aₛᵢ Aᵢᵢ⁻¹ bᵢ), S xₛ = bₛ − Σ Aₛᵢ Aᵢᵢ⁻¹ bᵢ, back through
-//! each half. Each half is one sequential faer call (or loop) and the halves meet in a fixed
-//! order, so the bits do not depend on the thread count.
+//! factored densely (f64). The pivots are those of the unsplit LDLᵀ in the same order (A₁₁'s,
+//! A₂₂'s, then S's), so the inertia is their sum (Haynsworth). Solves: forward through each
+//! half (its rows of the separator collect −Aₛᵢ Aᵢᵢ⁻¹ bᵢ), S xₛ = bₛ − Σ Aₛᵢ Aᵢᵢ⁻¹ bᵢ, back
+//! through each half. Each half is one sequential faer call (or loop) and the halves meet in
+//! a fixed order, so the bits do not depend on the thread count.
+//!
+//! The halves are stored in f64, or in f32 for mixed precision (`mixed.rs` refines the split
+//! solve in f64 and decides the fallbacks; the solve loops read the f32 factor into f64 sums).
 
 use super::factor_diagonal;
+use super::pivots::{PivotRule, negative_pivots};
 use crate::{Factorization, SolverError, SymmetricMatrix, SymmetricPattern};
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::ldlt::factor::{LdltError, LdltRegularization};
@@ -26,6 +30,76 @@ use faer::sparse::linalg::cholesky::{
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Accum, Conj, Mat, MatMut, Par, Side};
 
+/// Pivots of S′ᵢ (a half's separator block) below this fraction of their diagonal entry
+/// (f64 halves; f32 ones use the mixed pivot floor) make the rebuild of S′ᵢ inexact: the
+/// split gives way to the unsplit factor.
+const SEPARATOR_PIVOT_FLOOR: f64 = 1e-8;
+
+/// A half's factor values, in the precision last used.
+#[derive(Default)]
+pub(super) enum Stored {
+    #[default]
+    Empty,
+    Double(Vec<f64>),
+    Single(Vec<f32>),
+}
+
+/// The precisions a half can be factored in.
+pub(super) trait Real:
+    faer::traits::ComplexField + Copy + Into<f64> + Send + Sync + 'static
+{
+    /// Rounded to this precision.
+    fn narrow(v: f64) -> Self;
+    /// `stored` as a factor of this precision with `len` entries (the other one freed first).
+    fn slot(stored: &mut Stored, len: usize) -> Result<&mut Vec<Self>, SolverError>;
+    /// The factor `stored` holds in this precision (empty if another).
+    fn view(stored: &Stored) -> &[Self];
+}
+
+impl Real for f64 {
+    fn narrow(v: f64) -> Self {
+        v
+    }
+    fn slot(stored: &mut Stored, len: usize) -> Result<&mut Vec<Self>, SolverError> {
+        if !matches!(stored, Stored::Double(v) if v.len() == len) {
+            *stored = Stored::Empty;
+            *stored = Stored::Double(crate::budget::try_zeros(len, "a split half's factor")?);
+        }
+        match stored {
+            Stored::Double(v) => Ok(v),
+            _ => unreachable!("just stored"),
+        }
+    }
+    fn view(stored: &Stored) -> &[Self] {
+        match stored {
+            Stored::Double(v) => v,
+            _ => &[],
+        }
+    }
+}
+
+impl Real for f32 {
+    fn narrow(v: f64) -> Self {
+        v as f32
+    }
+    fn slot(stored: &mut Stored, len: usize) -> Result<&mut Vec<Self>, SolverError> {
+        if !matches!(stored, Stored::Single(v) if v.len() == len) {
+            *stored = Stored::Empty;
+            *stored = Stored::Single(super::mixed::try_zeros_f32(len)?);
+        }
+        match stored {
+            Stored::Single(v) => Ok(v),
+            _ => unreachable!("just stored"),
+        }
+    }
+    fn view(stored: &Stored) -> &[Self] {
+        match stored {
+            Stored::Single(v) => v,
+            _ => &[],
+        }
+    }
+}
+
 /// One half with the separator appended, in its own numbering: interior DOFs (in the
 /// nested-dissection order), then the separator's.
 struct Half {
@@ -33,12 +107,13 @@ struct Half {
     dofs: Vec<usize>,
     /// Interior DOFs (the first `interior` local indices).
     interior: usize,
+    /// The factor-order equation of the first interior DOF in the unsplit LDLᵀ.
+    first: usize,
     pattern: SymmetricPattern,
     /// Local value k is A's value `gather[k]`.
     gather: Vec<usize>,
     symbolic: SymbolicCholesky<usize>,
-    values: Vec<f64>,
-    l: Vec<f64>,
+    l: Stored,
     buffer: MemBuffer,
 }
 
@@ -46,9 +121,13 @@ struct Half {
 struct HalfOutcome {
     /// Negative interior pivots.
     negative: usize,
-    /// S′ᵢ, lower triangle (ns × ns).
+    /// S′ᵢ, lower triangle (ns × ns), in f64.
     schur: Mat<f64>,
 }
+
+/// A factorisation's outcome: the factor, or why it cannot be trusted (the caller takes
+/// another path), or an error of A itself.
+pub(super) type Attempt<T> = Result<Result<T, &'static str>, SolverError>;
 
 /// The split factor: two halves and the dense separator block.
 pub(super) struct Split {
@@ -92,10 +171,10 @@ impl Split {
         let sep = forward[n0 + n1..].to_vec();
         let ns = sep.len();
         let half = |range: std::ops::Range<usize>| {
-            let mut dofs = forward[range].to_vec();
+            let mut dofs = forward[range.clone()].to_vec();
             let interior = dofs.len();
             dofs.extend_from_slice(&sep);
-            Half::new(pattern, dofs, interior)
+            Half::new(pattern, dofs, interior, range.start)
         };
         let halves = [half(0..n0)?, half(n0..n0 + n1)?];
         let mut local = vec![usize::MAX; n];
@@ -145,36 +224,41 @@ impl Split {
 
     /// Entries of the two half factors and S.
     pub(super) fn factor_entries(&self) -> usize {
-        self.halves.iter().map(|h| h.l.len()).sum::<usize>() + self.sep.len().pow(2)
+        self.halves
+            .iter()
+            .map(|h| h.symbolic.len_val())
+            .sum::<usize>()
+            + self.sep.len().pow(2)
     }
 
     pub(super) fn is_factored(&self) -> bool {
         self.factored
     }
 
-    /// Factors `a`: the halves on `par`'s threads (one each), S on `par`. `Ok(Err(reason))`
-    /// when a half's trailing block (which the unsplit factor never forms) meets a pivot too
-    /// small to trust: the caller factors unsplit.
-    pub(super) fn factorize(
+    /// Factors `a`: the halves in precision `T` on `par`'s threads (one each), S in f64 on
+    /// `par`, pivots judged by `rule`. `Ok(Err(reason))` when a half's trailing block (which
+    /// the unsplit factor never forms) meets a pivot too small to trust, or an f32 pivot is in
+    /// doubt: the caller takes another path.
+    pub(super) fn factorize<T: Real>(
         &mut self,
         a: &SymmetricMatrix,
         par: Par,
-        tolerance: f64,
+        rule: PivotRule,
         flops: f64,
-    ) -> Result<Result<Factorization, &'static str>, SolverError> {
+    ) -> Attempt<Factorization> {
         self.factored = false;
         let diag = a.diagonal();
         let values = a.values();
         let [h0, h1] = &mut self.halves;
         let (r0, r1) = if par.degree() > 1 {
             rayon::join(
-                || h0.factorize(values, &diag, tolerance),
-                || h1.factorize(values, &diag, tolerance),
+                || h0.factorize::<T>(values, &diag, rule),
+                || h1.factorize::<T>(values, &diag, rule),
             )
         } else {
             (
-                h0.factorize(values, &diag, tolerance),
-                h1.factorize(values, &diag, tolerance),
+                h0.factorize::<T>(values, &diag, rule),
+                h1.factorize::<T>(values, &diag, rule),
             )
         };
         let (o0, o1) = match (r0?, r1?) {
@@ -199,24 +283,24 @@ impl Split {
             MemStack::new(&mut self.s_buffer),
             Default::default(),
         );
-        let mut negative = o0.negative + o1.negative;
-        for k in 0..ns {
-            let d = self.s[(k, k)];
-            let dof = self.sep[k];
-            let equation = self.n - ns + k;
-            let failed = matches!(info, Err(LdltError::ZeroPivot { index }) if index == k);
-            if failed || crate::profile::is_zero_pivot(d, tolerance, diag[dof].abs()) {
-                return Err(SolverError::ZeroPivot {
-                    equation,
+        let first = self.n - ns;
+        if let Err(LdltError::ZeroPivot { index }) = info {
+            let dof = self.sep[index];
+            return match rule {
+                PivotRule::Single { .. } => Ok(Err("f32 elimination met a zero pivot")),
+                PivotRule::Double { .. } => Err(SolverError::ZeroPivot {
+                    equation: first + index,
                     dof,
-                    pivot: if failed { 0.0 } else { d },
+                    pivot: 0.0,
                     diagonal: diag[dof].abs(),
-                });
-            }
-            if d < 0.0 {
-                negative += 1;
-            }
+                }),
+            };
         }
+        let pivots = (0..ns).map(|k| self.s[(k, k)]);
+        let negative = match negative_pivots(pivots, first, |k| self.sep[k], &diag, rule)? {
+            Ok(count) => count + o0.negative + o1.negative,
+            Err(reason) => return Ok(Err(reason)),
+        };
         self.factored = true;
         Ok(Ok(Factorization {
             negative_pivots: negative,
@@ -277,7 +361,12 @@ impl Split {
 impl Half {
     /// The pattern of A on `dofs` (renumbered), its gather map and faer's supernodal symbolic
     /// factor in that order.
-    fn new(a: &SymmetricPattern, dofs: Vec<usize>, interior: usize) -> Result<Self, SolverError> {
+    fn new(
+        a: &SymmetricPattern,
+        dofs: Vec<usize>,
+        interior: usize,
+        first: usize,
+    ) -> Result<Self, SolverError> {
         let n = a.n();
         let m = dofs.len();
         let mut local = vec![usize::MAX; n];
@@ -332,16 +421,14 @@ impl Half {
             what: "a split half's workspace",
             bytes: req.size_bytes(),
         })?;
-        let l = crate::budget::try_zeros(symbolic.len_val(), "a split half's factor")?;
-        let values = vec![0.0; pattern.nnz_lower()];
         Ok(Self {
             dofs,
             interior,
+            first,
             pattern,
             gather,
             symbolic,
-            values,
-            l,
+            l: Stored::Empty,
             buffer,
         })
     }
@@ -353,17 +440,19 @@ impl Half {
         }
     }
 
-    /// Factors Mᵢ (one thread), checks the interior pivots against A's diagonal and returns
-    /// S′ᵢ = Lₛₛ Dₛ Lₛₛᵀ.
-    fn factorize(
+    /// Factors Mᵢ in precision `T` (one thread), judges the interior pivots by `rule` against
+    /// A's diagonal and returns S′ᵢ = Lₛₛ Dₛ Lₛₛᵀ.
+    fn factorize<T: Real>(
         &mut self,
         a: &[f64],
         diag: &[f64],
-        tolerance: f64,
-    ) -> Result<Result<HalfOutcome, &'static str>, SolverError> {
-        for (v, &g) in self.values.iter_mut().zip(&self.gather) {
-            *v = if g == usize::MAX { 0.0 } else { a[g] };
-        }
+        rule: PivotRule,
+    ) -> Attempt<HalfOutcome> {
+        let values: Vec<T> = self
+            .gather
+            .iter()
+            .map(|&g| T::narrow(if g == usize::MAX { 0.0 } else { a[g] }))
+            .collect();
         let m = self.dofs.len();
         let sym = SymbolicSparseColMatRef::new_checked(
             m,
@@ -372,9 +461,10 @@ impl Half {
             None,
             self.pattern.row_idx(),
         );
-        let mat = SparseColMatRef::new(sym, &self.values);
+        let mat = SparseColMatRef::new(sym, &values);
+        let l = T::slot(&mut self.l, self.symbolic.len_val())?;
         let done = self.symbolic.factorize_numeric_ldlt(
-            &mut self.l,
+            l,
             mat,
             Side::Lower,
             LdltRegularization::default(),
@@ -382,56 +472,61 @@ impl Half {
             MemStack::new(&mut self.buffer),
             Default::default(),
         );
+        drop(values);
+        let ni = self.interior;
         if let Err(LdltError::ZeroPivot { index }) = done {
-            if index < self.interior {
-                let dof = self.dofs[index];
-                return Err(SolverError::ZeroPivot {
-                    equation: index,
-                    dof,
-                    pivot: 0.0,
-                    diagonal: diag[dof].abs(),
-                });
+            if index >= ni {
+                return Ok(Err("a split half's separator block met a zero pivot"));
             }
-            return Ok(Err("a split half's separator block met a zero pivot"));
+            if rule.single() {
+                return Ok(Err("f32 elimination met a zero pivot"));
+            }
+            let dof = self.dofs[index];
+            return Err(SolverError::ZeroPivot {
+                equation: self.first + index,
+                dof,
+                pivot: 0.0,
+                diagonal: diag[dof].abs(),
+            });
         }
-        let d = factor_diagonal(&self.symbolic, &self.l);
-        let mut negative = 0;
-        for (k, &dk) in d.iter().enumerate() {
-            let dof = self.dofs[k];
-            let scale = diag[dof].abs();
-            if k >= self.interior {
-                // S′ᵢ's own pivots: not A's; a small one only makes the rebuild inexact.
-                if crate::profile::is_zero_pivot(dk, 1e-8, scale) {
-                    return Ok(Err("a split half's separator pivot is too small"));
-                }
-                continue;
-            }
-            if crate::profile::is_zero_pivot(dk, tolerance, scale) {
-                return Err(SolverError::ZeroPivot {
-                    equation: k,
-                    dof,
-                    pivot: dk,
-                    diagonal: scale,
-                });
-            }
-            if dk < 0.0 {
-                negative += 1;
+        let l = T::view(&self.l);
+        let d = factor_diagonal(&self.symbolic, l);
+        let negative = match negative_pivots(
+            d[..ni].iter().copied(),
+            self.first,
+            |k| self.dofs[k],
+            diag,
+            rule,
+        )? {
+            Ok(count) => count,
+            Err(reason) => return Ok(Err(reason)),
+        };
+        // S′ᵢ's own pivots are not A's; a small one only makes the rebuild inexact.
+        let floor = match rule {
+            PivotRule::Double { .. } => SEPARATOR_PIVOT_FLOOR,
+            PivotRule::Single { floor, .. } => floor.max(SEPARATOR_PIVOT_FLOOR),
+        };
+        for (k, &dk) in d.iter().enumerate().skip(ni) {
+            if crate::profile::is_zero_pivot(dk, floor, diag[self.dofs[k]].abs()) {
+                return Ok(Err("a split half's separator pivot is too small"));
             }
         }
         Ok(Ok(HalfOutcome {
             negative,
-            schur: self.trailing_schur(&d),
+            schur: self.trailing_schur(l, &d),
         }))
     }
 
-    /// S′ᵢ = Lₛₛ Dₛ Lₛₛᵀ from the factor's separator columns (lower triangle).
-    fn trailing_schur(&self, d: &[f64]) -> Mat<f64> {
+    /// S′ᵢ = Lₛₛ Dₛ Lₛₛᵀ (lower triangle, f64) from the factor's separator columns, the
+    /// product in the factor's precision.
+    fn trailing_schur<T: Real>(&self, l: &[T], d: &[f64]) -> Mat<f64> {
         let ni = self.interior;
         let ns = self.dofs.len() - ni;
         let sn = self.supernodal();
-        let f = supernodal::SupernodalLdltRef::new(sn, &self.l);
+        let f = supernodal::SupernodalLdltRef::new(sn, l);
+        let zero = T::narrow(0.0);
         // W = Lₛₛ Dₛ (lower), L = Lₛₛ.
-        let mut lss = Mat::<f64>::zeros(ns, ns);
+        let mut lss = Mat::<T>::full(ns, ns, zero);
         for k in 0..sn.n_supernodes() {
             let (b, e) = (sn.supernode_begin()[k], sn.supernode_end()[k]);
             if e <= ni {
@@ -443,7 +538,7 @@ impl Half {
             for c in b.max(ni)..e {
                 let col = c - b;
                 let lc = c - ni;
-                lss[(lc, lc)] = 1.0;
+                lss[(lc, lc)] = T::narrow(1.0);
                 for r in col + 1..w {
                     lss[(b + r - ni, lc)] = val[(r, col)];
                 }
@@ -456,10 +551,10 @@ impl Half {
         for j in 0..ns {
             let dj = d[ni + j];
             for i in j..ns {
-                wd[(i, j)] *= dj;
+                wd[(i, j)] = T::narrow(wd[(i, j)].into() * dj);
             }
         }
-        let mut out = Mat::<f64>::zeros(ns, ns);
+        let mut out = Mat::<T>::full(ns, ns, zero);
         faer::linalg::matmul::triangular::matmul(
             out.as_mut(),
             BlockStructure::TriangularLower,
@@ -468,18 +563,35 @@ impl Half {
             BlockStructure::TriangularLower,
             lss.as_ref().transpose(),
             BlockStructure::UnitTriangularUpper,
-            1.0,
+            T::narrow(1.0),
             Par::Seq,
         );
-        out
+        Mat::from_fn(ns, ns, |i, j| out[(i, j)].into())
     }
 
     /// z ← D⁻¹L⁻¹z over the interior columns; the separator rows of z collect −Lₛᵢ y
     /// (= −Aₛᵢ Aᵢᵢ⁻¹ bᵢ when z's separator rows start at zero).
     fn forward(&self, z: &mut [f64]) {
+        match &self.l {
+            Stored::Double(l) => self.forward_with(l, z),
+            Stored::Single(l) => self.forward_with(l, z),
+            Stored::Empty => unreachable!("solve after a successful factorisation"),
+        }
+    }
+
+    /// z ← L⁻ᵀz over the interior columns, the separator rows of z holding xₛ.
+    fn backward(&self, z: &mut [f64]) {
+        match &self.l {
+            Stored::Double(l) => self.backward_with(l, z),
+            Stored::Single(l) => self.backward_with(l, z),
+            Stored::Empty => unreachable!("solve after a successful factorisation"),
+        }
+    }
+
+    fn forward_with<T: Real>(&self, l: &[T], z: &mut [f64]) {
         let ni = self.interior;
         let sn = self.supernodal();
-        let f = supernodal::SupernodalLdltRef::new(sn, &self.l);
+        let f = supernodal::SupernodalLdltRef::new(sn, l);
         for k in 0..sn.n_supernodes() {
             let (b, e) = (sn.supernode_begin()[k], sn.supernode_end()[k]);
             if b >= ni {
@@ -496,23 +608,22 @@ impl Half {
                 }
                 let v = val.col(col);
                 for r in col + 1..w {
-                    z[b + r] -= v[r] * y;
+                    z[b + r] -= v[r].into() * y;
                 }
                 for (t, &row) in s.pattern().iter().enumerate() {
-                    z[row] -= v[w + t] * y;
+                    z[row] -= v[w + t].into() * y;
                 }
             }
             for c in b..e.min(ni) {
-                z[c] /= val[(c - b, c - b)];
+                z[c] /= val[(c - b, c - b)].into();
             }
         }
     }
 
-    /// z ← L⁻ᵀz over the interior columns, the separator rows of z holding xₛ.
-    fn backward(&self, z: &mut [f64]) {
+    fn backward_with<T: Real>(&self, l: &[T], z: &mut [f64]) {
         let ni = self.interior;
         let sn = self.supernodal();
-        let f = supernodal::SupernodalLdltRef::new(sn, &self.l);
+        let f = supernodal::SupernodalLdltRef::new(sn, l);
         for k in (0..sn.n_supernodes()).rev() {
             let (b, e) = (sn.supernode_begin()[k], sn.supernode_end()[k]);
             if b >= ni {
@@ -526,10 +637,10 @@ impl Half {
                 let v = val.col(col);
                 let mut acc = z[c];
                 for r in col + 1..w {
-                    acc -= v[r] * z[b + r];
+                    acc -= v[r].into() * z[b + r];
                 }
                 for (t, &row) in s.pattern().iter().enumerate() {
-                    acc -= v[w + t] * z[row];
+                    acc -= v[w + t].into() * z[row];
                 }
                 z[c] = acc;
             }
@@ -538,23 +649,22 @@ impl Half {
 }
 
 impl super::FaerSolver {
-    /// The split factorisation, or the unsplit one when the split cannot be trusted.
+    /// The f64 split factorisation, or the unsplit one when the split cannot be trusted.
     pub(super) fn factorize_split(
         &mut self,
         a: &SymmetricMatrix,
     ) -> Result<Factorization, SolverError> {
-        let Some(pattern) = &self.pattern else {
-            return Err(SolverError::NotReady("factorize called before analyze"));
-        };
-        a.check_for(pattern)?;
-        self.factored = false;
         let Some(split) = self.split_state.as_mut() else {
             return self.factorize_double(a);
         };
-        match split.factorize(a, self.par, self.tolerance, self.flops)? {
+        let rule = PivotRule::Double {
+            tolerance: self.tolerance,
+        };
+        match split.factorize::<f64>(a, self.par, rule, self.flops)? {
             Ok(f) => {
                 // The unsplit factor, if a fallback made one, is not needed now.
                 self.l_values = Vec::new();
+                self.split_fallback = None;
                 self.factored = true;
                 Ok(f)
             }
@@ -563,6 +673,19 @@ impl super::FaerSolver {
                 self.factorize_double(a)
             }
         }
+    }
+
+    /// The split solve of each column of `b` (n × nrhs), if the split holds the active
+    /// factor; `false` (b untouched) otherwise.
+    pub(super) fn solve_split(&mut self, b: &mut [f64], nrhs: usize) -> bool {
+        let Some(split) = self.split_state.as_mut().filter(|s| s.is_factored()) else {
+            return false;
+        };
+        let n = b.len() / nrhs.max(1);
+        for col in b.chunks_mut(n.max(1)) {
+            split.solve_column(col, self.par);
+        }
+        true
     }
 
     /// (interior DOFs of half 0, of half 1, separator DOFs) of the split the last analysis
