@@ -141,6 +141,25 @@ pub(super) struct Split {
     s: Mat<f64>,
     s_buffer: MemBuffer,
     factored: bool,
+    /// CPU seconds of the last factorisation's halves (each on its thread), then the join's
+    /// wall seconds (S's assembly and dense LDLᵀ).
+    times: [f64; 3],
+}
+
+/// CPU seconds this thread has run (Linux's `/proc/thread-self/schedstat`; NaN elsewhere):
+/// a half's own work, whatever else shares the cores.
+fn thread_cpu_seconds() -> f64 {
+    std::fs::read_to_string("/proc/thread-self/schedstat")
+        .ok()
+        .and_then(|t| t.split_whitespace().next()?.parse::<f64>().ok())
+        .map_or(f64::NAN, |ns| ns * 1e-9)
+}
+
+/// `f()` and the CPU seconds this thread spent in it.
+fn timed<R>(f: impl FnOnce() -> R) -> (R, f64) {
+    let start = thread_cpu_seconds();
+    let r = f();
+    (r, thread_cpu_seconds() - start)
 }
 
 impl Split {
@@ -210,6 +229,7 @@ impl Split {
             s: Mat::zeros(ns, ns),
             s_buffer,
             factored: false,
+            times: [f64::NAN; 3],
         }))
     }
 
@@ -220,6 +240,22 @@ impl Split {
             self.halves[1].interior,
             self.sep.len(),
         )
+    }
+
+    /// Σc² over the column counts of each half's factor (its interior and its copy of the
+    /// separator) and ns³/3 for S: the work of the two threads and of the join.
+    pub(super) fn work(&self) -> [f64; 3] {
+        let ns = self.sep.len() as f64;
+        [
+            super::factor_flops(&self.halves[0].symbolic),
+            super::factor_flops(&self.halves[1].symbolic),
+            ns.powi(3) / 3.0,
+        ]
+    }
+
+    /// CPU seconds of each half of the last factorisation and the join's wall seconds.
+    pub(super) fn times(&self) -> [f64; 3] {
+        self.times
     }
 
     /// Entries of the two half factors and S.
@@ -250,17 +286,14 @@ impl Split {
         let diag = a.diagonal();
         let values = a.values();
         let [h0, h1] = &mut self.halves;
-        let (r0, r1) = if par.degree() > 1 {
-            rayon::join(
-                || h0.factorize::<T>(values, &diag, rule),
-                || h1.factorize::<T>(values, &diag, rule),
-            )
+        let mut half0 = || timed(|| h0.factorize::<T>(values, &diag, rule));
+        let mut half1 = || timed(|| h1.factorize::<T>(values, &diag, rule));
+        let ((r0, t0), (r1, t1)) = if par.degree() > 1 {
+            rayon::join(half0, half1)
         } else {
-            (
-                h0.factorize::<T>(values, &diag, rule),
-                h1.factorize::<T>(values, &diag, rule),
-            )
+            (half0(), half1())
         };
+        let join = std::time::Instant::now();
         let (o0, o1) = match (r0?, r1?) {
             (Ok(o0), Ok(o1)) => (o0, o1),
             (Err(w), _) | (_, Err(w)) => return Ok(Err(w)),
@@ -302,6 +335,7 @@ impl Split {
             Err(reason) => return Ok(Err(reason)),
         };
         self.factored = true;
+        self.times = [t0, t1, join.elapsed().as_secs_f64()];
         Ok(Ok(Factorization {
             negative_pivots: negative,
             factor_entries: self.factor_entries(),
@@ -692,6 +726,18 @@ impl super::FaerSolver {
     /// made; `None` when it did not split.
     pub fn split_sizes(&self) -> Option<(usize, usize, usize)> {
         self.split_state.as_ref().map(Split::sizes)
+    }
+
+    /// [Σc² of half 0's factor, of half 1's, nₛ³/3 of S] of the split the last analysis
+    /// made (`Split::work`); `None` when it did not split.
+    pub fn split_work(&self) -> Option<[f64; 3]> {
+        self.split_state.as_ref().map(Split::work)
+    }
+
+    /// [CPU s of half 0, of half 1, wall s of the join (S)] of the last split factorisation:
+    /// on free cores the split takes max(half 0, half 1) + join (`None` when not split).
+    pub fn split_times(&self) -> Option<[f64; 3]> {
+        self.split_state.as_ref().map(Split::times)
     }
 
     /// Why the last split factorisation fell back to the unsplit factor, if one did.
