@@ -21,7 +21,12 @@ use super::pivots::{PivotRule, negative_pivots};
 use crate::{Factorization, SolverError, SymmetricMatrix, SymmetricPattern};
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::ldlt::factor::{LdltError, LdltRegularization};
+use faer::linalg::matmul::matmul;
 use faer::linalg::matmul::triangular::BlockStructure;
+use faer::linalg::triangular_solve::{
+    solve_unit_lower_triangular_in_place, solve_unit_upper_triangular_in_place,
+};
+use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::linalg::cholesky::{
     CholeskySymbolicParams, SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering,
@@ -46,7 +51,15 @@ pub(super) enum Stored {
 
 /// The precisions a half can be factored in.
 pub(super) trait Real:
-    faer::traits::ComplexField + Copy + Into<f64> + Send + Sync + 'static
+    faer::traits::ComplexField
+    + faer::traits::Conjugate<Canonical = Self>
+    + Copy
+    + Into<f64>
+    + std::ops::SubAssign
+    + std::ops::DivAssign
+    + Send
+    + Sync
+    + 'static
 {
     /// Rounded to this precision.
     fn narrow(v: f64) -> Self;
@@ -343,15 +356,29 @@ impl Split {
         }))
     }
 
-    /// Overwrites `b` (one column of n values) with A⁻¹b.
+    /// Overwrites `b` (one column of n values) with A⁻¹b: the halves' sweeps in their
+    /// factor's precision (b scaled by a power of two near ‖b‖∞, so f32 neither overflows
+    /// nor underflows and f64 is not rounded by it), S's in f64.
     pub(super) fn solve_column(&mut self, b: &mut [f64], par: Par) {
+        match self.halves[0].l {
+            Stored::Single(_) => self.solve_in::<f32>(b, par),
+            _ => self.solve_in::<f64>(b, par),
+        }
+    }
+
+    fn solve_in<T: Real>(&mut self, b: &mut [f64], par: Par) {
+        let norm = b.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        if norm == 0.0 {
+            return;
+        }
+        let scale = 2f64.powi(norm.log2().round() as i32);
         let [h0, h1] = &self.halves;
         let forward = |h: &Half| {
-            let mut z = vec![0.0; h.dofs.len()];
+            let mut z = vec![T::narrow(0.0); h.dofs.len()];
             for (zk, &d) in z.iter_mut().zip(&h.dofs[..h.interior]) {
-                *zk = b[d];
+                *zk = T::narrow(b[d] / scale);
             }
-            h.forward(&mut z);
+            h.forward(T::view(&h.l), &mut z);
             z
         };
         let (mut z0, mut z1) = if par.degree() > 1 {
@@ -361,7 +388,9 @@ impl Split {
         };
         let ns = self.sep.len();
         let mut xs: Vec<f64> = (0..ns)
-            .map(|k| b[self.sep[k]] + z0[h0.interior + k] + z1[h1.interior + k])
+            .map(|k| {
+                b[self.sep[k]] / scale + z0[h0.interior + k].into() + z1[h1.interior + k].into()
+            })
             .collect();
         faer::linalg::cholesky::ldlt::solve::solve_in_place_with_conj(
             self.s.as_ref(),
@@ -371,9 +400,11 @@ impl Split {
             Par::Seq,
             MemStack::new(&mut self.s_buffer),
         );
-        let backward = |h: &Half, z: &mut Vec<f64>| {
-            z[h.interior..].copy_from_slice(&xs);
-            h.backward(z);
+        let backward = |h: &Half, z: &mut Vec<T>| {
+            for (zk, &x) in z[h.interior..].iter_mut().zip(&xs) {
+                *zk = T::narrow(x);
+            }
+            h.backward(T::view(&h.l), z);
         };
         if par.degree() > 1 {
             rayon::join(|| backward(h0, &mut z0), || backward(h1, &mut z1));
@@ -383,11 +414,11 @@ impl Split {
         }
         for (h, z) in [(h0, &z0), (h1, &z1)] {
             for (&d, &zk) in h.dofs[..h.interior].iter().zip(z.iter()) {
-                b[d] = zk;
+                b[d] = zk.into() * scale;
             }
         }
         for (&d, &x) in self.sep.iter().zip(&xs) {
-            b[d] = x;
+            b[d] = x * scale;
         }
     }
 }
@@ -604,28 +635,14 @@ impl Half {
     }
 
     /// z ← D⁻¹L⁻¹z over the interior columns; the separator rows of z collect −Lₛᵢ y
-    /// (= −Aₛᵢ Aᵢᵢ⁻¹ bᵢ when z's separator rows start at zero).
-    fn forward(&self, z: &mut [f64]) {
-        match &self.l {
-            Stored::Double(l) => self.forward_with(l, z),
-            Stored::Single(l) => self.forward_with(l, z),
-            Stored::Empty => unreachable!("solve after a successful factorisation"),
-        }
-    }
-
-    /// z ← L⁻ᵀz over the interior columns, the separator rows of z holding xₛ.
-    fn backward(&self, z: &mut [f64]) {
-        match &self.l {
-            Stored::Double(l) => self.backward_with(l, z),
-            Stored::Single(l) => self.backward_with(l, z),
-            Stored::Empty => unreachable!("solve after a successful factorisation"),
-        }
-    }
-
-    fn forward_with<T: Real>(&self, l: &[T], z: &mut [f64]) {
+    /// (= −Aₛᵢ Aᵢᵢ⁻¹ bᵢ when z's separator rows start at zero). Per supernode: a unit lower
+    /// triangular solve and a product with the rows below (faer's dense kernels, one thread);
+    /// the supernode that straddles the interior's end column by column.
+    fn forward<T: Real>(&self, l: &[T], z: &mut [T]) {
         let ni = self.interior;
         let sn = self.supernodal();
         let f = supernodal::SupernodalLdltRef::new(sn, l);
+        let mut tmp = Vec::new();
         for k in 0..sn.n_supernodes() {
             let (b, e) = (sn.supernode_begin()[k], sn.supernode_end()[k]);
             if b >= ni {
@@ -634,30 +651,44 @@ impl Half {
             let s = f.supernode(k);
             let val = s.val();
             let w = e - b;
-            for c in b..e.min(ni) {
-                let col = c - b;
-                let y = z[c];
-                if y == 0.0 {
-                    continue;
+            if e <= ni {
+                let (top, bottom) = val.split_at_row(w);
+                let mut x = MatMut::from_column_major_slice_mut(&mut z[b..e], w, 1);
+                solve_unit_lower_triangular_in_place(top, x.rb_mut(), Par::Seq);
+                tmp.clear();
+                tmp.resize(bottom.nrows(), T::narrow(0.0));
+                let t = MatMut::from_column_major_slice_mut(&mut tmp, bottom.nrows(), 1);
+                matmul(t, Accum::Replace, bottom, x.rb(), T::narrow(1.0), Par::Seq);
+                for (&row, &v) in s.pattern().iter().zip(&tmp) {
+                    z[row] -= v;
                 }
-                let v = val.col(col);
-                for r in col + 1..w {
-                    z[b + r] -= v[r].into() * y;
-                }
-                for (t, &row) in s.pattern().iter().enumerate() {
-                    z[row] -= v[w + t].into() * y;
+            } else {
+                for c in b..ni {
+                    let col = c - b;
+                    let y: f64 = z[c].into();
+                    let v = val.col(col);
+                    let update = |zr: &mut T, l: T| *zr = T::narrow((*zr).into() - l.into() * y);
+                    for r in col + 1..w {
+                        update(&mut z[b + r], v[r]);
+                    }
+                    for (t, &row) in s.pattern().iter().enumerate() {
+                        update(&mut z[row], v[w + t]);
+                    }
                 }
             }
             for c in b..e.min(ni) {
-                z[c] /= val[(c - b, c - b)].into();
+                z[c] /= val[(c - b, c - b)];
             }
         }
     }
 
-    fn backward_with<T: Real>(&self, l: &[T], z: &mut [f64]) {
+    /// z ← L⁻ᵀz over the interior columns, the separator rows of z holding xₛ (the
+    /// transposed sweep of `forward`).
+    fn backward<T: Real>(&self, l: &[T], z: &mut [T]) {
         let ni = self.interior;
         let sn = self.supernodal();
         let f = supernodal::SupernodalLdltRef::new(sn, l);
+        let mut tmp = Vec::new();
         for k in (0..sn.n_supernodes()).rev() {
             let (b, e) = (sn.supernode_begin()[k], sn.supernode_end()[k]);
             if b >= ni {
@@ -666,17 +697,34 @@ impl Half {
             let s = f.supernode(k);
             let val = s.val();
             let w = e - b;
-            for c in (b..e.min(ni)).rev() {
-                let col = c - b;
-                let v = val.col(col);
-                let mut acc = z[c];
-                for r in col + 1..w {
-                    acc -= v[r].into() * z[b + r];
+            if e <= ni {
+                let (top, bottom) = val.split_at_row(w);
+                tmp.clear();
+                tmp.extend(s.pattern().iter().map(|&row| z[row]));
+                let t = faer::MatRef::from_column_major_slice(&tmp, bottom.nrows(), 1);
+                let mut x = MatMut::from_column_major_slice_mut(&mut z[b..e], w, 1);
+                matmul(
+                    x.rb_mut(),
+                    Accum::Add,
+                    bottom.transpose(),
+                    t,
+                    T::narrow(-1.0),
+                    Par::Seq,
+                );
+                solve_unit_upper_triangular_in_place(top.transpose(), x, Par::Seq);
+            } else {
+                for c in (b..ni).rev() {
+                    let col = c - b;
+                    let v = val.col(col);
+                    let mut acc: f64 = z[c].into();
+                    for r in col + 1..w {
+                        acc -= v[r].into() * z[b + r].into();
+                    }
+                    for (t, &row) in s.pattern().iter().enumerate() {
+                        acc -= v[w + t].into() * z[row].into();
+                    }
+                    z[c] = T::narrow(acc);
                 }
-                for (t, &row) in s.pattern().iter().enumerate() {
-                    acc -= v[w + t].into() * z[row];
-                }
-                z[c] = acc;
             }
         }
     }
