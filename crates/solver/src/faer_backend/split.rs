@@ -14,7 +14,8 @@
 //! a fixed order, so the bits do not depend on the thread count.
 //!
 //! The halves are stored in f64, or in f32 for mixed precision (`mixed.rs` refines the split
-//! solve in f64 and decides the fallbacks; the solve loops read the f32 factor into f64 sums).
+//! solve in f64 and decides the fallbacks; the halves' sweeps run in their factor's precision,
+//! S's in f64).
 
 use super::factor_diagonal;
 use super::pivots::{PivotRule, negative_pivots};
