@@ -9,7 +9,8 @@
 //! `-- only=laminate` to run the cases whose name contains that text, `-- noprofile` to leave
 //! out the profile solver, `-- noamd` to leave out faer with AMD, `-- mixed` to add faer ND
 //! with an f32 factor refined in f64, `-- split` to add faer ND split at the top separator
-//! (`FaerSplit::Halves`, halves on two threads), `-- rounds=N` to run every solver of a case N times in
+//! (`FaerSplit::Halves`, halves on two threads), `-- splitmixed` to add the split with f32
+//! halves refined in f64, `-- rounds=N` to run every solver of a case N times in
 //! turn, so that ratios between solvers come from neighbouring runs on a busy machine).
 //! The last column is the normwise backward error ‖b − A x‖∞ / (‖A‖∞‖x‖∞ + ‖b‖∞) of the
 //! solve.
@@ -333,36 +334,59 @@ fn main() {
                 (Box::new(ProfileLdlt::new()), "profile LDLᵀ (RCM)".into()),
             );
         }
-        // The tree-level split (two halves on two threads, `FaerSplit::Halves`), f64.
-        if has("split") {
+        // The tree-level split (two halves on two threads, `FaerSplit::Halves`) in f64, and
+        // mixed precision (f32 factor refined in f64) unsplit and split.
+        let mut faers: Vec<(FaerSolver, String)> = Vec::new();
+        for (flag, split, precision, name) in [
+            ("split", FaerSplit::Halves, FaerPrecision::Double, "split"),
+            (
+                "mixed",
+                FaerSplit::Off,
+                FaerPrecision::mixed(),
+                "mixed f32/f64",
+            ),
+            (
+                "splitmixed",
+                FaerSplit::Halves,
+                FaerPrecision::mixed(),
+                "split mixed f32/f64",
+            ),
+        ] {
+            if !has(flag) {
+                continue;
+            }
             for threads in [1, 2] {
                 let mut s = FaerSolver::new(FaerMode::Ldlt)
                     .with_ordering(FaerOrdering::NestedDissection)
                     .with_threads(threads);
-                s.split = FaerSplit::Halves;
-                solvers.push((
-                    Box::new(s),
+                s.precision = precision;
+                s.split = split;
+                faers.push((
+                    s,
                     format!(
-                        "faer LDLᵀ ND split, {threads} thread{}",
+                        "faer LDLᵀ ND {name}, {threads} thread{}",
                         if threads > 1 { "s" } else { "" }
                     ),
                 ));
             }
         }
-        let mut mixed: Vec<(FaerSolver, String)> = Vec::new();
-        if has("mixed") {
-            for threads in [1, 2] {
-                let mut s = FaerSolver::new(FaerMode::Ldlt)
-                    .with_ordering(FaerOrdering::NestedDissection)
-                    .with_threads(threads);
-                s.precision = FaerPrecision::mixed();
-                mixed.push((
-                    s,
-                    format!(
-                        "faer LDLᵀ ND mixed f32/f64, {threads} thread{}",
-                        if threads > 1 { "s" } else { "" }
-                    ),
-                ));
+        // The split's shape: the two threads' work and the join's (what decides whether a
+        // deeper split would balance better).
+        if has("split") || has("splitmixed") {
+            let mut s =
+                FaerSolver::new(FaerMode::Ldlt).with_ordering(FaerOrdering::NestedDissection);
+            s.split = FaerSplit::Halves;
+            if let Ok(whole) = s.analyze(k.pattern())
+                && let (Some((n0, n1, ns)), Some([w0, w1, ws])) = (s.split_sizes(), s.split_work())
+            {
+                println!(
+                    "split of {case}: interiors {n0} / {n1} DOF, separator {ns}; Σc² halves {:.2} / {:.2} G (ratio {:.3}), S {:.2} G; unsplit {:.2} G",
+                    w0 / 1e9,
+                    w1 / 1e9,
+                    w0.max(w1) / w0.min(w1),
+                    ws / 1e9,
+                    whole.flops / 1e9
+                );
             }
         }
         for _ in 0..rounds {
@@ -370,18 +394,30 @@ fn main() {
             for (s, label) in &mut solvers {
                 rows.extend(run(case, &k, s.as_mut(), label.clone()));
             }
-            for (s, label) in &mut mixed {
+            for (s, label) in &mut faers {
                 if let Some(mut r) = run(case, &k, s, label.clone()) {
-                    let m = s.mixed_stats();
-                    r.solver += &format!(
-                        " (f32 factors {}, f64 {}{}, refinement steps {})",
-                        m.single_factorizations,
-                        m.double_factorizations,
-                        m.last_fallback
-                            .map(|w| format!(": {w}"))
-                            .unwrap_or_default(),
-                        m.refinement_steps
-                    );
+                    if s.precision != FaerPrecision::Double {
+                        let m = s.mixed_stats();
+                        r.solver += &format!(
+                            " (f32 factors {}, f64 {}{}, refinement steps {})",
+                            m.single_factorizations,
+                            m.double_factorizations,
+                            m.last_fallback
+                                .map(|w| format!(": {w}"))
+                                .unwrap_or_default(),
+                            m.refinement_steps
+                        );
+                    }
+                    // On free cores the split takes the longer half plus the join.
+                    if let Some([h0, h1, join]) = s.split_times() {
+                        r.solver += &format!(
+                            " [halves {h0:.3} / {h1:.3} CPU s, join {join:.3} s: critical path {:.3} s{}]",
+                            h0.max(h1) + join,
+                            s.split_fallback()
+                                .map(|w| format!("; fell back: {w}"))
+                                .unwrap_or_default()
+                        );
+                    }
                     rows.push(r);
                 }
             }

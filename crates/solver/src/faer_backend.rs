@@ -21,6 +21,7 @@ use std::sync::Arc;
 mod counts;
 use counts::{column_counts, factor_flops};
 mod mixed;
+mod pivots;
 mod split;
 pub use mixed::{FaerPrecision, MixedStats};
 
@@ -71,8 +72,10 @@ pub enum FaerSplit {
     #[default]
     Off,
     /// Split whenever the chosen ordering is nested dissection and its top level was
-    /// dissected (f64 LDLᵀ only; mixed precision and LLᵀ ignore it). Falls back to the unsplit
-    /// factor when a half's separator block meets a pivot below 1e-8 of its diagonal.
+    /// dissected (LDLᵀ only: LLᵀ ignores it). In f64 it falls back to the unsplit factor when
+    /// a half's separator block meets a pivot below 1e-8 of its diagonal; with
+    /// [`FaerPrecision::Mixed`] the halves are f32, the split solve is refined in f64, and
+    /// every fallback of mixed precision goes to the f64 split (then to the unsplit factor).
     Halves,
 }
 
@@ -358,14 +361,13 @@ impl LinearSolver for FaerSolver {
         let lower_nonzeros = column_counts(&symbolic).iter().sum();
         let splits = self.split == FaerSplit::Halves
             && self.mode == FaerMode::Ldlt
-            && !mixed
             && chosen == FaerOrdering::NestedDissection;
         if let (true, Some((forward, sides))) = (splits, top.take()) {
             // The unsplit factor is allocated only if a fallback needs it.
             self.split_state = split::Split::analyze(pattern, &forward, sides)?;
         }
         if mixed {
-            self.mixed.reset(len)?;
+            self.mixed.reset(len, self.split_state.is_none())?;
         } else if self.split_state.is_none() {
             self.l_values = try_zeros(len, "the faer factor")?;
         }
@@ -388,12 +390,15 @@ impl LinearSolver for FaerSolver {
     }
 
     fn factorize(&mut self, a: &SymmetricMatrix) -> Result<Factorization, SolverError> {
+        let Some(pattern) = &self.pattern else {
+            return Err(SolverError::NotReady("factorize called before analyze"));
+        };
+        a.check_for(pattern)?;
+        self.factored = false;
         if self.uses_mixed() {
             self.factorize_mixed(a)
-        } else if self.split_state.is_some() {
-            self.factorize_split(a)
         } else {
-            self.factorize_double(a)
+            self.factorize_f64(a)
         }
     }
 
@@ -401,14 +406,8 @@ impl LinearSolver for FaerSolver {
         self.check_rhs(b, nrhs)?;
         if self.mixed.single_active() {
             self.solve_mixed(b, nrhs)
-        } else if let Some(split) = self.split_state.as_mut().filter(|s| s.is_factored()) {
-            let n = b.len() / nrhs.max(1);
-            for col in b.chunks_mut(n.max(1)) {
-                split.solve_column(col, self.par);
-            }
-            Ok(())
         } else {
-            self.solve_double(b, nrhs)
+            self.solve_f64(b, nrhs)
         }
     }
 }
@@ -417,6 +416,24 @@ impl FaerSolver {
     /// Whether factorisations go through the f32 path.
     fn uses_mixed(&self) -> bool {
         self.precision != FaerPrecision::Double && self.mode == FaerMode::Ldlt
+    }
+
+    /// The f64 factorisation: split when the analysis split, else unsplit.
+    fn factorize_f64(&mut self, a: &SymmetricMatrix) -> Result<Factorization, SolverError> {
+        if self.split_state.is_some() {
+            self.factorize_split(a)
+        } else {
+            self.factorize_double(a)
+        }
+    }
+
+    /// Solves with the f64 factor, split or not.
+    fn solve_f64(&mut self, b: &mut [f64], nrhs: usize) -> Result<(), SolverError> {
+        if self.solve_split(b, nrhs) {
+            Ok(())
+        } else {
+            self.solve_double(b, nrhs)
+        }
     }
 
     /// The f64 numeric factorisation of `a` into `l_values` (allocated if an f32 factor held
@@ -492,24 +509,15 @@ impl FaerSolver {
             }
         }
         // Pivot checks and inertia from the factor's diagonal (D, or L_kk with d_k = L_kk²).
-        let diag = a.diagonal();
-        let mut negative = 0;
-        for (k, &v) in factor_diagonal(symbolic, &self.l_values).iter().enumerate() {
-            let dof = perm_fwd[k];
-            let d = if self.mode == FaerMode::Llt { v * v } else { v };
-            let scale = diag[dof].abs();
-            if crate::profile::is_zero_pivot(d, self.tolerance, scale) {
-                return Err(SolverError::ZeroPivot {
-                    equation: k,
-                    dof,
-                    pivot: d,
-                    diagonal: scale,
-                });
-            }
-            if d < 0.0 {
-                negative += 1;
-            }
-        }
+        let llt = self.mode == FaerMode::Llt;
+        let pivots = factor_diagonal(symbolic, &self.l_values)
+            .into_iter()
+            .map(|v| if llt { v * v } else { v });
+        let rule = pivots::PivotRule::Double {
+            tolerance: self.tolerance,
+        };
+        let negative = pivots::negative_pivots(pivots, 0, |k| perm_fwd[k], &a.diagonal(), rule)?
+            .unwrap_or_else(|_| unreachable!("f64 pivots are errors, not fallbacks"));
         self.factored = true;
         Ok(Factorization {
             negative_pivots: negative,

@@ -7,12 +7,18 @@
 //! order, with κ∞(A) = ‖A‖∞‖A⁻¹‖∞ estimated by Hager's method (a lower bound, hence the factor
 //! 10 of slack). The split's own backward error must stay within 10× the unsplit one's or
 //! 1e-15 (rounding of the extra sums S = S′₁ + S′₂ − Aₛₛ, of order nₛ ε).
+//!
+//! Mixed precision inside the split (f32 halves, S in f64, refinement in f64): the f32 factor
+//! must be kept (no fallback: these boxes have cond ≈ 1e2–1e4, so each refinement step gains
+//! cond·ε₃₂ ≤ 1e-3) and refined to the refinement target 1e-14; the same inertia. With a
+//! wrong Schur assembly the f32 split is no approximate inverse, refinement stalls and falls
+//! back, which the test refuses.
 
 mod common;
 
 use common::box_matrix;
 use nonlin3d_solver::{
-    FaerMode, FaerOrdering, FaerSolver, FaerSplit, LinearSolver, SymmetricMatrix,
+    FaerMode, FaerOrdering, FaerPrecision, FaerSolver, FaerSplit, LinearSolver, SymmetricMatrix,
 };
 use nonlin3d_testkit::Lcg;
 
@@ -74,12 +80,15 @@ fn inverse_norm(s: &mut FaerSolver, n: usize) -> f64 {
     estimate
 }
 
-/// SPD (shift 0) and indefinite (shift 1.5) 6×6×4-cell Hex20 boxes (3 k DOF): the split is
-/// made (the top level is dissected), the inertia is the unsplit one, and the solutions agree
-/// within κ∞(ω + ω̂).
+/// SPD (shift 0) and indefinite (shift 1.5) 6×6×4-cell Hex20 boxes (3 k DOF), split in f64
+/// and with f32 halves: the split is made (the top level is dissected), the inertia is the
+/// unsplit one, and the solutions agree within κ∞(ω + ω̂).
 #[test]
 fn split_matches_the_unsplit_factor() {
-    for shift in [0.0, 1.5] {
+    for (shift, precision) in [0.0, 1.5]
+        .into_iter()
+        .flat_map(|s| [(s, FaerPrecision::Double), (s, FaerPrecision::mixed())])
+    {
         let a = box_matrix([6, 6, 4], shift);
         let n = a.n();
         let mut rng = Lcg::new(5);
@@ -90,13 +99,15 @@ fn split_matches_the_unsplit_factor() {
         let mut x = b.clone();
         whole.solve_in_place(&mut x, 1).unwrap();
         let mut split = solver(FaerSplit::Halves);
+        split.precision = precision;
         split.analyze(a.pattern()).unwrap();
         let (n0, n1, ns) = split.split_sizes().expect("the box is dissected");
         assert_eq!(n0 + n1 + ns, n);
         assert!(n0 > ns && n1 > ns, "halves {n0}, {n1}, separator {ns}");
         let g = split.factorize(&a).unwrap();
         assert_eq!(split.split_fallback(), None);
-        assert_eq!(g.negative_pivots, f.negative_pivots, "shift {shift}");
+        let case = format!("shift {shift}, {precision:?}");
+        assert_eq!(g.negative_pivots, f.negative_pivots, "{case}");
         if shift > 0.0 {
             assert!(
                 f.negative_pivots > 0,
@@ -106,16 +117,27 @@ fn split_matches_the_unsplit_factor() {
         let mut y = b.clone();
         split.solve_in_place(&mut y, 1).unwrap();
         let (omega, omega_split) = (backward_error(&a, &x, &b), backward_error(&a, &y, &b));
-        assert!(
-            omega_split <= (10.0 * omega).max(1e-15),
-            "shift {shift}: backward error {omega_split:.1e} split, {omega:.1e} unsplit"
-        );
+        if precision == FaerPrecision::Double {
+            assert!(
+                omega_split <= (10.0 * omega).max(1e-15),
+                "{case}: backward error {omega_split:.1e} split, {omega:.1e} unsplit"
+            );
+        } else {
+            // The f32 split itself, refined (a fallback would hide a wrong f32 path).
+            let m = split.mixed_stats();
+            assert_eq!(
+                (m.single_factorizations, m.double_factorizations),
+                (1, 0),
+                "{case}: {m:?}"
+            );
+            assert!(omega_split <= 1e-14, "{case}: ω {omega_split:.1e}");
+        }
         let kappa = matrix_norm(&a) * inverse_norm(&mut whole, n);
         let diff: Vec<f64> = x.iter().zip(&y).map(|(p, q)| p - q).collect();
         let relative = inf_norm(&diff) / inf_norm(&x);
         assert!(
             relative <= 10.0 * kappa * (omega + omega_split),
-            "shift {shift}: ‖x − x̂‖/‖x‖ = {relative:.1e}, κ {kappa:.1e}, ω {omega:.1e} + {omega_split:.1e}"
+            "{case}: ‖x − x̂‖/‖x‖ = {relative:.1e}, κ {kappa:.1e}, ω {omega:.1e} + {omega_split:.1e}"
         );
     }
 }

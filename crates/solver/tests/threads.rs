@@ -8,24 +8,31 @@
 //! pseudo-random Σ (element rank-one + diagonal) blocks assembly shifted to be indefinite: bitwise
 //! equality depends on the order of the sums, not on the physics of the values. Both the
 //! unsplit factor and the split one (`FaerSplit::Halves`: halves on two threads, S on all) are
-//! checked.
+//! checked, in f64 and with f32 halves refined in f64 (`FaerPrecision::mixed()`).
 
 mod common;
 
 use common::box_matrix;
 use nonlin3d_solver::{
-    FaerMode, FaerOrdering, FaerSolver, FaerSplit, FaerStructure, LinearSolver, SymmetricMatrix,
+    FaerMode, FaerOrdering, FaerPrecision, FaerSolver, FaerSplit, FaerStructure, LinearSolver,
+    SymmetricMatrix,
 };
 use nonlin3d_testkit::Lcg;
 
 /// The solution of A x = b (b pseudo-random) and the inertia on `threads` threads, unsplit
 /// or split at the top separator.
-fn solve_on(a: &SymmetricMatrix, threads: usize, split: FaerSplit) -> (Vec<f64>, usize) {
+fn solve_on(
+    a: &SymmetricMatrix,
+    threads: usize,
+    split: FaerSplit,
+    precision: FaerPrecision,
+) -> (Vec<f64>, usize) {
     let mut s = FaerSolver::new(FaerMode::Ldlt)
         .with_structure(FaerStructure::Supernodal)
         .with_ordering(FaerOrdering::NestedDissection)
         .with_threads(threads);
     s.split = split;
+    s.precision = precision;
     s.analyze(a.pattern()).unwrap();
     assert_eq!(s.split_sizes().is_some(), split == FaerSplit::Halves);
     let f = s.factorize(a).unwrap();
@@ -33,6 +40,10 @@ fn solve_on(a: &SymmetricMatrix, threads: usize, split: FaerSplit) -> (Vec<f64>,
     let mut rng = Lcg::new(11);
     let mut x: Vec<f64> = (0..a.n()).map(|_| rng.uniform(-1.0, 1.0)).collect();
     s.solve_in_place(&mut x, 1).unwrap();
+    if precision != FaerPrecision::Double {
+        // The f32 factor itself (not an f64 fallback) is what must give the same bits.
+        assert_eq!(s.mixed_stats().double_factorizations, 0, "{split:?}");
+    }
     (x, f.negative_pivots)
 }
 
@@ -41,14 +52,18 @@ fn solve_on(a: &SymmetricMatrix, threads: usize, split: FaerSplit) -> (Vec<f64>,
 /// Σ(v vᵀ + I) lie below 1.5 and the factor has negative pivots).
 #[test]
 fn factors_and_solutions_are_bitwise_equal_on_1_2_and_3_threads() {
-    for (shift, split) in [0.0, 1.5]
-        .into_iter()
-        .flat_map(|s| [(s, FaerSplit::Off), (s, FaerSplit::Halves)])
-    {
+    let mixed = FaerPrecision::mixed();
+    for (shift, split, precision) in [0.0, 1.5].into_iter().flat_map(|s| {
+        [
+            (s, FaerSplit::Off, FaerPrecision::Double),
+            (s, FaerSplit::Halves, FaerPrecision::Double),
+            (s, FaerSplit::Halves, mixed),
+        ]
+    }) {
         let a = box_matrix([10, 10, 6], shift);
-        let (x1, neg1) = solve_on(&a, 1, split);
+        let (x1, neg1) = solve_on(&a, 1, split, precision);
         for threads in [2, 3] {
-            let (x, neg) = solve_on(&a, threads, split);
+            let (x, neg) = solve_on(&a, threads, split, precision);
             assert_eq!(neg, neg1, "shift {shift}, {threads} threads");
             let differ = x
                 .iter()
@@ -57,7 +72,7 @@ fn factors_and_solutions_are_bitwise_equal_on_1_2_and_3_threads() {
                 .count();
             assert_eq!(
                 differ, 0,
-                "shift {shift}, {split:?}, {threads} threads: {differ} entries differ"
+                "shift {shift}, {split:?}, {precision:?}, {threads} threads: {differ} entries differ"
             );
         }
         if shift > 0.0 {

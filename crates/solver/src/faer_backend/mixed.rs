@@ -13,7 +13,12 @@
 //! - refinement stalls (the backward error falls by less than half in a step) or has not
 //!   reached the tolerance in [`MAX_REFINEMENT_STEPS`]: A is too ill-conditioned for f32
 //!   (cond(A)·ε₃₂ ≳ 0.5).
+//!
+//! With [`super::FaerSplit::Halves`] the f32 factor is the split one (f32 halves, S in f64)
+//! and the same rules hold; the f64 fallback is then the f64 split.
 
+use super::pivots::{PivotRule, negative_pivots};
+use super::split::Attempt;
 use super::{FaerSolver, factor_diagonal};
 use crate::{Factorization, SolverError, SymmetricMatrix};
 use faer::dyn_stack::{MemStack, StackReq};
@@ -94,11 +99,14 @@ pub(super) struct MixedState {
 }
 
 impl MixedState {
-    /// Room for an f32 factor of `len` entries; forgets everything else.
-    pub(super) fn reset(&mut self, len: usize) -> Result<(), SolverError> {
+    /// Forgets everything; room for an unsplit f32 factor of `len` entries, now if
+    /// `allocate` (else when first needed).
+    pub(super) fn reset(&mut self, len: usize, allocate: bool) -> Result<(), SolverError> {
         *self = Self::default();
         self.len = len;
-        self.l32 = try_zeros_f32(len)?;
+        if allocate {
+            self.l32 = try_zeros_f32(len)?;
+        }
         Ok(())
     }
 
@@ -114,7 +122,7 @@ pub(super) fn scratch(symbolic: &SymbolicCholesky<usize>, par: Par) -> StackReq 
         .or(symbolic.solve_in_place_scratch::<f32>(1, par))
 }
 
-fn try_zeros_f32(len: usize) -> Result<Vec<f32>, SolverError> {
+pub(super) fn try_zeros_f32(len: usize) -> Result<Vec<f32>, SolverError> {
     let mut v = Vec::new();
     v.try_reserve_exact(len)
         .map_err(|_| SolverError::OutOfMemory {
@@ -151,16 +159,12 @@ impl FaerSolver {
         self.mixed.stats
     }
 
-    /// Factorises `a` in f32 if it can be trusted (module docs), else in f64.
+    /// Factorises `a` (pattern already checked) in f32 if it can be trusted (module docs),
+    /// else in f64.
     pub(super) fn factorize_mixed(
         &mut self,
         a: &SymmetricMatrix,
     ) -> Result<Factorization, SolverError> {
-        let Some(pattern) = &self.pattern else {
-            return Err(SolverError::NotReady("factorize called before analyze"));
-        };
-        a.check_for(pattern)?;
-        self.factored = false;
         self.mixed.single = false;
         match &mut self.mixed.a {
             Some(m) if std::sync::Arc::ptr_eq(m.pattern(), a.pattern()) => {
@@ -175,7 +179,8 @@ impl FaerSolver {
         }
     }
 
-    /// The f64 factor of `a`, because of `reason`; frees the f32 one first.
+    /// The f64 factor of `a` (split if the analysis split), because of `reason`; frees the
+    /// unsplit f32 one first.
     fn fall_back(
         &mut self,
         a: &SymmetricMatrix,
@@ -186,19 +191,53 @@ impl FaerSolver {
         self.mixed.stats.last_fallback = Some(reason);
         self.mixed.stats.double_factorizations += 1;
         self.mixed.last_negative = None;
-        let f = self.factorize_double(a)?;
+        let f = self.factorize_f64(a)?;
         self.mixed.last_negative = Some(f.negative_pivots);
         Ok(f)
     }
 
-    /// The f32 factorisation: `Ok(Err(reason))` when it cannot be trusted.
-    fn factorize_single(
-        &mut self,
-        a: &SymmetricMatrix,
-    ) -> Result<Result<Factorization, &'static str>, SolverError> {
+    /// The f32 factorisation (split or not): `Ok(Err(reason))` when it cannot be trusted.
+    fn factorize_single(&mut self, a: &SymmetricMatrix) -> Attempt<Factorization> {
         if a.values().iter().any(|v| v.abs() > f64::from(f32::MAX)) {
             return Ok(Err("an entry does not fit f32"));
         }
+        let rule = PivotRule::Single {
+            tolerance: self.tolerance,
+            floor: match self.precision {
+                FaerPrecision::Mixed { pivot_floor, .. } => pivot_floor,
+                FaerPrecision::Double => 0.0,
+            },
+        };
+        let done = match self.split_state.as_mut() {
+            Some(split) => split.factorize::<f32>(a, self.par, rule, self.flops)?,
+            None => self.factorize_single_unsplit(a, rule)?,
+        };
+        let f = match done {
+            Ok(f) => f,
+            Err(reason) => return Ok(Err(reason)),
+        };
+        if self
+            .mixed
+            .last_negative
+            .is_some_and(|last| last != f.negative_pivots)
+        {
+            return Ok(Err("the negative pivot count changed"));
+        }
+        // The f64 factor, if a fallback made one, is not needed now.
+        self.l_values = Vec::new();
+        self.mixed.single = true;
+        self.mixed.last_negative = Some(f.negative_pivots);
+        self.mixed.stats.single_factorizations += 1;
+        self.factored = true;
+        Ok(Ok(f))
+    }
+
+    /// faer's f32 factorisation of the whole of `a`, its pivots judged by `rule`.
+    fn factorize_single_unsplit(
+        &mut self,
+        a: &SymmetricMatrix,
+        rule: PivotRule,
+    ) -> Attempt<Factorization> {
         if self.mixed.l32.len() != self.mixed.len {
             self.mixed.l32 = try_zeros_f32(self.mixed.len)?;
         }
@@ -231,42 +270,16 @@ impl FaerSolver {
             Some(p) => p.arrays().0.to_vec(),
             None => (0..n).collect(),
         };
-        let floor = match self.precision {
-            FaerPrecision::Mixed { pivot_floor, .. } => pivot_floor,
-            FaerPrecision::Double => 0.0,
-        };
-        let diag = a.diagonal();
-        let mut negative = 0;
-        for (k, d) in factor_diagonal(symbolic, &self.mixed.l32)
-            .into_iter()
-            .enumerate()
-        {
-            let scale = diag[perm_fwd[k]].abs();
-            if !d.is_finite() || d.abs() < floor.max(self.tolerance) * scale {
-                return Ok(Err("an f32 pivot is too small to trust its sign"));
-            }
-            if d < 0.0 {
-                negative += 1;
-            }
-        }
-        if self
-            .mixed
-            .last_negative
-            .is_some_and(|last| last != negative)
-        {
-            return Ok(Err("the negative pivot count changed"));
-        }
-        // The f64 factor, if a fallback made one, is not needed now.
-        self.l_values = Vec::new();
-        self.mixed.single = true;
-        self.mixed.last_negative = Some(negative);
-        self.mixed.stats.single_factorizations += 1;
-        self.factored = true;
-        Ok(Ok(Factorization {
-            negative_pivots: negative,
-            factor_entries: self.mixed.len,
-            flops: self.flops,
-        }))
+        let pivots = factor_diagonal(symbolic, &self.mixed.l32);
+        Ok(
+            negative_pivots(pivots, 0, |k| perm_fwd[k], &a.diagonal(), rule)?.map(|negative| {
+                Factorization {
+                    negative_pivots: negative,
+                    factor_entries: self.mixed.len,
+                    flops: self.flops,
+                }
+            }),
+        )
     }
 
     /// Solves with the f32 factor and refines each column in f64; on a stall, factorises in
@@ -290,65 +303,95 @@ impl FaerSolver {
             done?;
             self.factored = true;
             b.copy_from_slice(&original);
-            return self.solve_double(b, nrhs);
+            return self.solve_f64(b, nrhs);
         }
         Ok(())
     }
 
-    /// Iterative refinement of one column in place; `false` if it stalled.
+    /// Iterative refinement of one column in place with the f32 factor (split or not);
+    /// `false` if it stalled.
     fn refine(&mut self, col: &mut [f64]) -> Result<bool, SolverError> {
         let FaerPrecision::Mixed { tolerance, .. } = self.precision else {
             return Ok(false);
         };
-        let (Some(symbolic), Some(buffer), Some(a)) =
-            (&self.symbolic, &mut self.buffer, &self.mixed.a)
-        else {
+        let Some(a) = &self.mixed.a else {
             return Err(SolverError::NotReady("solve called before factorize"));
         };
-        let n = col.len();
-        let b = col.to_vec();
-        let b_norm = max_abs(&b);
-        col.fill(0.0);
-        if b_norm == 0.0 {
-            return Ok(true);
+        let (a_norm, par, stats) = (self.mixed.a_norm, self.par, &mut self.mixed.stats);
+        if let Some(split) = self.split_state.as_mut().filter(|s| s.is_factored()) {
+            // The split's solve reads its f32 halves into f64 sums: no scaling needed.
+            let correct = |r: &mut [f64]| split.solve_column(r, par);
+            return refine_column(col, a, a_norm, tolerance, stats, correct);
         }
+        let (Some(symbolic), Some(buffer)) = (&self.symbolic, &mut self.buffer) else {
+            return Err(SolverError::NotReady("solve called before factorize"));
+        };
         let factor = LdltRef::<usize, f32>::new(symbolic, &self.mixed.l32);
-        let mut r = b.clone();
-        let mut ax = vec![0.0; n];
-        let mut c = vec![0.0f32; n];
-        let mut previous = f64::INFINITY;
-        for _ in 0..MAX_REFINEMENT_STEPS {
+        let mut c = vec![0.0f32; col.len()];
+        let correct = |r: &mut [f64]| {
             // The correction in f32, scaled to ‖r‖∞ = 1 so small residuals do not underflow.
-            let scale = max_abs(&r);
-            for (ci, ri) in c.iter_mut().zip(&r) {
+            let scale = max_abs(r);
+            for (ci, ri) in c.iter_mut().zip(r.iter()) {
                 *ci = (ri / scale) as f32;
             }
+            let n = c.len();
             factor.solve_in_place_with_conj(
                 Conj::No,
                 MatMut::from_column_major_slice_mut(&mut c, n, 1),
                 super::SOLVE_PAR,
                 MemStack::new(buffer),
             );
-            for (xi, ci) in col.iter_mut().zip(&c) {
-                *xi += f64::from(*ci) * scale;
+            for (ri, ci) in r.iter_mut().zip(&c) {
+                *ri = f64::from(*ci) * scale;
             }
-            a.matvec(col, &mut ax)?;
-            for ((ri, bi), axi) in r.iter_mut().zip(&b).zip(&ax) {
-                *ri = bi - axi;
-            }
-            let omega = max_abs(&r) / (self.mixed.a_norm * max_abs(col) + b_norm);
-            self.mixed.stats.refinement_steps += 1;
-            self.mixed.stats.last_backward_error = omega;
-            if omega <= tolerance {
-                return Ok(true);
-            }
-            if !omega.is_finite() || omega > 0.5 * previous {
-                return Ok(false);
-            }
-            previous = omega;
-        }
-        Ok(false)
+        };
+        refine_column(col, a, a_norm, tolerance, stats, correct)
     }
+}
+
+/// Iterative refinement of `col` (b in, x out): x ← x + C(b − A x) with `correct` applying
+/// the approximate inverse C = (L̃D̃L̃ᵀ)⁻¹ in place, until the normwise backward error
+/// ‖b − A x‖∞ / (‖A‖∞‖x‖∞ + ‖b‖∞) is at most `tolerance` (`true`), or it stalls: falls by
+/// less than half in a step, or [`MAX_REFINEMENT_STEPS`] pass (`false`).
+fn refine_column(
+    col: &mut [f64],
+    a: &SymmetricMatrix,
+    a_norm: f64,
+    tolerance: f64,
+    stats: &mut MixedStats,
+    mut correct: impl FnMut(&mut [f64]),
+) -> Result<bool, SolverError> {
+    let n = col.len();
+    let b = col.to_vec();
+    let b_norm = max_abs(&b);
+    col.fill(0.0);
+    if b_norm == 0.0 {
+        return Ok(true);
+    }
+    let mut r = b.clone();
+    let mut ax = vec![0.0; n];
+    let mut previous = f64::INFINITY;
+    for _ in 0..MAX_REFINEMENT_STEPS {
+        correct(&mut r);
+        for (xi, ci) in col.iter_mut().zip(&r) {
+            *xi += ci;
+        }
+        a.matvec(col, &mut ax)?;
+        for ((ri, bi), axi) in r.iter_mut().zip(&b).zip(&ax) {
+            *ri = bi - axi;
+        }
+        let omega = max_abs(&r) / (a_norm * max_abs(col) + b_norm);
+        stats.refinement_steps += 1;
+        stats.last_backward_error = omega;
+        if omega <= tolerance {
+            return Ok(true);
+        }
+        if !omega.is_finite() || omega > 0.5 * previous {
+            return Ok(false);
+        }
+        previous = omega;
+    }
+    Ok(false)
 }
 
 #[cfg(test)]

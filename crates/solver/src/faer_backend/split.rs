@@ -7,17 +7,27 @@
 //! Mᵢ = [Aᵢᵢ Aᵢₛ; Aₛᵢ Aₛₛ] = Lᵢ Dᵢ Lᵢᵀ, whose trailing block gives back
 //! Lₛₛ Dₛ Lₛₛᵀ = S′ᵢ = Aₛₛ − Aₛᵢ Aᵢᵢ⁻¹ Aᵢₛ (a Schur complement of a principal submatrix of A:
 //! positive definite when A is). The separator's Schur complement S = S′₁ + S′₂ − Aₛₛ is then
-//! factored densely. The pivots are those of the unsplit LDLᵀ in the same order (A₁₁'s, A₂₂'s,
-//! then S's), so the inertia is their sum (Haynsworth). Solves: forward through each half
-//! (its rows of the separator collect −Aₛᵢ Aᵢᵢ⁻¹ bᵢ), S xₛ = bₛ − Σ Aₛᵢ Aᵢᵢ⁻¹ bᵢ, back through
-//! each half. Each half is one sequential faer call (or loop) and the halves meet in a fixed
-//! order, so the bits do not depend on the thread count.
+//! factored densely (f64). The pivots are those of the unsplit LDLᵀ in the same order (A₁₁'s,
+//! A₂₂'s, then S's), so the inertia is their sum (Haynsworth). Solves: forward through each
+//! half (its rows of the separator collect −Aₛᵢ Aᵢᵢ⁻¹ bᵢ), S xₛ = bₛ − Σ Aₛᵢ Aᵢᵢ⁻¹ bᵢ, back
+//! through each half. Each half is one sequential faer call (or loop) and the halves meet in
+//! a fixed order, so the bits do not depend on the thread count.
+//!
+//! The halves are stored in f64, or in f32 for mixed precision (`mixed.rs` refines the split
+//! solve in f64 and decides the fallbacks; the halves' sweeps run in their factor's precision,
+//! S's in f64).
 
 use super::factor_diagonal;
+use super::pivots::{PivotRule, negative_pivots};
 use crate::{Factorization, SolverError, SymmetricMatrix, SymmetricPattern};
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::ldlt::factor::{LdltError, LdltRegularization};
+use faer::linalg::matmul::matmul;
 use faer::linalg::matmul::triangular::BlockStructure;
+use faer::linalg::triangular_solve::{
+    solve_unit_lower_triangular_in_place, solve_unit_upper_triangular_in_place,
+};
+use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::linalg::cholesky::{
     CholeskySymbolicParams, SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering,
@@ -26,29 +36,90 @@ use faer::sparse::linalg::cholesky::{
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Accum, Conj, Mat, MatMut, Par, Side};
 
-/// One half with the separator appended, in its own numbering: interior DOFs (in the
-/// nested-dissection order), then the separator's.
-struct Half {
-    /// Local index → DOF of A.
-    dofs: Vec<usize>,
-    /// Interior DOFs (the first `interior` local indices).
-    interior: usize,
-    pattern: SymmetricPattern,
-    /// Local value k is A's value `gather[k]`.
-    gather: Vec<usize>,
-    symbolic: SymbolicCholesky<usize>,
-    values: Vec<f64>,
-    l: Vec<f64>,
-    buffer: MemBuffer,
+mod half;
+use half::Half;
+
+/// Pivots of S′ᵢ (a half's separator block) below this fraction of their diagonal entry
+/// (f64 halves; f32 ones use the mixed pivot floor) make the rebuild of S′ᵢ inexact: the
+/// split gives way to the unsplit factor.
+const SEPARATOR_PIVOT_FLOOR: f64 = 1e-8;
+
+/// A half's factor values, in the precision last used.
+#[derive(Default)]
+pub(super) enum Stored {
+    #[default]
+    Empty,
+    Double(Vec<f64>),
+    Single(Vec<f32>),
 }
 
-/// What a half's factorisation found.
-struct HalfOutcome {
-    /// Negative interior pivots.
-    negative: usize,
-    /// S′ᵢ, lower triangle (ns × ns).
-    schur: Mat<f64>,
+/// The precisions a half can be factored in.
+pub(super) trait Real:
+    faer::traits::ComplexField
+    + faer::traits::Conjugate<Canonical = Self>
+    + Copy
+    + Into<f64>
+    + std::ops::SubAssign
+    + std::ops::DivAssign
+    + Send
+    + Sync
+    + 'static
+{
+    /// Rounded to this precision.
+    fn narrow(v: f64) -> Self;
+    /// `stored` as a factor of this precision with `len` entries (the other one freed first).
+    fn slot(stored: &mut Stored, len: usize) -> Result<&mut Vec<Self>, SolverError>;
+    /// The factor `stored` holds in this precision (empty if another).
+    fn view(stored: &Stored) -> &[Self];
 }
+
+impl Real for f64 {
+    fn narrow(v: f64) -> Self {
+        v
+    }
+    fn slot(stored: &mut Stored, len: usize) -> Result<&mut Vec<Self>, SolverError> {
+        if !matches!(stored, Stored::Double(v) if v.len() == len) {
+            *stored = Stored::Empty;
+            *stored = Stored::Double(crate::budget::try_zeros(len, "a split half's factor")?);
+        }
+        match stored {
+            Stored::Double(v) => Ok(v),
+            _ => unreachable!("just stored"),
+        }
+    }
+    fn view(stored: &Stored) -> &[Self] {
+        match stored {
+            Stored::Double(v) => v,
+            _ => &[],
+        }
+    }
+}
+
+impl Real for f32 {
+    fn narrow(v: f64) -> Self {
+        v as f32
+    }
+    fn slot(stored: &mut Stored, len: usize) -> Result<&mut Vec<Self>, SolverError> {
+        if !matches!(stored, Stored::Single(v) if v.len() == len) {
+            *stored = Stored::Empty;
+            *stored = Stored::Single(super::mixed::try_zeros_f32(len)?);
+        }
+        match stored {
+            Stored::Single(v) => Ok(v),
+            _ => unreachable!("just stored"),
+        }
+    }
+    fn view(stored: &Stored) -> &[Self] {
+        match stored {
+            Stored::Single(v) => v,
+            _ => &[],
+        }
+    }
+}
+
+/// A factorisation's outcome: the factor, or why it cannot be trusted (the caller takes
+/// another path), or an error of A itself.
+pub(super) type Attempt<T> = Result<Result<T, &'static str>, SolverError>;
 
 /// The split factor: two halves and the dense separator block.
 pub(super) struct Split {
@@ -62,6 +133,25 @@ pub(super) struct Split {
     s: Mat<f64>,
     s_buffer: MemBuffer,
     factored: bool,
+    /// CPU seconds of the last factorisation's halves (each on its thread), then the join's
+    /// wall seconds (S's assembly and dense LDLᵀ).
+    times: [f64; 3],
+}
+
+/// CPU seconds this thread has run (Linux's `/proc/thread-self/schedstat`; NaN elsewhere):
+/// a half's own work, whatever else shares the cores.
+fn thread_cpu_seconds() -> f64 {
+    std::fs::read_to_string("/proc/thread-self/schedstat")
+        .ok()
+        .and_then(|t| t.split_whitespace().next()?.parse::<f64>().ok())
+        .map_or(f64::NAN, |ns| ns * 1e-9)
+}
+
+/// `f()` and the CPU seconds this thread spent in it.
+fn timed<R>(f: impl FnOnce() -> R) -> (R, f64) {
+    let start = thread_cpu_seconds();
+    let r = f();
+    (r, thread_cpu_seconds() - start)
 }
 
 impl Split {
@@ -92,10 +182,10 @@ impl Split {
         let sep = forward[n0 + n1..].to_vec();
         let ns = sep.len();
         let half = |range: std::ops::Range<usize>| {
-            let mut dofs = forward[range].to_vec();
+            let mut dofs = forward[range.clone()].to_vec();
             let interior = dofs.len();
             dofs.extend_from_slice(&sep);
-            Half::new(pattern, dofs, interior)
+            Half::new(pattern, dofs, interior, range.start)
         };
         let halves = [half(0..n0)?, half(n0..n0 + n1)?];
         let mut local = vec![usize::MAX; n];
@@ -131,6 +221,7 @@ impl Split {
             s: Mat::zeros(ns, ns),
             s_buffer,
             factored: false,
+            times: [f64::NAN; 3],
         }))
     }
 
@@ -143,40 +234,58 @@ impl Split {
         )
     }
 
+    /// Σc² over the column counts of each half's factor (its interior and its copy of the
+    /// separator) and ns³/3 for S: the work of the two threads and of the join.
+    pub(super) fn work(&self) -> [f64; 3] {
+        let ns = self.sep.len() as f64;
+        [
+            super::factor_flops(&self.halves[0].symbolic),
+            super::factor_flops(&self.halves[1].symbolic),
+            ns.powi(3) / 3.0,
+        ]
+    }
+
+    /// CPU seconds of each half of the last factorisation and the join's wall seconds.
+    pub(super) fn times(&self) -> [f64; 3] {
+        self.times
+    }
+
     /// Entries of the two half factors and S.
     pub(super) fn factor_entries(&self) -> usize {
-        self.halves.iter().map(|h| h.l.len()).sum::<usize>() + self.sep.len().pow(2)
+        self.halves
+            .iter()
+            .map(|h| h.symbolic.len_val())
+            .sum::<usize>()
+            + self.sep.len().pow(2)
     }
 
     pub(super) fn is_factored(&self) -> bool {
         self.factored
     }
 
-    /// Factors `a`: the halves on `par`'s threads (one each), S on `par`. `Ok(Err(reason))`
-    /// when a half's trailing block (which the unsplit factor never forms) meets a pivot too
-    /// small to trust: the caller factors unsplit.
-    pub(super) fn factorize(
+    /// Factors `a`: the halves in precision `T` on `par`'s threads (one each), S in f64 on
+    /// `par`, pivots judged by `rule`. `Ok(Err(reason))` when a half's trailing block (which
+    /// the unsplit factor never forms) meets a pivot too small to trust, or an f32 pivot is in
+    /// doubt: the caller takes another path.
+    pub(super) fn factorize<T: Real>(
         &mut self,
         a: &SymmetricMatrix,
         par: Par,
-        tolerance: f64,
+        rule: PivotRule,
         flops: f64,
-    ) -> Result<Result<Factorization, &'static str>, SolverError> {
+    ) -> Attempt<Factorization> {
         self.factored = false;
         let diag = a.diagonal();
         let values = a.values();
         let [h0, h1] = &mut self.halves;
-        let (r0, r1) = if par.degree() > 1 {
-            rayon::join(
-                || h0.factorize(values, &diag, tolerance),
-                || h1.factorize(values, &diag, tolerance),
-            )
+        let mut half0 = || timed(|| h0.factorize::<T>(values, &diag, rule));
+        let mut half1 = || timed(|| h1.factorize::<T>(values, &diag, rule));
+        let ((r0, t0), (r1, t1)) = if par.degree() > 1 {
+            rayon::join(half0, half1)
         } else {
-            (
-                h0.factorize(values, &diag, tolerance),
-                h1.factorize(values, &diag, tolerance),
-            )
+            (half0(), half1())
         };
+        let join = std::time::Instant::now();
         let (o0, o1) = match (r0?, r1?) {
             (Ok(o0), Ok(o1)) => (o0, o1),
             (Err(w), _) | (_, Err(w)) => return Ok(Err(w)),
@@ -199,25 +308,26 @@ impl Split {
             MemStack::new(&mut self.s_buffer),
             Default::default(),
         );
-        let mut negative = o0.negative + o1.negative;
-        for k in 0..ns {
-            let d = self.s[(k, k)];
-            let dof = self.sep[k];
-            let equation = self.n - ns + k;
-            let failed = matches!(info, Err(LdltError::ZeroPivot { index }) if index == k);
-            if failed || crate::profile::is_zero_pivot(d, tolerance, diag[dof].abs()) {
-                return Err(SolverError::ZeroPivot {
-                    equation,
+        let first = self.n - ns;
+        if let Err(LdltError::ZeroPivot { index }) = info {
+            let dof = self.sep[index];
+            return match rule {
+                PivotRule::Single { .. } => Ok(Err("f32 elimination met a zero pivot")),
+                PivotRule::Double { .. } => Err(SolverError::ZeroPivot {
+                    equation: first + index,
                     dof,
-                    pivot: if failed { 0.0 } else { d },
+                    pivot: 0.0,
                     diagonal: diag[dof].abs(),
-                });
-            }
-            if d < 0.0 {
-                negative += 1;
-            }
+                }),
+            };
         }
+        let pivots = (0..ns).map(|k| self.s[(k, k)]);
+        let negative = match negative_pivots(pivots, first, |k| self.sep[k], &diag, rule)? {
+            Ok(count) => count + o0.negative + o1.negative,
+            Err(reason) => return Ok(Err(reason)),
+        };
         self.factored = true;
+        self.times = [t0, t1, join.elapsed().as_secs_f64()];
         Ok(Ok(Factorization {
             negative_pivots: negative,
             factor_entries: self.factor_entries(),
@@ -225,15 +335,29 @@ impl Split {
         }))
     }
 
-    /// Overwrites `b` (one column of n values) with A⁻¹b.
+    /// Overwrites `b` (one column of n values) with A⁻¹b: the halves' sweeps in their
+    /// factor's precision (b scaled by a power of two near ‖b‖∞, so f32 neither overflows
+    /// nor underflows and f64 is not rounded by it), S's in f64.
     pub(super) fn solve_column(&mut self, b: &mut [f64], par: Par) {
+        match self.halves[0].l {
+            Stored::Single(_) => self.solve_in::<f32>(b, par),
+            _ => self.solve_in::<f64>(b, par),
+        }
+    }
+
+    fn solve_in<T: Real>(&mut self, b: &mut [f64], par: Par) {
+        let norm = b.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        if norm == 0.0 {
+            return;
+        }
+        let scale = 2f64.powi(norm.log2().round() as i32);
         let [h0, h1] = &self.halves;
         let forward = |h: &Half| {
-            let mut z = vec![0.0; h.dofs.len()];
+            let mut z = vec![T::narrow(0.0); h.dofs.len()];
             for (zk, &d) in z.iter_mut().zip(&h.dofs[..h.interior]) {
-                *zk = b[d];
+                *zk = T::narrow(b[d] / scale);
             }
-            h.forward(&mut z);
+            h.forward(T::view(&h.l), &mut z);
             z
         };
         let (mut z0, mut z1) = if par.degree() > 1 {
@@ -243,7 +367,9 @@ impl Split {
         };
         let ns = self.sep.len();
         let mut xs: Vec<f64> = (0..ns)
-            .map(|k| b[self.sep[k]] + z0[h0.interior + k] + z1[h1.interior + k])
+            .map(|k| {
+                b[self.sep[k]] / scale + z0[h0.interior + k].into() + z1[h1.interior + k].into()
+            })
             .collect();
         faer::linalg::cholesky::ldlt::solve::solve_in_place_with_conj(
             self.s.as_ref(),
@@ -253,9 +379,11 @@ impl Split {
             Par::Seq,
             MemStack::new(&mut self.s_buffer),
         );
-        let backward = |h: &Half, z: &mut Vec<f64>| {
-            z[h.interior..].copy_from_slice(&xs);
-            h.backward(z);
+        let backward = |h: &Half, z: &mut Vec<T>| {
+            for (zk, &x) in z[h.interior..].iter_mut().zip(&xs) {
+                *zk = T::narrow(x);
+            }
+            h.backward(T::view(&h.l), z);
         };
         if par.degree() > 1 {
             rayon::join(|| backward(h0, &mut z0), || backward(h1, &mut z1));
@@ -265,296 +393,32 @@ impl Split {
         }
         for (h, z) in [(h0, &z0), (h1, &z1)] {
             for (&d, &zk) in h.dofs[..h.interior].iter().zip(z.iter()) {
-                b[d] = zk;
+                b[d] = zk.into() * scale;
             }
         }
         for (&d, &x) in self.sep.iter().zip(&xs) {
-            b[d] = x;
-        }
-    }
-}
-
-impl Half {
-    /// The pattern of A on `dofs` (renumbered), its gather map and faer's supernodal symbolic
-    /// factor in that order.
-    fn new(a: &SymmetricPattern, dofs: Vec<usize>, interior: usize) -> Result<Self, SolverError> {
-        let n = a.n();
-        let m = dofs.len();
-        let mut local = vec![usize::MAX; n];
-        for (k, &d) in dofs.iter().enumerate() {
-            local[d] = k;
-        }
-        let mut columns: Vec<Vec<usize>> = vec![Vec::new(); m];
-        for j in 0..n {
-            if local[j] == usize::MAX {
-                continue;
-            }
-            for &i in a.column(j) {
-                if local[i] != usize::MAX {
-                    let (r, c) = (local[i].max(local[j]), local[i].min(local[j]));
-                    columns[c].push(r);
-                }
-            }
-        }
-        let pattern = SymmetricPattern::from_lower_columns(m, &columns)?;
-        drop(columns);
-        let mut gather = vec![usize::MAX; pattern.nnz_lower()];
-        for j in 0..n {
-            if local[j] == usize::MAX {
-                continue;
-            }
-            let start = a.col_ptr()[j];
-            for (p, &i) in a.column(j).iter().enumerate() {
-                if local[i] != usize::MAX {
-                    let (r, c) = (local[i].max(local[j]), local[i].min(local[j]));
-                    if let Some(q) = pattern.position(r, c) {
-                        gather[q] = start + p;
-                    }
-                }
-            }
-        }
-        let sym =
-            SymbolicSparseColMatRef::new_checked(m, m, pattern.col_ptr(), None, pattern.row_idx());
-        let params = CholeskySymbolicParams {
-            supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
-            ..Default::default()
-        };
-        // The identity as a custom order: faer's `Identity` reads the pattern as its upper
-        // triangle, a custom order transposes the lower one first.
-        let id: Vec<usize> = (0..m).collect();
-        let order = SymmetricOrdering::Custom(faer::perm::PermRef::new_checked(&id, &id, m));
-        let symbolic = factorize_symbolic_cholesky(sym, Side::Lower, order, params)
-            .map_err(|e| SolverError::Faer(format!("split half, symbolic: {e:?}")))?;
-        let req = symbolic
-            .factorize_numeric_ldlt_scratch::<f64>(Par::Seq, Default::default())
-            .or(symbolic.solve_in_place_scratch::<f64>(1, Par::Seq));
-        let buffer = MemBuffer::try_new(req).map_err(|_| SolverError::OutOfMemory {
-            what: "a split half's workspace",
-            bytes: req.size_bytes(),
-        })?;
-        let l = crate::budget::try_zeros(symbolic.len_val(), "a split half's factor")?;
-        let values = vec![0.0; pattern.nnz_lower()];
-        Ok(Self {
-            dofs,
-            interior,
-            pattern,
-            gather,
-            symbolic,
-            values,
-            l,
-            buffer,
-        })
-    }
-
-    fn supernodal(&self) -> &supernodal::SymbolicSupernodalCholesky<usize> {
-        match self.symbolic.raw() {
-            SymbolicCholeskyRaw::Supernodal(s) => s,
-            SymbolicCholeskyRaw::Simplicial(_) => unreachable!("split halves are supernodal"),
-        }
-    }
-
-    /// Factors Mᵢ (one thread), checks the interior pivots against A's diagonal and returns
-    /// S′ᵢ = Lₛₛ Dₛ Lₛₛᵀ.
-    fn factorize(
-        &mut self,
-        a: &[f64],
-        diag: &[f64],
-        tolerance: f64,
-    ) -> Result<Result<HalfOutcome, &'static str>, SolverError> {
-        for (v, &g) in self.values.iter_mut().zip(&self.gather) {
-            *v = if g == usize::MAX { 0.0 } else { a[g] };
-        }
-        let m = self.dofs.len();
-        let sym = SymbolicSparseColMatRef::new_checked(
-            m,
-            m,
-            self.pattern.col_ptr(),
-            None,
-            self.pattern.row_idx(),
-        );
-        let mat = SparseColMatRef::new(sym, &self.values);
-        let done = self.symbolic.factorize_numeric_ldlt(
-            &mut self.l,
-            mat,
-            Side::Lower,
-            LdltRegularization::default(),
-            Par::Seq,
-            MemStack::new(&mut self.buffer),
-            Default::default(),
-        );
-        if let Err(LdltError::ZeroPivot { index }) = done {
-            if index < self.interior {
-                let dof = self.dofs[index];
-                return Err(SolverError::ZeroPivot {
-                    equation: index,
-                    dof,
-                    pivot: 0.0,
-                    diagonal: diag[dof].abs(),
-                });
-            }
-            return Ok(Err("a split half's separator block met a zero pivot"));
-        }
-        let d = factor_diagonal(&self.symbolic, &self.l);
-        let mut negative = 0;
-        for (k, &dk) in d.iter().enumerate() {
-            let dof = self.dofs[k];
-            let scale = diag[dof].abs();
-            if k >= self.interior {
-                // S′ᵢ's own pivots: not A's; a small one only makes the rebuild inexact.
-                if crate::profile::is_zero_pivot(dk, 1e-8, scale) {
-                    return Ok(Err("a split half's separator pivot is too small"));
-                }
-                continue;
-            }
-            if crate::profile::is_zero_pivot(dk, tolerance, scale) {
-                return Err(SolverError::ZeroPivot {
-                    equation: k,
-                    dof,
-                    pivot: dk,
-                    diagonal: scale,
-                });
-            }
-            if dk < 0.0 {
-                negative += 1;
-            }
-        }
-        Ok(Ok(HalfOutcome {
-            negative,
-            schur: self.trailing_schur(&d),
-        }))
-    }
-
-    /// S′ᵢ = Lₛₛ Dₛ Lₛₛᵀ from the factor's separator columns (lower triangle).
-    fn trailing_schur(&self, d: &[f64]) -> Mat<f64> {
-        let ni = self.interior;
-        let ns = self.dofs.len() - ni;
-        let sn = self.supernodal();
-        let f = supernodal::SupernodalLdltRef::new(sn, &self.l);
-        // W = Lₛₛ Dₛ (lower), L = Lₛₛ.
-        let mut lss = Mat::<f64>::zeros(ns, ns);
-        for k in 0..sn.n_supernodes() {
-            let (b, e) = (sn.supernode_begin()[k], sn.supernode_end()[k]);
-            if e <= ni {
-                continue;
-            }
-            let s = f.supernode(k);
-            let val = s.val();
-            let w = e - b;
-            for c in b.max(ni)..e {
-                let col = c - b;
-                let lc = c - ni;
-                lss[(lc, lc)] = 1.0;
-                for r in col + 1..w {
-                    lss[(b + r - ni, lc)] = val[(r, col)];
-                }
-                for (t, &row) in s.pattern().iter().enumerate() {
-                    lss[(row - ni, lc)] = val[(w + t, col)];
-                }
-            }
-        }
-        let mut wd = lss.clone();
-        for j in 0..ns {
-            let dj = d[ni + j];
-            for i in j..ns {
-                wd[(i, j)] *= dj;
-            }
-        }
-        let mut out = Mat::<f64>::zeros(ns, ns);
-        faer::linalg::matmul::triangular::matmul(
-            out.as_mut(),
-            BlockStructure::TriangularLower,
-            Accum::Replace,
-            wd.as_ref(),
-            BlockStructure::TriangularLower,
-            lss.as_ref().transpose(),
-            BlockStructure::UnitTriangularUpper,
-            1.0,
-            Par::Seq,
-        );
-        out
-    }
-
-    /// z ← D⁻¹L⁻¹z over the interior columns; the separator rows of z collect −Lₛᵢ y
-    /// (= −Aₛᵢ Aᵢᵢ⁻¹ bᵢ when z's separator rows start at zero).
-    fn forward(&self, z: &mut [f64]) {
-        let ni = self.interior;
-        let sn = self.supernodal();
-        let f = supernodal::SupernodalLdltRef::new(sn, &self.l);
-        for k in 0..sn.n_supernodes() {
-            let (b, e) = (sn.supernode_begin()[k], sn.supernode_end()[k]);
-            if b >= ni {
-                break;
-            }
-            let s = f.supernode(k);
-            let val = s.val();
-            let w = e - b;
-            for c in b..e.min(ni) {
-                let col = c - b;
-                let y = z[c];
-                if y == 0.0 {
-                    continue;
-                }
-                let v = val.col(col);
-                for r in col + 1..w {
-                    z[b + r] -= v[r] * y;
-                }
-                for (t, &row) in s.pattern().iter().enumerate() {
-                    z[row] -= v[w + t] * y;
-                }
-            }
-            for c in b..e.min(ni) {
-                z[c] /= val[(c - b, c - b)];
-            }
-        }
-    }
-
-    /// z ← L⁻ᵀz over the interior columns, the separator rows of z holding xₛ.
-    fn backward(&self, z: &mut [f64]) {
-        let ni = self.interior;
-        let sn = self.supernodal();
-        let f = supernodal::SupernodalLdltRef::new(sn, &self.l);
-        for k in (0..sn.n_supernodes()).rev() {
-            let (b, e) = (sn.supernode_begin()[k], sn.supernode_end()[k]);
-            if b >= ni {
-                continue;
-            }
-            let s = f.supernode(k);
-            let val = s.val();
-            let w = e - b;
-            for c in (b..e.min(ni)).rev() {
-                let col = c - b;
-                let v = val.col(col);
-                let mut acc = z[c];
-                for r in col + 1..w {
-                    acc -= v[r] * z[b + r];
-                }
-                for (t, &row) in s.pattern().iter().enumerate() {
-                    acc -= v[w + t] * z[row];
-                }
-                z[c] = acc;
-            }
+            b[d] = x * scale;
         }
     }
 }
 
 impl super::FaerSolver {
-    /// The split factorisation, or the unsplit one when the split cannot be trusted.
+    /// The f64 split factorisation, or the unsplit one when the split cannot be trusted.
     pub(super) fn factorize_split(
         &mut self,
         a: &SymmetricMatrix,
     ) -> Result<Factorization, SolverError> {
-        let Some(pattern) = &self.pattern else {
-            return Err(SolverError::NotReady("factorize called before analyze"));
-        };
-        a.check_for(pattern)?;
-        self.factored = false;
         let Some(split) = self.split_state.as_mut() else {
             return self.factorize_double(a);
         };
-        match split.factorize(a, self.par, self.tolerance, self.flops)? {
+        let rule = PivotRule::Double {
+            tolerance: self.tolerance,
+        };
+        match split.factorize::<f64>(a, self.par, rule, self.flops)? {
             Ok(f) => {
                 // The unsplit factor, if a fallback made one, is not needed now.
                 self.l_values = Vec::new();
+                self.split_fallback = None;
                 self.factored = true;
                 Ok(f)
             }
@@ -565,10 +429,35 @@ impl super::FaerSolver {
         }
     }
 
+    /// The split solve of each column of `b` (n × nrhs), if the split holds the active
+    /// factor; `false` (b untouched) otherwise.
+    pub(super) fn solve_split(&mut self, b: &mut [f64], nrhs: usize) -> bool {
+        let Some(split) = self.split_state.as_mut().filter(|s| s.is_factored()) else {
+            return false;
+        };
+        let n = b.len() / nrhs.max(1);
+        for col in b.chunks_mut(n.max(1)) {
+            split.solve_column(col, self.par);
+        }
+        true
+    }
+
     /// (interior DOFs of half 0, of half 1, separator DOFs) of the split the last analysis
     /// made; `None` when it did not split.
     pub fn split_sizes(&self) -> Option<(usize, usize, usize)> {
         self.split_state.as_ref().map(Split::sizes)
+    }
+
+    /// [Σc² of half 0's factor, of half 1's, nₛ³/3 of S] of the split the last analysis
+    /// made (`Split::work`); `None` when it did not split.
+    pub fn split_work(&self) -> Option<[f64; 3]> {
+        self.split_state.as_ref().map(Split::work)
+    }
+
+    /// [CPU s of half 0, of half 1, wall s of the join (S)] of the last split factorisation:
+    /// on free cores the split takes max(half 0, half 1) + join (`None` when not split).
+    pub fn split_times(&self) -> Option<[f64; 3]> {
+        self.split_state.as_ref().map(Split::times)
     }
 
     /// Why the last split factorisation fell back to the unsplit factor, if one did.

@@ -1,0 +1,73 @@
+//! Pivot checks and inertia shared by the unsplit, split and mixed-precision factors: the
+//! pivots d_k of an LDLᵀ (thesis §3: the negative-pivot count is the number of negative
+//! eigenvalues, Sylvester's law of inertia) judged against |a_kk| of the original matrix.
+
+use crate::SolverError;
+
+/// How a pivot is judged.
+#[derive(Debug, Clone, Copy)]
+pub(super) enum PivotRule {
+    /// An f64 factor: |d_k| ≤ tolerance·|a_kk| is a zero pivot of A (an error naming the DOF).
+    Double { tolerance: f64 },
+    /// An f32 factor: |d_k| < max(floor, tolerance)·|a_kk| means the sign could be rounding's,
+    /// and the f64 factor must decide (a fallback, not an error).
+    Single { tolerance: f64, floor: f64 },
+}
+
+impl PivotRule {
+    /// The reason an f32 factor is refused, or the error of an f64 one, for pivot `d` of
+    /// equation `equation` (DOF `dof`, |a_kk| = `scale`); `Ok(Ok(()))` when it is trusted.
+    pub(super) fn judge(
+        self,
+        d: f64,
+        equation: usize,
+        dof: usize,
+        scale: f64,
+    ) -> Result<Result<(), &'static str>, SolverError> {
+        match self {
+            Self::Double { tolerance } => {
+                if crate::profile::is_zero_pivot(d, tolerance, scale) {
+                    return Err(SolverError::ZeroPivot {
+                        equation,
+                        dof,
+                        pivot: d,
+                        diagonal: scale,
+                    });
+                }
+            }
+            Self::Single { tolerance, floor } => {
+                if !d.is_finite() || d.abs() < floor.max(tolerance) * scale {
+                    return Ok(Err("an f32 pivot is too small to trust its sign"));
+                }
+            }
+        }
+        Ok(Ok(()))
+    }
+
+    /// Whether this rule is for an f32 factor.
+    pub(super) fn single(self) -> bool {
+        matches!(self, Self::Single { .. })
+    }
+}
+
+/// Negative pivots among `pivots` (factor order, starting at equation `first`), each judged
+/// by `rule` against `diag[dof(k)]`.
+pub(super) fn negative_pivots(
+    pivots: impl IntoIterator<Item = f64>,
+    first: usize,
+    dof: impl Fn(usize) -> usize,
+    diag: &[f64],
+    rule: PivotRule,
+) -> Result<Result<usize, &'static str>, SolverError> {
+    let mut negative = 0;
+    for (k, d) in pivots.into_iter().enumerate() {
+        let dof = dof(k);
+        if let Err(reason) = rule.judge(d, first + k, dof, diag[dof].abs())? {
+            return Ok(Err(reason));
+        }
+        if d < 0.0 {
+            negative += 1;
+        }
+    }
+    Ok(Ok(negative))
+}

@@ -1,0 +1,337 @@
+//! One half of the split (`split.rs`): Mᵢ = [Aᵢᵢ Aᵢₛ; Aₛᵢ Aₛₛ] in its own numbering, its
+//! faer factor (f64 or f32, one thread), the rebuild of S′ᵢ = Lₛₛ Dₛ Lₛₛᵀ = Aₛₛ − Aₛᵢ Aᵢᵢ⁻¹ Aᵢₛ
+//! and the sweeps over its interior columns that the split solve needs.
+
+use super::*;
+
+/// One half with the separator appended, in its own numbering: interior DOFs (in the
+/// nested-dissection order), then the separator's.
+pub(super) struct Half {
+    /// Local index → DOF of A.
+    pub(super) dofs: Vec<usize>,
+    /// Interior DOFs (the first `interior` local indices).
+    pub(super) interior: usize,
+    /// The factor-order equation of the first interior DOF in the unsplit LDLᵀ.
+    pub(super) first: usize,
+    pub(super) pattern: SymmetricPattern,
+    /// Local value k is A's value `gather[k]`.
+    pub(super) gather: Vec<usize>,
+    pub(super) symbolic: SymbolicCholesky<usize>,
+    pub(super) l: Stored,
+    pub(super) buffer: MemBuffer,
+}
+
+/// What a half's factorisation found.
+pub(super) struct HalfOutcome {
+    /// Negative interior pivots.
+    pub(super) negative: usize,
+    /// S′ᵢ, lower triangle (ns × ns), in f64.
+    pub(super) schur: Mat<f64>,
+}
+
+impl Half {
+    /// The pattern of A on `dofs` (renumbered), its gather map and faer's supernodal symbolic
+    /// factor in that order.
+    pub(super) fn new(
+        a: &SymmetricPattern,
+        dofs: Vec<usize>,
+        interior: usize,
+        first: usize,
+    ) -> Result<Self, SolverError> {
+        let n = a.n();
+        let m = dofs.len();
+        let mut local = vec![usize::MAX; n];
+        for (k, &d) in dofs.iter().enumerate() {
+            local[d] = k;
+        }
+        let mut columns: Vec<Vec<usize>> = vec![Vec::new(); m];
+        for j in 0..n {
+            if local[j] == usize::MAX {
+                continue;
+            }
+            for &i in a.column(j) {
+                if local[i] != usize::MAX {
+                    let (r, c) = (local[i].max(local[j]), local[i].min(local[j]));
+                    columns[c].push(r);
+                }
+            }
+        }
+        let pattern = SymmetricPattern::from_lower_columns(m, &columns)?;
+        drop(columns);
+        let mut gather = vec![usize::MAX; pattern.nnz_lower()];
+        for j in 0..n {
+            if local[j] == usize::MAX {
+                continue;
+            }
+            let start = a.col_ptr()[j];
+            for (p, &i) in a.column(j).iter().enumerate() {
+                if local[i] != usize::MAX {
+                    let (r, c) = (local[i].max(local[j]), local[i].min(local[j]));
+                    if let Some(q) = pattern.position(r, c) {
+                        gather[q] = start + p;
+                    }
+                }
+            }
+        }
+        let sym =
+            SymbolicSparseColMatRef::new_checked(m, m, pattern.col_ptr(), None, pattern.row_idx());
+        let params = CholeskySymbolicParams {
+            supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
+            ..Default::default()
+        };
+        // The identity as a custom order: faer's `Identity` reads the pattern as its upper
+        // triangle, a custom order transposes the lower one first.
+        let id: Vec<usize> = (0..m).collect();
+        let order = SymmetricOrdering::Custom(faer::perm::PermRef::new_checked(&id, &id, m));
+        let symbolic = factorize_symbolic_cholesky(sym, Side::Lower, order, params)
+            .map_err(|e| SolverError::Faer(format!("split half, symbolic: {e:?}")))?;
+        let req = symbolic
+            .factorize_numeric_ldlt_scratch::<f64>(Par::Seq, Default::default())
+            .or(symbolic.solve_in_place_scratch::<f64>(1, Par::Seq));
+        let buffer = MemBuffer::try_new(req).map_err(|_| SolverError::OutOfMemory {
+            what: "a split half's workspace",
+            bytes: req.size_bytes(),
+        })?;
+        Ok(Self {
+            dofs,
+            interior,
+            first,
+            pattern,
+            gather,
+            symbolic,
+            l: Stored::Empty,
+            buffer,
+        })
+    }
+
+    fn supernodal(&self) -> &supernodal::SymbolicSupernodalCholesky<usize> {
+        match self.symbolic.raw() {
+            SymbolicCholeskyRaw::Supernodal(s) => s,
+            SymbolicCholeskyRaw::Simplicial(_) => unreachable!("split halves are supernodal"),
+        }
+    }
+
+    /// Factors Mᵢ in precision `T` (one thread), judges the interior pivots by `rule` against
+    /// A's diagonal and returns S′ᵢ = Lₛₛ Dₛ Lₛₛᵀ.
+    pub(super) fn factorize<T: Real>(
+        &mut self,
+        a: &[f64],
+        diag: &[f64],
+        rule: PivotRule,
+    ) -> Attempt<HalfOutcome> {
+        let values: Vec<T> = self
+            .gather
+            .iter()
+            .map(|&g| T::narrow(if g == usize::MAX { 0.0 } else { a[g] }))
+            .collect();
+        let m = self.dofs.len();
+        let sym = SymbolicSparseColMatRef::new_checked(
+            m,
+            m,
+            self.pattern.col_ptr(),
+            None,
+            self.pattern.row_idx(),
+        );
+        let mat = SparseColMatRef::new(sym, &values);
+        let l = T::slot(&mut self.l, self.symbolic.len_val())?;
+        let done = self.symbolic.factorize_numeric_ldlt(
+            l,
+            mat,
+            Side::Lower,
+            LdltRegularization::default(),
+            Par::Seq,
+            MemStack::new(&mut self.buffer),
+            Default::default(),
+        );
+        drop(values);
+        let ni = self.interior;
+        if let Err(LdltError::ZeroPivot { index }) = done {
+            if index >= ni {
+                return Ok(Err("a split half's separator block met a zero pivot"));
+            }
+            if rule.single() {
+                return Ok(Err("f32 elimination met a zero pivot"));
+            }
+            let dof = self.dofs[index];
+            return Err(SolverError::ZeroPivot {
+                equation: self.first + index,
+                dof,
+                pivot: 0.0,
+                diagonal: diag[dof].abs(),
+            });
+        }
+        let l = T::view(&self.l);
+        let d = factor_diagonal(&self.symbolic, l);
+        let negative = match negative_pivots(
+            d[..ni].iter().copied(),
+            self.first,
+            |k| self.dofs[k],
+            diag,
+            rule,
+        )? {
+            Ok(count) => count,
+            Err(reason) => return Ok(Err(reason)),
+        };
+        // S′ᵢ's own pivots are not A's; a small one only makes the rebuild inexact.
+        let floor = match rule {
+            PivotRule::Double { .. } => SEPARATOR_PIVOT_FLOOR,
+            PivotRule::Single { floor, .. } => floor.max(SEPARATOR_PIVOT_FLOOR),
+        };
+        for (k, &dk) in d.iter().enumerate().skip(ni) {
+            if crate::profile::is_zero_pivot(dk, floor, diag[self.dofs[k]].abs()) {
+                return Ok(Err("a split half's separator pivot is too small"));
+            }
+        }
+        Ok(Ok(HalfOutcome {
+            negative,
+            schur: self.trailing_schur(l, &d),
+        }))
+    }
+
+    /// S′ᵢ = Lₛₛ Dₛ Lₛₛᵀ (lower triangle, f64) from the factor's separator columns, the
+    /// product in the factor's precision.
+    fn trailing_schur<T: Real>(&self, l: &[T], d: &[f64]) -> Mat<f64> {
+        let ni = self.interior;
+        let ns = self.dofs.len() - ni;
+        let sn = self.supernodal();
+        let f = supernodal::SupernodalLdltRef::new(sn, l);
+        let zero = T::narrow(0.0);
+        // W = Lₛₛ Dₛ (lower), L = Lₛₛ.
+        let mut lss = Mat::<T>::full(ns, ns, zero);
+        for k in 0..sn.n_supernodes() {
+            let (b, e) = (sn.supernode_begin()[k], sn.supernode_end()[k]);
+            if e <= ni {
+                continue;
+            }
+            let s = f.supernode(k);
+            let val = s.val();
+            let w = e - b;
+            for c in b.max(ni)..e {
+                let col = c - b;
+                let lc = c - ni;
+                lss[(lc, lc)] = T::narrow(1.0);
+                for r in col + 1..w {
+                    lss[(b + r - ni, lc)] = val[(r, col)];
+                }
+                for (t, &row) in s.pattern().iter().enumerate() {
+                    lss[(row - ni, lc)] = val[(w + t, col)];
+                }
+            }
+        }
+        let mut wd = lss.clone();
+        for j in 0..ns {
+            let dj = d[ni + j];
+            for i in j..ns {
+                wd[(i, j)] = T::narrow(wd[(i, j)].into() * dj);
+            }
+        }
+        let mut out = Mat::<T>::full(ns, ns, zero);
+        faer::linalg::matmul::triangular::matmul(
+            out.as_mut(),
+            BlockStructure::TriangularLower,
+            Accum::Replace,
+            wd.as_ref(),
+            BlockStructure::TriangularLower,
+            lss.as_ref().transpose(),
+            BlockStructure::UnitTriangularUpper,
+            T::narrow(1.0),
+            Par::Seq,
+        );
+        Mat::from_fn(ns, ns, |i, j| out[(i, j)].into())
+    }
+
+    /// z ← D⁻¹L⁻¹z over the interior columns; the separator rows of z collect −Lₛᵢ y
+    /// (= −Aₛᵢ Aᵢᵢ⁻¹ bᵢ when z's separator rows start at zero). Per supernode: a unit lower
+    /// triangular solve and a product with the rows below (faer's dense kernels, one thread);
+    /// the supernode that straddles the interior's end column by column.
+    pub(super) fn forward<T: Real>(&self, l: &[T], z: &mut [T]) {
+        let ni = self.interior;
+        let sn = self.supernodal();
+        let f = supernodal::SupernodalLdltRef::new(sn, l);
+        let mut tmp = Vec::new();
+        for k in 0..sn.n_supernodes() {
+            let (b, e) = (sn.supernode_begin()[k], sn.supernode_end()[k]);
+            if b >= ni {
+                break;
+            }
+            let s = f.supernode(k);
+            let val = s.val();
+            let w = e - b;
+            if e <= ni {
+                let (top, bottom) = val.split_at_row(w);
+                let mut x = MatMut::from_column_major_slice_mut(&mut z[b..e], w, 1);
+                solve_unit_lower_triangular_in_place(top, x.rb_mut(), Par::Seq);
+                tmp.clear();
+                tmp.resize(bottom.nrows(), T::narrow(0.0));
+                let t = MatMut::from_column_major_slice_mut(&mut tmp, bottom.nrows(), 1);
+                matmul(t, Accum::Replace, bottom, x.rb(), T::narrow(1.0), Par::Seq);
+                for (&row, &v) in s.pattern().iter().zip(&tmp) {
+                    z[row] -= v;
+                }
+            } else {
+                for c in b..ni {
+                    let col = c - b;
+                    let y: f64 = z[c].into();
+                    let v = val.col(col);
+                    let update = |zr: &mut T, l: T| *zr = T::narrow((*zr).into() - l.into() * y);
+                    for r in col + 1..w {
+                        update(&mut z[b + r], v[r]);
+                    }
+                    for (t, &row) in s.pattern().iter().enumerate() {
+                        update(&mut z[row], v[w + t]);
+                    }
+                }
+            }
+            for c in b..e.min(ni) {
+                z[c] /= val[(c - b, c - b)];
+            }
+        }
+    }
+
+    /// z ← L⁻ᵀz over the interior columns, the separator rows of z holding xₛ (the
+    /// transposed sweep of `forward`).
+    pub(super) fn backward<T: Real>(&self, l: &[T], z: &mut [T]) {
+        let ni = self.interior;
+        let sn = self.supernodal();
+        let f = supernodal::SupernodalLdltRef::new(sn, l);
+        let mut tmp = Vec::new();
+        for k in (0..sn.n_supernodes()).rev() {
+            let (b, e) = (sn.supernode_begin()[k], sn.supernode_end()[k]);
+            if b >= ni {
+                continue;
+            }
+            let s = f.supernode(k);
+            let val = s.val();
+            let w = e - b;
+            if e <= ni {
+                let (top, bottom) = val.split_at_row(w);
+                tmp.clear();
+                tmp.extend(s.pattern().iter().map(|&row| z[row]));
+                let t = faer::MatRef::from_column_major_slice(&tmp, bottom.nrows(), 1);
+                let mut x = MatMut::from_column_major_slice_mut(&mut z[b..e], w, 1);
+                matmul(
+                    x.rb_mut(),
+                    Accum::Add,
+                    bottom.transpose(),
+                    t,
+                    T::narrow(-1.0),
+                    Par::Seq,
+                );
+                solve_unit_upper_triangular_in_place(top.transpose(), x, Par::Seq);
+            } else {
+                for c in (b..ni).rev() {
+                    let col = c - b;
+                    let v = val.col(col);
+                    let mut acc: f64 = z[c].into();
+                    for r in col + 1..w {
+                        acc -= v[r].into() * z[b + r].into();
+                    }
+                    for (t, &row) in s.pattern().iter().enumerate() {
+                        acc -= v[w + t].into() * z[row].into();
+                    }
+                    z[c] = T::narrow(acc);
+                }
+            }
+        }
+    }
+}
