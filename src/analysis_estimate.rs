@@ -144,8 +144,9 @@ pub(crate) fn resolve_accuracy(scene: &Scene) -> Result<(Scene, Option<MeshChoic
     Ok((out, Some(choice)))
 }
 
-/// The companion scene: the same scene on the mesh twice as coarse (`coarsened()` of the
-/// mesh crate), without an estimate or target of its own.
+/// The companion scene: the same scene on the companion mesh (`coarsened()` of the mesh
+/// crate: in-plane counts halved, the front's through-thickness mesh kept where it resolves
+/// the mode split), without an estimate or target of its own.
 pub(crate) fn companion_scene(scene: &Scene) -> Result<Scene, Error> {
     let mut c = scene.clone();
     c.mesh.error_estimate = Some(ErrorEstimateName::Off);
@@ -174,8 +175,9 @@ pub(crate) fn companion_scene(scene: &Scene) -> Result<Scene, Error> {
     Ok(c)
 }
 
-/// A level's front as positions along it (S over the front's length) and G.
-fn front_g(level: &LevelResult) -> (Vec<f64>, Vec<Modes>) {
+/// A level's front as positions along it (S over the front's length), G, and whether each
+/// point's faces are open.
+fn front_g(level: &LevelResult) -> (Vec<f64>, Vec<Modes>, Vec<bool>) {
     let end = level.front.last().map_or(0.0, |r| r.s_mm);
     let at = level
         .front
@@ -192,16 +194,25 @@ fn front_g(level: &LevelResult) -> (Vec<f64>, Vec<Modes>) {
             g_t: r.g_t,
         })
         .collect();
-    (at, g)
+    let open = level.front.iter().map(|r| r.is_open()).collect();
+    (at, g, open)
 }
 
 /// Fills each level's per-point errors and summary from the companion's matching level.
 fn fill_level(level: &mut LevelResult, companion: &LevelResult) -> Result<(), Error> {
-    let (at, g) = front_g(level);
-    let (cat, cg) = front_g(companion);
+    let (at, g, open) = front_g(level);
+    let (cat, cg, _) = front_g(companion);
     let est = estimate::companion(
-        FrontG { at: &at, g: &g },
-        FrontG { at: &cat, g: &cg },
+        FrontG {
+            at: &at,
+            g: &g,
+            open: Some(&open),
+        },
+        FrontG {
+            at: &cat,
+            g: &cg,
+            open: None,
+        },
         estimate::FLOOR,
     )
     .map_err(|e| Error::Scene(e.to_string()))?;

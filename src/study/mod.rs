@@ -19,6 +19,7 @@ mod write;
 pub use run::{Event, run};
 pub use write::{svg, table, write_all};
 
+use crate::scene::ErrorEstimateName;
 use crate::{Error, Scene};
 use serde::{Deserialize, Serialize};
 
@@ -145,7 +146,10 @@ impl Plan {
     }
 
     /// The scene of every case: `scene` with `[common]` and the case's tables merged in,
-    /// validated; one factorisation thread each (the cases run side by side).
+    /// validated; one factorisation thread each (the cases run side by side), and no error
+    /// estimate unless the scene, `[common.mesh]` or the case names `error_estimate` (the
+    /// study measures each case's error against its family itself; the companion mesh would
+    /// add about a tenth to every case's time, docs/ACCURACY.md §4).
     pub fn scenes(&self, scene: &Scene) -> Result<Vec<Scene>, Error> {
         let base = toml::Table::try_from(scene).map_err(|e| Error::Scene(e.to_string()))?;
         let mut common = base;
@@ -164,6 +168,8 @@ impl Plan {
                 s.validate()
                     .map_err(|e| Error::Scene(format!("case '{}': {e}", c.name)))?;
                 s.analysis.threads = 1;
+                s.mesh.error_estimate =
+                    Some(s.mesh.error_estimate.unwrap_or(ErrorEstimateName::Off));
                 Ok(s)
             })
             .collect()

@@ -4,7 +4,7 @@
 #![allow(clippy::unwrap_used)]
 
 use super::*;
-use crate::scene::{CrackFacesName, NewtonName};
+use crate::scene::{CrackFacesName, ErrorEstimateName, NewtonName};
 
 const PLAN: &str = r#"
 [common.loads]
@@ -58,6 +58,43 @@ fn knobs_merge_into_the_scene_field_by_field_case_over_common() {
     assert_eq!(
         describe(&plan.cases[1].knobs),
         r#"analysis.newton="bfgs" contact.crack_faces="on""#
+    );
+}
+
+#[test]
+fn study_cases_skip_the_error_estimate_unless_asked() {
+    // The scene as `nonlin3d run` reads it names no estimate (the run's default is the
+    // companion); the study's cases run without it, except a case or [common.mesh] that asks.
+    let base = Scene::thesis_reference().unwrap();
+    assert_eq!(base.mesh.error_estimate, None);
+    let plan = Plan::from_toml(
+        "[[case]]\nname = \"plain\"\n\n[[case]]\nname = \"asks\"\n\
+         mesh = { error_estimate = \"companion\" }\n",
+    )
+    .unwrap();
+    let scenes = plan.scenes(&base).unwrap();
+    assert_eq!(scenes[0].mesh.error_estimate, Some(ErrorEstimateName::Off));
+    assert_eq!(
+        scenes[1].mesh.error_estimate,
+        Some(ErrorEstimateName::Companion)
+    );
+    // A scene that names the estimate itself keeps it in every case.
+    let mut named = base.clone();
+    named.mesh.error_estimate = Some(ErrorEstimateName::Companion);
+    let scenes = plan.scenes(&named).unwrap();
+    assert_eq!(
+        scenes[0].mesh.error_estimate,
+        Some(ErrorEstimateName::Companion)
+    );
+    // [common.mesh] for every case.
+    let common = Plan::from_toml(
+        "[common.mesh]\nerror_estimate = \"companion\"\n\n[[case]]\nname = \"a\"\n",
+    )
+    .unwrap();
+    let scenes = common.scenes(&base).unwrap();
+    assert_eq!(
+        scenes[0].mesh.error_estimate,
+        Some(ErrorEstimateName::Companion)
     );
 }
 
