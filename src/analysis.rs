@@ -102,12 +102,17 @@ pub fn run(
     progress: &mut dyn FnMut(Progress) -> Result<(), Error>,
 ) -> Result<Results, Error> {
     // `[mesh] accuracy` turned into knobs before anything is sized.
-    let (resolved, choice) = estimate::resolve_accuracy(scene)?;
-    let scene = &resolved;
+    let (mut resolved, choice) = estimate::resolve_accuracy(scene)?;
     // The whole run (tangent and factor too) estimated before meshing.
-    crate::budget::check_scene(scene, &crate::budget::limit())?;
+    crate::budget::check_scene(&resolved, &crate::budget::limit())?;
     let t0 = Instant::now();
-    let model = build_model(scene)?;
+    let model = build_model(&resolved)?;
+    // All cores (threads = 0) on a small model: one thread factorises (the bits do not
+    // depend on it).
+    if resolved.analysis.threads == 0 && 3 * model.mesh.nodes.len() < ONE_THREAD_BELOW_DOFS {
+        resolved.analysis.threads = 1;
+    }
+    let scene = &resolved;
     let t_mesh = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
     // With `[substructure]` Newton solves the nonlinear sub-mesh and its superelement.
@@ -170,6 +175,12 @@ pub fn run(
     results.warnings.extend(results.stability_warnings());
     Ok(results)
 }
+
+/// Below this many DOF a run asked for all cores (`threads = 0`, `--threads` not given)
+/// factorises on one thread: on the 2-vCPU machine, shared (load average 10), two threads took
+/// 1.16× the wall time of one at 6 789 DOF and 1.20× at 9 849 (1.6–1.8× the CPU), and at
+/// 12.6 k DOF on a quieter machine they gained nothing (docs/PERFORMANCE.md).
+pub const ONE_THREAD_BELOW_DOFS: usize = 15_000;
 
 /// What the sweep over the levels gives [`run`].
 struct Sweep {

@@ -394,3 +394,17 @@ fn modified_newton_reaches_full_newtons_levels() {
         }
     }
 }
+
+/// A run asked for all cores (`threads = 0`) on a model below
+/// `analysis::ONE_THREAD_BELOW_DOFS` factorises on one thread (and says so); one that names
+/// its threads keeps them.
+#[test]
+fn a_small_model_factorises_on_one_thread_unless_told() {
+    let mut s = scene(&[-0.001], CrackFacesName::Off);
+    s.analysis.threads = 0;
+    let r = run(&s);
+    assert!(r.model.dofs < nonlin3d::analysis::ONE_THREAD_BELOW_DOFS);
+    assert_eq!(r.timings.threads, 1);
+    s.analysis.threads = 2;
+    assert_eq!(run(&s).timings.threads, 2);
+}
