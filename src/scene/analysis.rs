@@ -37,7 +37,9 @@ pub enum NewtonName {
     /// Modified Newton–Raphson (the default): K_T factorised at each increment's start and
     /// then every `refactor_every` iterations, or after an iteration that did not halve ‖r‖∞;
     /// the same converged states as `full` to the residual tolerance, in about 0.6 of its
-    /// factorisations (docs/PERFORMANCE.md, "Modified Newton by default").
+    /// factorisations. The levels up to the one that takes the §3.2 perturbation are solved
+    /// with full Newton (the branch is picked there; docs/PERFORMANCE.md, "Modified Newton by
+    /// default").
     #[default]
     Modified,
     /// Quasi-Newton: BFGS updates (20 pairs) of a factorised tangent kept across increments,
