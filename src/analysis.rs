@@ -13,15 +13,15 @@ use crate::{Error, results::*};
 use nonlin3d_element::Kinematics;
 use nonlin3d_mesh::names::{CENTER_TOP, CRACK_LOWER, CRACK_UPPER};
 pub use nonlin3d_newton::solve_level;
-use nonlin3d_newton::{
-    ArcLength, IncrementReport, LevelReport, NewtonSettings, PathSolver, SignRule, Stepping,
-    StructuralProblem, solve_level_arc,
-};
-use nonlin3d_vcct::{FrontRelease, cells_above, release_rates, respect_contact};
+use nonlin3d_newton::{ArcLength, PathSolver, SignRule, StructuralProblem};
+use nonlin3d_vcct::{FrontRelease, cells_above, release_rates};
 use std::time::Instant;
 
 #[path = "analysis_estimate.rs"]
 pub(crate) mod estimate;
+#[path = "analysis_level.rs"]
+mod level;
+use level::{Solved, Strategy, engage_contact, record_level, solve_arc, solve_in_steps};
 
 /// G along the front at state `u`.
 pub fn front_table(
@@ -102,12 +102,17 @@ pub fn run(
     progress: &mut dyn FnMut(Progress) -> Result<(), Error>,
 ) -> Result<Results, Error> {
     // `[mesh] accuracy` turned into knobs before anything is sized.
-    let (resolved, choice) = estimate::resolve_accuracy(scene)?;
-    let scene = &resolved;
+    let (mut resolved, choice) = estimate::resolve_accuracy(scene)?;
     // The whole run (tangent and factor too) estimated before meshing.
-    crate::budget::check_scene(scene, &crate::budget::limit())?;
+    crate::budget::check_scene(&resolved, &crate::budget::limit())?;
     let t0 = Instant::now();
-    let model = build_model(scene)?;
+    let model = build_model(&resolved)?;
+    // All cores (threads = 0) on a small model: one thread factorises (the bits do not
+    // depend on it).
+    if resolved.analysis.threads == 0 && 3 * model.mesh.nodes.len() < ONE_THREAD_BELOW_DOFS {
+        resolved.analysis.threads = 1;
+    }
+    let scene = &resolved;
     let t_mesh = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
     // With `[substructure]` Newton solves the nonlinear sub-mesh and its superelement.
@@ -171,6 +176,12 @@ pub fn run(
     Ok(results)
 }
 
+/// Below this many DOF a run asked for all cores (`threads = 0`, `--threads` not given)
+/// factorises on one thread: on the 2-vCPU machine, shared (load average 10), two threads took
+/// 1.16× the wall time of one at 6 789 DOF and 1.20× at 9 849 (1.6–1.8× the CPU), and at
+/// 12.6 k DOF on a quieter machine they gained nothing (docs/PERFORMANCE.md).
+pub const ONE_THREAD_BELOW_DOFS: usize = 15_000;
+
 /// What the sweep over the levels gives [`run`].
 struct Sweep {
     /// One record per level, in order.
@@ -202,7 +213,7 @@ fn sweep(
     } else {
         &scene.loads.strains
     };
-    let (newton, stepping) = settings(scene);
+    let (strategy, stepping) = Strategy::of(scene);
     // The force is looked up (and its node set needed) only when one is wanted.
     let force = if plate {
         0.0
@@ -216,7 +227,7 @@ fn sweep(
     let mut u = vec![0.0; problem.assembler().n()];
     // One solver for every level: analysed once; with BFGS each level starts from the
     // factorisation its predecessor's stability test left.
-    let mut session = PathSolver::new(problem, newton.solver)?;
+    let mut session = PathSolver::new(problem, strategy.solver())?;
     let mut out = Sweep {
         levels: Vec::with_capacity(factors.len()),
         force,
@@ -245,6 +256,7 @@ fn sweep(
         } else {
             &[]
         };
+        let newton = strategy.level(!pert.is_empty());
         let level_error = |e: Error| Error::Level {
             index: k,
             quantity: if plate { "load" } else { "strain" },
@@ -270,123 +282,64 @@ fn sweep(
         let mut solved = Solved::default();
         if !stage.active() {
             solved = match &arc {
-                Some(arc) => solve_level_arc(
+                Some(arc) => solve_arc(
                     problem,
                     &mut u,
-                    from,
-                    lambda,
+                    (from, lambda),
                     pert,
-                    &newton,
-                    arc,
-                    &stepping,
+                    (newton, arc, &stepping),
                     &mut session,
                 )
-                .map(|l| Solved {
-                    attempts: l.attempts,
-                    perturbed: l.perturbed,
-                    pivots: l.negative_pivots,
-                    fallback: false,
-                })
-                .map_err(|e| level_error(e.into()))?,
+                .map_err(level_error)?,
                 // `auto`: in the contact loop's steps, up to the first that overlaps
                 // (src/contact.rs).
                 None => {
-                    let mut all = Solved::default();
-                    let mut at = from;
-                    for end in stage.plain_steps(from, lambda) {
-                        start.clone_from(&u);
-                        step = (at, end);
-                        let offered = if all.perturbed { &[][..] } else { pert };
-                        let s = solve_or_redo(
-                            &mut inward,
-                            problem,
-                            &mut u,
-                            step,
-                            offered,
-                            (&newton, &stepping),
-                            &mut session,
-                        )
-                        .map_err(level_error)?;
-                        all.attempts.extend(s.attempts);
-                        all.perturbed |= s.perturbed;
-                        all.pivots = s.pivots;
-                        all.fallback |= s.fallback;
-                        at = end;
-                        if end != lambda && stage.overlaps(model, &u) {
-                            break;
-                        }
-                    }
+                    let (all, last_start, last) = solve_in_steps(
+                        &stage,
+                        model,
+                        &mut inward,
+                        problem,
+                        &mut u,
+                        (from, lambda),
+                        pert,
+                        (newton, &stepping),
+                        &mut session,
+                    )
+                    .map_err(level_error)?;
+                    (start, step) = (last_start, last);
                     all
                 }
             };
         }
         // (Contact and substructuring together are refused by the scene checks: the contact
         // stage works on the full model's DOFs.)
-        let mut contact = None;
-        if stage.active() || stage.overlaps(model, &u) {
-            // `auto` engaging here continues from the overlapping state (src/contact.rs).
-            let plain = (!stage.active()).then(|| {
-                let first = LevelReport {
-                    attempts: Vec::new(),
-                    perturbed: solved.perturbed,
-                    negative_pivots: solved.pivots,
-                };
-                (first, t.elapsed().as_secs_f64())
-            });
-            let (level, summary) = stage
-                .solve(
-                    scene,
-                    model,
-                    &mut u,
-                    (&start, step.0, step.1, lambda),
-                    pert,
-                    plain,
-                    (&newton, &stepping),
-                )
-                .map_err(level_error)?;
-            solved.attempts.extend(level.first.attempts);
-            solved.perturbed = level.first.perturbed;
-            solved.pivots = level.first.negative_pivots;
-            // With BFGS the contact loop runs with full Newton (src/contact.rs).
-            solved.fallback |= newton.keep_tangent;
-            contact = Some(summary);
-        }
+        let contact = engage_contact(
+            &mut stage,
+            scene,
+            model,
+            &mut u,
+            (&start, step, lambda),
+            pert,
+            (newton, &stepping),
+            (&mut solved, t),
+        )
+        .map_err(level_error)?;
         if solved.perturbed {
             out.perturbed_at = Some(value);
         }
         out.solve_s += t.elapsed().as_secs_f64();
-        let t = Instant::now();
-        let (mut front, full) = match sub.as_deref_mut() {
-            Some(s) => {
-                let full = s.recover(&u, lambda)?;
-                (s.front_table(scene, model, &full)?, full)
-            }
-            None => (front_table(scene, model, problem, &u)?, u.clone()),
-        };
-        let closed = stage.closed_upper(model);
-        let states = respect_contact(&mut front, &model.front, |a, _| closed.contains(&a));
-        out.vcct_s += t.elapsed().as_secs_f64();
-        let (centre, peak) = deflections(model, &full);
-        if !plate && !stage.enabled() && peak < -0.01 * model.h {
-            return Err(Error::BuckledIntoBase {
-                index: k,
-                strain: value,
-                separation_mm: peak * 1e3,
-            });
-        }
-        let mut level = LevelResult::new(value, centre, peak, &solved.attempts, &front, full);
-        level.set_face_states(&states);
-        level.contact = contact;
-        level.set_negative_pivots(solved.pivots);
-        level.convergence.full_newton_fallback = solved.fallback;
-        level.convergence.bifurcation = solved.attempts.iter().find_map(|a| {
-            a.bifurcation.map(|b| Crossing {
-                from: b.from * reference,
-                to: a.lambda * reference,
-                negative_pivots_before: b.before,
-                negative_pivots_after: b.after,
-            })
-        });
+        let (level, vcct_s) = record_level(
+            scene,
+            model,
+            problem,
+            sub.as_deref_mut(),
+            &stage,
+            (&u, lambda),
+            (k, value, reference),
+            solved,
+            contact,
+        )?;
+        out.vcct_s += vcct_s;
         progress(Progress::Level {
             index: k,
             value,
@@ -413,62 +366,6 @@ pub fn arc_length(scene: &Scene) -> Option<ArcLength> {
         max_increments: a.max_attempts.max(1),
         sign: SignRule::Combined,
         ..ArcLength::default()
-    })
-}
-
-/// One level as [`solve_level`] left it.
-#[derive(Default)]
-struct Solved {
-    /// Every increment tried.
-    attempts: Vec<IncrementReport>,
-    /// Whether the perturbation was applied.
-    perturbed: bool,
-    /// Negative pivots of the tangent at the converged state.
-    pivots: Option<usize>,
-    /// Whether full Newton redid the level after BFGS.
-    fallback: bool,
-}
-
-/// One level from `from` to `to` by [`solve_level`]; with a kept tangent (BFGS) redone by full
-/// Newton from the same start if BFGS fails or lands on the branch buckled into the base
-/// (`inward` of the converged state; always false with contact `auto`/`on`).
-fn solve_or_redo(
-    inward: &mut dyn FnMut(&[f64]) -> bool,
-    problem: &mut StructuralProblem,
-    u: &mut Vec<f64>,
-    (from, lambda): (f64, f64),
-    pert: &[(usize, f64)],
-    (newton, stepping): (&NewtonSettings, &Stepping),
-    session: &mut PathSolver,
-) -> Result<Solved, Error> {
-    let start = u.clone();
-    let first = solve_level(problem, u, from, lambda, pert, newton, stepping, session)
-        .map(|l| (l.attempts, l.perturbed, l.negative_pivots));
-    // BFGS's early directions come from an older tangent and can carry the sublaminate
-    // across to the branch buckled into the base (seen on the reference scene at −0.003);
-    // full Newton follows the outward branch, so the level is redone with it — also when
-    // BFGS does not converge at all.
-    let redo = newton.keep_tangent && first.as_ref().map_or(true, |_| inward(u));
-    let (mut attempts, mut perturbed, mut pivots) = match first {
-        Err(_) if redo => (Vec::new(), false, None),
-        r => r?,
-    };
-    if redo {
-        *u = start;
-        let full = NewtonSettings {
-            solver: newton.solver,
-            force_tolerance: newton.force_tolerance,
-            ..NewtonSettings::default()
-        };
-        let level = solve_level(problem, u, from, lambda, pert, &full, stepping, session)?;
-        attempts.extend(level.attempts);
-        (perturbed, pivots) = (level.perturbed, level.negative_pivots);
-    }
-    Ok(Solved {
-        attempts,
-        perturbed,
-        pivots,
-        fallback: redo,
     })
 }
 

@@ -354,3 +354,57 @@ fn faces_that_touch_without_force_do_not_make_a_buckled_state_stable() {
         r.stability_warnings()
     );
 }
+
+/// Modified Newton (the default) against full Newton on the contact sweep: the same negative
+/// pivots, bifurcation bracket and closed pairs at every level, and G
+/// within 1e-6 of the level's G_T max at every point and mode. Both states are converged to
+/// ‖r‖∞ ≤ 1e-8·F; G is a product of nodal forces and openings, each off by about that
+/// tolerance relative, so the two differ by a few 1e-8 (measured 6.6e-8 on the 8-slice
+/// scene); 1e-6 leaves room for the flat branch just past a bifurcation, where a residual
+/// moves the state most (4.4e-6 on the through-width scene, docs/PERFORMANCE.md).
+#[test]
+fn modified_newton_reaches_full_newtons_levels() {
+    use nonlin3d::scene::NewtonName;
+    let modified = scene(&SWEEP, CrackFacesName::Auto);
+    assert_eq!(modified.analysis.newton, NewtonName::Modified);
+    let mut full = modified.clone();
+    full.analysis.newton = NewtonName::Full;
+    let (m, f) = (run(&modified), run(&full));
+    for (a, b) in m.levels.iter().zip(&f.levels) {
+        assert_eq!(a.convergence.negative_pivots, b.convergence.negative_pivots);
+        assert_eq!(a.convergence.bifurcation, b.convergence.bifurcation);
+        let closed =
+            |r: &nonlin3d::results::LevelResult| r.contact.as_ref().map(|c| c.pairs_closed);
+        assert_eq!(closed(a), closed(b), "level {}", a.value);
+        let g_max = b.front.iter().fold(0.0_f64, |m, r| m.max(r.g_t.abs()));
+        for (p, q) in a.front.iter().zip(&b.front) {
+            assert_eq!(p.faces, q.faces);
+            for (x, y) in [
+                (p.g_i, q.g_i),
+                (p.g_ii, q.g_ii),
+                (p.g_iii, q.g_iii),
+                (p.g_t, q.g_t),
+            ] {
+                assert!(
+                    (x - y).abs() <= 1e-6 * g_max.max(1e-12),
+                    "level {}: {x} {y}",
+                    a.value
+                );
+            }
+        }
+    }
+}
+
+/// A run asked for all cores (`threads = 0`) on a model below
+/// `analysis::ONE_THREAD_BELOW_DOFS` factorises on one thread (and says so); one that names
+/// its threads keeps them.
+#[test]
+fn a_small_model_factorises_on_one_thread_unless_told() {
+    let mut s = scene(&[-0.001], CrackFacesName::Off);
+    s.analysis.threads = 0;
+    let r = run(&s);
+    assert!(r.model.dofs < nonlin3d::analysis::ONE_THREAD_BELOW_DOFS);
+    assert_eq!(r.timings.threads, 1);
+    s.analysis.threads = 2;
+    assert_eq!(run(&s).timings.threads, 2);
+}
