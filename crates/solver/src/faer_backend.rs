@@ -59,17 +59,17 @@ pub enum FaerOrdering {
     Metis,
     /// The candidates' symbolic factors compared by flops (Σ c_k² over the column counts),
     /// the fewest kept (ties: AMD, then nested dissection, then METIS). The default. Below
-    /// [`AUTO_METIS_ONLY_DOFS`] DOFs the candidates are AMD, nested dissection and METIS; at
-    /// and above it METIS alone (it needed the fewest flops on every 3-D model measured from
-    /// 10 k DOF up, docs/PERFORMANCE.md), unless METIS fails, when AMD and nested dissection
-    /// are compared.
+    /// [`AUTO_WITHOUT_AMD_DOFS`] DOFs the candidates are AMD, nested dissection and METIS; at
+    /// and above it nested dissection and METIS (AMD needed 1.6–6× the best one's flops on
+    /// every model measured from 10 k DOF up, and its large symbolic factor is the costliest
+    /// analysis there; neither nested dissection nor METIS was always the better:
+    /// docs/PERFORMANCE.md). A METIS failure only removes it from the comparison.
     #[default]
     Auto,
 }
 
-/// From this many DOFs on, [`FaerOrdering::Auto`] runs METIS alone instead of comparing it
-/// with AMD and nested dissection (each candidate's analysis costs about one ordering).
-pub const AUTO_METIS_ONLY_DOFS: usize = 200_000;
+/// From this many DOFs on, [`FaerOrdering::Auto`] leaves AMD out of its comparison.
+pub const AUTO_WITHOUT_AMD_DOFS: usize = 200_000;
 
 /// Whether [`FaerSolver`]'s LDLᵀ splits the matrix at the nested-dissection order's top
 /// separator and factors the two halves on two threads (tree-level parallelism, `split.rs`).
@@ -240,7 +240,7 @@ fn pivot_position(simplicial: bool, index: usize) -> usize {
 /// A symbolic factor, or why it could not be made.
 type SymbolicResult = Result<SymbolicCholesky<usize>, SolverError>;
 
-/// [`FaerOrdering::Auto`]'s comparison: AMD, nested dissection and (if given) METIS, the
+/// [`FaerOrdering::Auto`]'s comparison: AMD (if `with_amd`), nested dissection and METIS, the
 /// symbolic factor with the fewest flops kept, earlier candidates winning ties. One symbolic
 /// factor is kept alive beside the one being made: a loser's structure is dropped at once
 /// (AMD's is rebuilt from its order if it wins). A METIS failure only removes METIS from the
@@ -248,17 +248,21 @@ type SymbolicResult = Result<SymbolicCholesky<usize>, SolverError>;
 fn auto_choice(
     symbolic_for: &dyn Fn(SymmetricOrdering<'_, usize>) -> SymbolicResult,
     nested: &dyn Fn() -> SymbolicResult,
-    metis: Option<&dyn Fn() -> SymbolicResult>,
+    metis: &dyn Fn() -> SymbolicResult,
+    with_amd: bool,
     n: usize,
 ) -> Result<(SymbolicCholesky<usize>, FaerOrdering), SolverError> {
-    let amd = symbolic_for(SymmetricOrdering::Amd)?;
-    let amd_flops = factor_flops(&amd);
-    let amd_perm: Option<(Vec<usize>, Vec<usize>)> = amd
-        .perm()
-        .map(|p| (p.arrays().0.to_vec(), p.arrays().1.to_vec()));
-    drop(amd);
+    let mut best_flops = f64::INFINITY;
+    let mut amd_perm: Option<Option<(Vec<usize>, Vec<usize>)>> = None;
+    if with_amd {
+        let amd = symbolic_for(SymmetricOrdering::Amd)?;
+        best_flops = factor_flops(&amd);
+        amd_perm = Some(
+            amd.perm()
+                .map(|p| (p.arrays().0.to_vec(), p.arrays().1.to_vec())),
+        );
+    }
     let mut best: Option<(SymbolicCholesky<usize>, FaerOrdering)> = None;
-    let mut best_flops = amd_flops;
     let nd = nested()?;
     if factor_flops(&nd) < best_flops {
         best_flops = factor_flops(&nd);
@@ -266,22 +270,25 @@ fn auto_choice(
     } else {
         drop(nd);
     }
-    if let Some(Ok(m)) = metis.map(|f| f()) {
+    if let Ok(m) = metis() {
         if factor_flops(&m) < best_flops {
             best = Some((m, FaerOrdering::Metis));
         }
     }
-    match best {
-        Some(b) => Ok(b),
-        None => {
-            let again = match &amd_perm {
-                Some((fwd, inv)) => symbolic_for(SymmetricOrdering::Custom(
-                    faer::perm::PermRef::new_checked(fwd, inv, n),
-                ))?,
-                None => symbolic_for(SymmetricOrdering::Identity)?,
-            };
-            Ok((again, FaerOrdering::Amd))
-        }
+    match (best, amd_perm) {
+        (Some(b), _) => Ok(b),
+        (None, Some(Some((fwd, inv)))) => Ok((
+            symbolic_for(SymmetricOrdering::Custom(faer::perm::PermRef::new_checked(
+                &fwd, &inv, n,
+            )))?,
+            FaerOrdering::Amd,
+        )),
+        // AMD won with no permutation (faer's identity) — or nothing was compared, which
+        // cannot happen: nested dissection always gives a factor or an error.
+        (None, _) => Ok((
+            symbolic_for(SymmetricOrdering::Identity)?,
+            FaerOrdering::Amd,
+        )),
     }
 }
 
@@ -355,13 +362,7 @@ impl LinearSolver for FaerSolver {
             FaerOrdering::NestedDissection => (nested()?, FaerOrdering::NestedDissection),
             FaerOrdering::Metis => (metis()?, FaerOrdering::Metis),
             FaerOrdering::Auto => {
-                let metis_only = n >= AUTO_METIS_ONLY_DOFS;
-                match metis_only.then(metis) {
-                    Some(Ok(m)) => (m, FaerOrdering::Metis),
-                    // METIS failed above the threshold: compare the other two.
-                    Some(Err(_)) => auto_choice(&symbolic_for, &nested, None, n)?,
-                    None => auto_choice(&symbolic_for, &nested, Some(&metis), n)?,
-                }
+                auto_choice(&symbolic_for, &nested, &metis, n < AUTO_WITHOUT_AMD_DOFS, n)?
             }
         };
         let req = match self.mode {

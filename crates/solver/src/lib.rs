@@ -46,7 +46,7 @@ mod solver;
 pub use budget::{MemoryBudget, set_memory_budget};
 pub use error::SolverError;
 pub use faer_backend::{
-    AUTO_METIS_ONLY_DOFS, FaerMode, FaerOrdering, FaerPrecision, FaerSolver, FaerSplit,
+    AUTO_WITHOUT_AMD_DOFS, FaerMode, FaerOrdering, FaerPrecision, FaerSolver, FaerSplit,
     FaerStructure, MixedStats,
 };
 pub use matrix::SymmetricMatrix;
