@@ -270,10 +270,10 @@ fn auto_choice(
     } else {
         drop(nd);
     }
-    if let Ok(m) = metis() {
-        if factor_flops(&m) < best_flops {
-            best = Some((m, FaerOrdering::Metis));
-        }
+    if let Ok(m) = metis()
+        && factor_flops(&m) < best_flops
+    {
+        best = Some((m, FaerOrdering::Metis));
     }
     match (best, amd_perm) {
         (Some(b), _) => Ok(b),
