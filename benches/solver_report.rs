@@ -10,7 +10,10 @@
 //! out the profile solver, `-- noamd` to leave out faer with AMD, `-- mixed` to add faer ND
 //! with an f32 factor refined in f64, `-- split` to add faer ND split at the top separator
 //! (`FaerSplit::Halves`, halves on two threads), `-- splitmixed` to add the split with f32
-//! halves refined in f64, `-- rounds=N` to run every solver of a case N times in
+//! halves refined in f64, `-- metis` to add faer with METIS's order,
+//! `-- auto` to add faer with `FaerOrdering::Auto` (its symbolic time is every candidate's
+//! analysis, its label the order chosen), `-- nond` to leave out faer with our nested
+//! dissection, `-- rounds=N` to run every solver of a case N times in
 //! turn, so that ratios between solvers come from neighbouring runs on a busy machine).
 //! The last column is the normwise backward error ‖b − A x‖∞ / (‖A‖∞‖x‖∞ + ‖b‖∞) of the
 //! solve.
@@ -308,8 +311,14 @@ fn main() {
         for (ordering, name) in [
             (FaerOrdering::Amd, "AMD"),
             (FaerOrdering::NestedDissection, "ND"),
+            (FaerOrdering::Metis, "METIS"),
         ] {
-            if ordering == FaerOrdering::Amd && has("noamd") {
+            let skip = match ordering {
+                FaerOrdering::Amd => has("noamd"),
+                FaerOrdering::NestedDissection => has("nond"),
+                _ => !has("metis"),
+            };
+            if skip {
                 continue;
             }
             for threads in [1, 2] {
@@ -389,10 +398,24 @@ fn main() {
                 );
             }
         }
+        // `Auto` on 2 threads, kept apart to name the order it chose.
+        let mut autos: Vec<(FaerSolver, String)> = Vec::new();
+        if has("auto") {
+            autos.push((
+                FaerSolver::new(FaerMode::Ldlt).with_threads(2),
+                "faer LDLᵀ Auto, 2 threads".into(),
+            ));
+        }
         for _ in 0..rounds {
             let mut rows = Vec::new();
             for (s, label) in &mut solvers {
                 rows.extend(run(case, &k, s.as_mut(), label.clone()));
+            }
+            for (s, label) in &mut autos {
+                if let Some(mut r) = run(case, &k, s, label.clone()) {
+                    r.solver += &format!(" (chose {:?})", s.chosen_ordering());
+                    rows.push(r);
+                }
             }
             for (s, label) in &mut faers {
                 if let Some(mut r) = run(case, &k, s, label.clone()) {

@@ -43,7 +43,7 @@ pub fn peak_memory_bytes() -> Option<u64> {
 
 /// The solver's name and its ordering, in words.
 pub fn solver_names(kind: SolverKind) -> (String, String) {
-    const AUTO: &str = "AMD or nested dissection, whichever needs fewer flops";
+    const AUTO: &str = "AMD, nested dissection or METIS, whichever needs the fewest flops";
     match kind {
         SolverKind::Profile => ("profile LDLᵀ".into(), "reverse Cuthill–McKee".into()),
         SolverKind::FaerLdlt => ("faer LDLᵀ".into(), AUTO.into()),

@@ -118,7 +118,7 @@ pub struct AnalysisOptions {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "kebab-case")]
 pub enum SolverName {
-    /// faer's supernodal/simplicial LDLᵀ with AMD or nested-dissection ordering (`FaerOrdering::Auto`: whichever needs fewer flops).
+    /// faer's supernodal/simplicial LDLᵀ with AMD, nested-dissection or METIS ordering (`FaerOrdering::Auto`: whichever needs the fewest flops).
     #[default]
     Faer,
     /// The thesis's profile (skyline) LDLᵀ with RCM ordering.

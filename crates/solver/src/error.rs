@@ -121,4 +121,7 @@ pub enum SolverError {
     /// faer reported a failure outside the cases above.
     #[error("faer: {0}")]
     Faer(String),
+    /// METIS failed (other than out of memory).
+    #[error("METIS: {0}")]
+    Metis(String),
 }

@@ -1,5 +1,5 @@
 //! faer's sparse Cholesky (supernodal or simplicial, chosen by faer from the flop count) with
-//! AMD or nested-dissection ordering (by default the one needing fewer flops): LLᵀ for positive definite matrices, LDLᵀ for symmetric indefinite ones.
+//! AMD, nested-dissection or METIS ordering (by default the one needing the fewest flops): LLᵀ for positive definite matrices, LDLᵀ for symmetric indefinite ones.
 //! Symbolic analysis once per pattern, numeric factorisation many times.
 
 use crate::budget::{MemoryBudget, Need, current_budget, try_zeros};
@@ -56,13 +56,21 @@ pub enum FaerOrdering {
     Amd,
     /// Nested dissection on the node graph ([`crate::nested_dissection`]).
     NestedDissection,
-    /// Both, keeping the one whose symbolic factor needs fewer flops (AMD on ties): the two
-    /// symbolic analyses cost a few per cent of one numeric factorisation. The default:
-    /// nested dissection needs 0.29 of AMD's flops on a 45 k-DOF Hex20 cube, 0.58 on a
-    /// through-width model, 0.70 on the 10 k-DOF plate (docs/PERFORMANCE.md).
+    /// METIS's nested dissection on the node graph ([`crate::metis_nested_dissection`]).
+    Metis,
+    /// The candidates' symbolic factors compared by flops (Σ c_k² over the column counts),
+    /// the fewest kept (ties: AMD, then nested dissection, then METIS). The default. Below
+    /// [`AUTO_WITHOUT_AMD_DOFS`] DOFs the candidates are AMD, nested dissection and METIS; at
+    /// and above it nested dissection and METIS (AMD needed 1.6–6× the best one's flops on
+    /// every model measured from 10 k DOF up, and its large symbolic factor is the costliest
+    /// analysis there; neither nested dissection nor METIS was always the better:
+    /// docs/PERFORMANCE.md). A METIS failure only removes it from the comparison.
     #[default]
     Auto,
 }
+
+/// From this many DOFs on, [`FaerOrdering::Auto`] leaves AMD out of its comparison.
+pub const AUTO_WITHOUT_AMD_DOFS: usize = 200_000;
 
 /// Whether [`FaerSolver`]'s LDLᵀ splits the matrix at the nested-dissection order's top
 /// separator and factors the two halves on two threads (tree-level parallelism, `split.rs`).
@@ -180,7 +188,7 @@ impl FaerSolver {
         self
     }
 
-    /// The ordering the last analysis used (`Amd` or `NestedDissection`; `None` before
+    /// The ordering the last analysis used (`Amd`, `NestedDissection` or `Metis`; `None` before
     /// `analyze`).
     pub fn chosen_ordering(&self) -> Option<FaerOrdering> {
         self.chosen
@@ -229,6 +237,61 @@ fn pivot_position(simplicial: bool, index: usize) -> usize {
         index.saturating_sub(1)
     } else {
         index
+    }
+}
+
+/// A symbolic factor, or why it could not be made.
+type SymbolicResult = Result<SymbolicCholesky<usize>, SolverError>;
+
+/// [`FaerOrdering::Auto`]'s comparison: AMD (if `with_amd`), nested dissection and METIS, the
+/// symbolic factor with the fewest flops kept, earlier candidates winning ties. One symbolic
+/// factor is kept alive beside the one being made: a loser's structure is dropped at once
+/// (AMD's is rebuilt from its order if it wins). A METIS failure only removes METIS from the
+/// comparison.
+fn auto_choice(
+    symbolic_for: &dyn Fn(SymmetricOrdering<'_, usize>) -> SymbolicResult,
+    nested: &dyn Fn() -> SymbolicResult,
+    metis: &dyn Fn() -> SymbolicResult,
+    with_amd: bool,
+    n: usize,
+) -> Result<(SymbolicCholesky<usize>, FaerOrdering), SolverError> {
+    let mut best_flops = f64::INFINITY;
+    let mut amd_perm: Option<Option<(Vec<usize>, Vec<usize>)>> = None;
+    if with_amd {
+        let amd = symbolic_for(SymmetricOrdering::Amd)?;
+        best_flops = factor_flops(&amd);
+        amd_perm = Some(
+            amd.perm()
+                .map(|p| (p.arrays().0.to_vec(), p.arrays().1.to_vec())),
+        );
+    }
+    let mut best: Option<(SymbolicCholesky<usize>, FaerOrdering)> = None;
+    let nd = nested()?;
+    if factor_flops(&nd) < best_flops {
+        best_flops = factor_flops(&nd);
+        best = Some((nd, FaerOrdering::NestedDissection));
+    } else {
+        drop(nd);
+    }
+    if let Ok(m) = metis()
+        && factor_flops(&m) < best_flops
+    {
+        best = Some((m, FaerOrdering::Metis));
+    }
+    match (best, amd_perm) {
+        (Some(b), _) => Ok(b),
+        (None, Some(Some((fwd, inv)))) => Ok((
+            symbolic_for(SymmetricOrdering::Custom(faer::perm::PermRef::new_checked(
+                &fwd, &inv, n,
+            )))?,
+            FaerOrdering::Amd,
+        )),
+        // AMD won with no permutation (faer's identity) — or nothing was compared, which
+        // cannot happen: nested dissection always gives a factor or an error.
+        (None, _) => Ok((
+            symbolic_for(SymmetricOrdering::Identity)?,
+            FaerOrdering::Amd,
+        )),
     }
 }
 
@@ -292,31 +355,17 @@ impl LinearSolver for FaerSolver {
             top.set(sides.map(|s| (perm.forward().to_vec(), s)));
             symbolic_for(SymmetricOrdering::Custom(p))
         };
+        let metis = || {
+            let perm = crate::metis_nested_dissection(pattern)?;
+            let p = faer::perm::PermRef::new_checked(perm.forward(), perm.inverse(), n);
+            symbolic_for(SymmetricOrdering::Custom(p))
+        };
         let (symbolic, chosen) = match self.ordering {
             FaerOrdering::Amd => (symbolic_for(SymmetricOrdering::Amd)?, FaerOrdering::Amd),
             FaerOrdering::NestedDissection => (nested()?, FaerOrdering::NestedDissection),
+            FaerOrdering::Metis => (metis()?, FaerOrdering::Metis),
             FaerOrdering::Auto => {
-                // One symbolic factor alive at a time: AMD's flops and order are kept, its
-                // structure dropped before nested dissection runs, rebuilt if AMD wins.
-                let amd = symbolic_for(SymmetricOrdering::Amd)?;
-                let amd_flops = factor_flops(&amd);
-                let amd_perm: Option<(Vec<usize>, Vec<usize>)> = amd
-                    .perm()
-                    .map(|p| (p.arrays().0.to_vec(), p.arrays().1.to_vec()));
-                drop(amd);
-                let nd = nested()?;
-                if factor_flops(&nd) < amd_flops {
-                    (nd, FaerOrdering::NestedDissection)
-                } else {
-                    drop(nd);
-                    let again = match &amd_perm {
-                        Some((fwd, inv)) => symbolic_for(SymmetricOrdering::Custom(
-                            faer::perm::PermRef::new_checked(fwd, inv, n),
-                        ))?,
-                        None => symbolic_for(SymmetricOrdering::Identity)?,
-                    };
-                    (again, FaerOrdering::Amd)
-                }
+                auto_choice(&symbolic_for, &nested, &metis, n < AUTO_WITHOUT_AMD_DOFS, n)?
             }
         };
         let req = match self.mode {

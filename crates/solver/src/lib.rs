@@ -5,7 +5,7 @@
 //! |---|---|
 //! | [`SymmetricPattern`] | lower-triangle CSC pattern, built once from element DOF lists |
 //! | [`SymmetricMatrix`] | values on a shared pattern: zero, scatter-add, matvec |
-//! | [`reverse_cuthill_mckee`], [`approximate_minimum_degree`], [`nested_dissection`], [`envelope_stats`] | orderings and their bandwidth/profile |
+//! | [`reverse_cuthill_mckee`], [`approximate_minimum_degree`], [`nested_dissection`], [`metis_nested_dissection`], [`envelope_stats`] | orderings and their bandwidth/profile |
 //! | [`ProfileLdlt`] | envelope LDLᵀ, RCM ordered, SIMD inner products |
 //! | [`FaerSolver`], [`FaerOrdering`], [`FaerSplit`] | faer LDLᵀ / LLᵀ, AMD or nested-dissection ordered, supernodal or simplicial; optionally split at the top separator, halves on two threads |
 //! | [`LinearSolver`], [`SolverKind`] | the common interface; [`Factorization::negative_pivots`] is the inertia |
@@ -37,6 +37,7 @@ pub mod budget;
 mod error;
 mod faer_backend;
 mod matrix;
+mod metis;
 mod nested;
 mod ordering;
 pub mod profile;
@@ -45,9 +46,11 @@ mod solver;
 pub use budget::{MemoryBudget, set_memory_budget};
 pub use error::SolverError;
 pub use faer_backend::{
-    FaerMode, FaerOrdering, FaerPrecision, FaerSolver, FaerSplit, FaerStructure, MixedStats,
+    AUTO_WITHOUT_AMD_DOFS, FaerMode, FaerOrdering, FaerPrecision, FaerSolver, FaerSplit,
+    FaerStructure, MixedStats,
 };
 pub use matrix::SymmetricMatrix;
+pub use metis::{METIS_SEED, metis_nested_dissection};
 pub use nested::{LEAF_NODES, nested_dissection};
 pub use ordering::{
     EnvelopeStats, Permutation, approximate_minimum_degree, envelope_stats, reverse_cuthill_mckee,

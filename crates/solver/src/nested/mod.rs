@@ -87,7 +87,7 @@ pub(crate) fn nested_dissection_top(
 /// order-independent hash (a collision could only merge two DOFs wrongly, which changes the
 /// quality of the order, never its validity). A node's DOFs are consecutive in nonlin3d's
 /// numbering; DOFs that are not stay apart.
-fn compress(pattern: &SymmetricPattern) -> (Vec<Vec<usize>>, Graph) {
+pub(crate) fn compress(pattern: &SymmetricPattern) -> (Vec<Vec<usize>>, Graph) {
     let n = pattern.n();
     let mix = |v: usize| {
         (v as u64 + 1)

@@ -1,0 +1,144 @@
+//! METIS's nested dissection (Karypis & Kumar 1998, `METIS_NodeND` of METIS 5.1, built from
+//! source by the `metis-sys` crate) on the node graph of a finite-element pattern.
+//!
+//! The pattern is compressed to nodes first, as for [`crate::nested_dissection`] (the 3 DOFs
+//! of a node are one vertex of weight 3), METIS orders the vertices (multilevel node
+//! bisection with node-based FM refinement, several separators tried per level, minimum
+//! degree on the small parts) and each vertex expands back to its DOFs in place.
+//!
+//! Determinism: METIS's random generator is one process-wide state, seeded at each call from
+//! its options, so calls are serialised by a lock and the seed is fixed: the same pattern gives
+//! the same order on every call and from any thread or thread count.
+//!
+//! Signals: every METIS entry point installs GKlib's own SIGABRT/SIGTERM handlers (its error
+//! exit) for the length of the call and puts back the previous ones with `signal()`, which
+//! loses their flags; the handlers in force before the call are saved and restored here with
+//! `sigaction`. A SIGTERM arriving *during* the call is taken by GKlib's handler (the call then
+//! fails and the ordering falls back, see [`crate::FaerOrdering::Auto`]).
+
+use crate::nested::compress;
+use crate::{Permutation, SolverError, SymmetricPattern};
+use metis_sys as ffi;
+use std::sync::Mutex;
+
+/// The seed of METIS's random generator (its default, −1, means 4321; fixed explicitly so that
+/// a change of METIS's default cannot move the order).
+pub const METIS_SEED: i32 = 4321;
+
+/// Serialises METIS calls: its random state and GKlib's signal handlers are process-wide.
+static METIS_LOCK: Mutex<()> = Mutex::new(());
+
+/// METIS nested-dissection order of `pattern`'s DOFs (`forward[new] = old`).
+///
+/// Errors: a node graph with more than `i32::MAX` vertices or adjacency entries (METIS's
+/// 32-bit indices), METIS running out of memory, or any other METIS failure.
+pub fn metis_nested_dissection(pattern: &SymmetricPattern) -> Result<Permutation, SolverError> {
+    let (members, graph) = compress(pattern);
+    let nv = graph.n();
+    if nv <= 1 {
+        return Permutation::from_forward((0..pattern.n()).collect());
+    }
+    let to_idx = |v: usize, what: &'static str| -> Result<i32, SolverError> {
+        i32::try_from(v).map_err(|_| SolverError::TooLarge {
+            what,
+            entries: v,
+            limit: i32::MAX as usize,
+        })
+    };
+    let mut nvtxs = to_idx(nv, "METIS's node graph (vertices)")?;
+    to_idx(graph.adj.len(), "METIS's node graph (adjacency entries)")?;
+    let mut xadj: Vec<i32> = graph.xadj.iter().map(|&x| x as i32).collect();
+    let mut adjncy: Vec<i32> = graph.adj.iter().map(|&x| x as i32).collect();
+    let mut vwgt: Vec<i32> = graph.vw.iter().map(|&w| w as i32).collect();
+    let mut options = [0 as ffi::idx_t; ffi::METIS_NOPTIONS as usize];
+    let mut perm = vec![0 as ffi::idx_t; nv];
+    let mut iperm = vec![0 as ffi::idx_t; nv];
+    let status = {
+        // A poisoned lock only means another METIS call panicked: the state it guards is
+        // re-seeded by every call.
+        let _guard = METIS_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+        let _signals = SavedHandlers::save();
+        // SAFETY: the arrays have the lengths METIS_NodeND reads and writes (xadj nv + 1,
+        // adjncy xadj[nv], vwgt/perm/iperm nv, options METIS_NOPTIONS); indices were checked
+        // to fit idx_t (i32) above; METIS keeps no pointer after returning.
+        unsafe {
+            ffi::METIS_SetDefaultOptions(options.as_mut_ptr());
+            options[ffi::moptions_et_METIS_OPTION_SEED as usize] = METIS_SEED;
+            options[ffi::moptions_et_METIS_OPTION_NUMBERING as usize] = 0;
+            ffi::METIS_NodeND(
+                &mut nvtxs,
+                xadj.as_mut_ptr(),
+                adjncy.as_mut_ptr(),
+                vwgt.as_mut_ptr(),
+                options.as_mut_ptr(),
+                perm.as_mut_ptr(),
+                iperm.as_mut_ptr(),
+            )
+        }
+    };
+    match status {
+        s if s == ffi::rstatus_et_METIS_OK => {}
+        s if s == ffi::rstatus_et_METIS_ERROR_MEMORY => {
+            return Err(SolverError::OutOfMemory {
+                what: "METIS's nested dissection",
+                bytes: 4 * (xadj.len() + adjncy.len() + 4 * nv),
+            });
+        }
+        s => {
+            return Err(SolverError::Metis(format!(
+                "METIS_NodeND returned {s} on a graph of {nv} nodes"
+            )));
+        }
+    }
+    // METIS: perm[new] = old vertex.
+    let mut forward = Vec::with_capacity(pattern.n());
+    for &v in &perm {
+        let v = usize::try_from(v).ok().filter(|&v| v < nv).ok_or_else(|| {
+            SolverError::Metis(format!("METIS returned vertex {v} out of 0..{nv}"))
+        })?;
+        forward.extend_from_slice(&members[v]);
+    }
+    Permutation::from_forward(forward)
+}
+
+/// The SIGABRT and SIGTERM dispositions in force before a METIS call, put back on drop.
+struct SavedHandlers {
+    #[cfg(unix)]
+    saved: Vec<(libc::c_int, libc::sigaction)>,
+}
+
+impl SavedHandlers {
+    fn save() -> Self {
+        #[cfg(unix)]
+        {
+            let mut saved = Vec::new();
+            for sig in [libc::SIGABRT, libc::SIGTERM] {
+                // SAFETY: querying a disposition (null new action) into a zeroed struct.
+                unsafe {
+                    let mut old: libc::sigaction = std::mem::zeroed();
+                    if libc::sigaction(sig, std::ptr::null(), &mut old) == 0 {
+                        saved.push((sig, old));
+                    }
+                }
+            }
+            Self { saved }
+        }
+        #[cfg(not(unix))]
+        Self {}
+    }
+}
+
+impl Drop for SavedHandlers {
+    fn drop(&mut self) {
+        #[cfg(unix)]
+        for (sig, old) in &self.saved {
+            // SAFETY: re-installing a disposition the kernel gave us, flags included.
+            unsafe {
+                libc::sigaction(*sig, old, std::ptr::null_mut());
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests;
