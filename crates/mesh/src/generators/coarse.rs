@@ -2,7 +2,7 @@
 //! every element count halved and the front element doubled, so that the G of a run can be
 //! compared with the G of the same level on a mesh twice as coarse (Richardson's h and 2h).
 
-use super::{EmbeddedParams, FrontBand, ThroughWidthParams};
+use super::{EmbeddedParams, FrontBand, LayerBand, ThroughWidthParams};
 
 /// ⌈n/2⌉, at least 1: a count halved.
 fn half(n: usize) -> usize {
@@ -27,6 +27,18 @@ impl EmbeddedParams {
             };
             (band.inside >= 1 && band.outside >= 1).then_some(band)
         });
+        let (sub, base) = (half(self.sub_layers), half(self.base_layers));
+        // The layer band halved, kept while the halved counts stay even and it fits.
+        let layer_band = self.layer_band.and_then(|b| {
+            let band = LayerBand {
+                inside: half(b.inside),
+                outside: half(b.outside),
+            };
+            let clash =
+                front_band.is_some_and(|f| f.inside == band.inside || f.outside == band.outside);
+            let fits = band.inside < inside && band.outside < outside && !clash;
+            (fits && sub % 2 == 0 && base % 2 == 0).then_some(band)
+        });
         let room = self.a.min(self.b) * (1.0 - self.core_fraction);
         Self {
             slices,
@@ -34,8 +46,9 @@ impl EmbeddedParams {
             radial_outside: outside,
             front_element: self.front_element.map(|e| 2.0 * e).filter(|e| *e < room),
             front_band,
-            sub_layers: half(self.sub_layers),
-            base_layers: half(self.base_layers),
+            layer_band,
+            sub_layers: sub,
+            base_layers: base,
             ..self.clone()
         }
     }
