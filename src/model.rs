@@ -9,7 +9,7 @@ use crate::scene::{Geometry, MapName, Scene, Shape};
 use nonlin3d_laminate::Stiffness;
 use nonlin3d_mesh::names::{BONDED, CENTER_TOP, CRACK_LOWER, X0, X1, Y_HOLD, Y0, Y1, Z0};
 use nonlin3d_mesh::{
-    EllipticMap, EmbeddedParams, Front, FrontBand, Imperfection, Mesh, PlyLayout,
+    EllipticMap, EmbeddedParams, Front, FrontBand, Imperfection, LayerBand, Mesh, PlyLayout,
     ThroughWidthParams, embedded_delamination_with_front, through_width_delamination,
 };
 
@@ -201,6 +201,10 @@ pub(crate) fn embedded_params(
             .front_band
             .map(|[inside, outside]| FrontBand { inside, outside })
             .or(d.front_band),
+        layer_band: c
+            .layer_band
+            .map(|[inside, outside]| LayerBand { inside, outside })
+            .or(d.layer_band),
         sub_layers: c.sub_layers.unwrap_or(d.sub_layers),
         base_layers: c.base_layers.unwrap_or(d.base_layers),
         map: match shape {
