@@ -72,6 +72,7 @@ fn set_controls(c: &mut MeshControls, p: &EmbeddedParams) {
     c.front_grading = Some(p.front_grading);
     c.front_element_mm = p.front_element.map(|e| e / MM);
     c.front_band = p.front_band.map(|b| [b.inside, b.outside]);
+    c.layer_band = p.layer_band.map(|b| [b.inside, b.outside]);
 }
 
 /// The scene with `[mesh] accuracy` turned into knobs (the table's row scaled to the model;

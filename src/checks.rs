@@ -343,6 +343,12 @@ fn mesh_controls(s: &Scene) -> Result<(), Error> {
              and plate models; a through-width front is straight (refine it with across)"
         ));
     }
+    if through && let Some([i, o]) = c.layer_band {
+        return bad(format!(
+            "mesh.layer_band = [{i}, {o}]: the band of full layers is built for embedded, edge \
+             and plate models; a through-width model takes sub_layers and base_layers"
+        ));
+    }
     if let Some(t) = c.accuracy
         && !(t.is_finite() && t > 0.0 && t < 1.0)
     {

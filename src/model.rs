@@ -9,7 +9,7 @@ use crate::scene::{Geometry, MapName, Scene, Shape};
 use nonlin3d_laminate::Stiffness;
 use nonlin3d_mesh::names::{BONDED, CENTER_TOP, CRACK_LOWER, X0, X1, Y_HOLD, Y0, Y1, Z0};
 use nonlin3d_mesh::{
-    EllipticMap, EmbeddedParams, Front, FrontBand, Imperfection, Mesh, PlyLayout,
+    EllipticMap, EmbeddedParams, Front, FrontBand, Imperfection, LayerBand, Mesh, PlyLayout,
     ThroughWidthParams, embedded_delamination_with_front, through_width_delamination,
 };
 
@@ -201,6 +201,10 @@ pub(crate) fn embedded_params(
             .front_band
             .map(|[inside, outside]| FrontBand { inside, outside })
             .or(d.front_band),
+        layer_band: c
+            .layer_band
+            .map(|[inside, outside]| LayerBand { inside, outside })
+            .or(d.layer_band),
         sub_layers: c.sub_layers.unwrap_or(d.sub_layers),
         base_layers: c.base_layers.unwrap_or(d.base_layers),
         map: match shape {
@@ -545,6 +549,27 @@ mod tests {
         // operations (round-off of a few ulps, ~1e-17 m at W = 50 mm), so 1e-12·W bounds it.
         assert!((x[node][1] - y_max).abs() <= 1e-12 * y_max, "{:?}", x[node]);
         assert!(supports.iter().all(|s| s.nodes != Nodes::Set(Y0)));
+    }
+
+    /// `[mesh] layer_band` reaches the generator (fewer nodes than the same mesh without it:
+    /// mesh R of docs/ACCURACY.md §2c), and the companion scene of
+    /// the error estimate drops it with the layers it halves to odd counts (2 + 2 → 1 + 1), so
+    /// the companion still meshes.
+    #[test]
+    fn the_layer_band_reaches_the_mesh_and_its_companion_drops_it() {
+        let text = include_str!("../examples/scenes/fig_5_1_3_circle_30mm.toml");
+        let mut scene = Scene::from_toml(text).unwrap();
+        let m = &mut scene.mesh;
+        (m.slices, m.inside, m.outside) = (Some(6), Some(7), Some(6));
+        (m.sub_layers, m.base_layers) = (Some(2), Some(2));
+        (m.front_element_mm, m.front_band) = (Some(0.3), Some([5, 3]));
+        let plain = build_model(&scene).unwrap().mesh.nodes.len();
+        scene.mesh.layer_band = Some([3, 2]);
+        let banded = build_model(&scene).unwrap().mesh.nodes.len();
+        assert!(banded < plain, "{banded} against {plain} nodes");
+        let companion = crate::analysis::estimate::companion_scene(&scene).unwrap();
+        assert_eq!(companion.mesh.layer_band, None);
+        assert!(build_model(&companion).is_ok());
     }
 
     /// A model without the set a support needs says which set, in words.

@@ -325,6 +325,13 @@ pub struct MeshControls {
     /// by a conformal transition ring on each side. Unset: every ring has `slices` arcs.
     #[serde(default)]
     pub front_band: Option<[usize; 2]>,
+    /// `[inside, outside]`: the rings behind and ahead of the front that keep `sub_layers` and
+    /// `base_layers` (embedded, edge: issue 25's refinement through the thickness near the
+    /// front only); the rest of the model takes every other thickness station (both counts
+    /// even), joined by a conformal 1 → 2 transition ring on each side. Unset: the same layers
+    /// everywhere.
+    #[serde(default)]
+    pub layer_band: Option<[usize; 2]>,
     /// Elements through the sublaminate.
     #[serde(default)]
     pub sub_layers: Option<usize>,

@@ -46,6 +46,10 @@ fn a_front_element_is_positive_and_not_for_through_width_models() {
     s.mesh.front_band = Some([2, 2]);
     let m = message(&s);
     assert!(m.contains("mesh.front_band = [2, 2]"), "{m}");
+    s.mesh.front_band = None;
+    s.mesh.layer_band = Some([1, 1]);
+    let m = message(&s);
+    assert!(m.contains("mesh.layer_band = [1, 1]"), "{m}");
 }
 
 #[test]

@@ -39,10 +39,10 @@ pub use error::MeshError;
 pub use front::{Front, FrontPoint};
 pub use generators::{
     ACCURACY_TABLE, AccuracyRow, BoxParams, Centre, EllipticMap, EmbeddedParams, FrontBand,
-    FrontShape, NonlinearRegion, Partition, PlyLayout, REFERENCE_FRONT, ThroughWidthParams,
-    edge_delamination, ellipse_distance, embedded_delamination, embedded_delamination_with_front,
-    graded_coordinates, graded_from_first, nonlinear_region, quarter_front_length, structured_box,
-    thin_film, through_width_delamination,
+    FrontShape, LayerBand, NonlinearRegion, Partition, PlyLayout, REFERENCE_FRONT,
+    ThroughWidthParams, edge_delamination, ellipse_distance, embedded_delamination,
+    embedded_delamination_with_front, graded_coordinates, graded_from_first, nonlinear_region,
+    quarter_front_length, structured_box, thin_film, through_width_delamination,
 };
 pub use io::inp_read::{
     Amplitude, ContactPairs, Controls, InpModel, NodeRef, NotUsed, OutputKind, OutputRequest,

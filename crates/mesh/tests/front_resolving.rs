@@ -14,6 +14,8 @@ use nonlin3d_mesh::{
 
 #[path = "front_resolving/front_band.rs"]
 mod front_band;
+#[path = "front_resolving/layer_band.rs"]
+mod layer_band;
 
 /// The reference case (30 mm circle, h = 0.4 mm) with the front-resolving grading e = h/4.
 fn graded(e: f64) -> EmbeddedParams {

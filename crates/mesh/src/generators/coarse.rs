@@ -13,7 +13,7 @@
 //! mesh's largest error (G_II at S = 0 −12 … −26 %), and only a companion that coarsens it
 //! too (e doubled, base layers halved) shows it: every count is halved.
 
-use super::{EmbeddedParams, FrontBand, ThroughWidthParams};
+use super::{EmbeddedParams, FrontBand, LayerBand, ThroughWidthParams};
 
 /// ⌈n/2⌉, at least 1: a count halved.
 fn half(n: usize) -> usize {
@@ -61,12 +61,24 @@ impl EmbeddedParams {
                 self.front_element.map(|e| 2.0 * e).filter(|e| *e < room),
             )
         };
+        // The layer band halved, kept while the halved counts stay even and it fits.
+        let layer_band = self.layer_band.and_then(|b| {
+            let band = LayerBand {
+                inside: half(b.inside),
+                outside: half(b.outside),
+            };
+            let clash =
+                front_band.is_some_and(|f| f.inside == band.inside || f.outside == band.outside);
+            let fits = band.inside < inside && band.outside < outside && !clash;
+            (fits && sub_layers % 2 == 0 && base_layers % 2 == 0).then_some(band)
+        });
         Self {
             slices,
             radial_inside: inside,
             radial_outside: outside,
             front_element,
             front_band,
+            layer_band,
             sub_layers,
             base_layers,
             ..self.clone()

@@ -29,18 +29,20 @@
 //!    front descriptor for VCCT (§2.8).
 //!
 //! One module per part: `planform` (steps 1–2, the 2-D section), `maps` (step 3, eq. 3.1.1–3.1.2
-//! and the rectangle), `extrusion` (steps 4–5), `sets` and `front` (step 6), `params` (the
-//! parameters and their checks, and the thickness stations).
+//! and the rectangle), `extrusion` (steps 4–5), `layers` (the layer band's 1 → 2 template
+//! through the thickness, issue 25), `sets` and `front` (step 6), `params` (the parameters and
+//! their checks, and the thickness stations).
 
 mod extrusion;
 mod front;
+mod layers;
 mod maps;
 mod params;
 mod planform;
 mod sets;
 
 pub use maps::EllipticMap;
-pub use params::{Centre, EmbeddedParams, FrontBand, PlyLayout};
+pub use params::{Centre, EmbeddedParams, FrontBand, LayerBand, PlyLayout};
 
 use crate::MeshError;
 use crate::front::Front;

@@ -14,7 +14,7 @@ mod through_width;
 
 pub use accuracy::{ACCURACY_TABLE, AccuracyRow, REFERENCE_FRONT, quarter_front_length};
 pub use embedded::{
-    Centre, EllipticMap, EmbeddedParams, FrontBand, PlyLayout, edge_delamination,
+    Centre, EllipticMap, EmbeddedParams, FrontBand, LayerBand, PlyLayout, edge_delamination,
     embedded_delamination, embedded_delamination_with_front, thin_film,
 };
 pub use grading::{graded_coordinates, graded_from_first};

@@ -4,6 +4,7 @@
 //! their corners (the thesis's re-centring after the map of eq. 3.1.1–3.1.2).
 
 use super::EmbeddedParams;
+use super::layers::{LayerTransition, mid_parity, template};
 use super::planform::Section;
 use crate::MeshError;
 use crate::model::{Cell, Mesh};
@@ -16,13 +17,17 @@ pub(super) struct Solid {
     /// Nodes and cells (no sets yet).
     pub(super) mesh: Mesh,
     /// `corner[l][v]`: the corner node of section vertex v at thickness station l (on z = H
-    /// the upper copy, which the sublaminate's cells use).
-    pub(super) corner: Vec<Vec<usize>>,
+    /// the upper copy, which the sublaminate's cells use); `None` where the vertex's column
+    /// skips the station (the layer band, issue 25).
+    pub(super) corner: Vec<Vec<Option<usize>>>,
     /// The lower copy on z = H of each vertex strictly inside the front (the base's cells use
     /// it), `None` elsewhere.
     pub(super) lower: Vec<Option<usize>>,
     /// The thickness station of the delamination plane z = H.
     pub(super) zh: usize,
+    /// The parity of the coarse stations carrying the layer band's M vertices (module
+    /// `layers`).
+    parity: usize,
     /// Hex20 mid-edge nodes keyed by their two corner nodes (smaller index first).
     pub(super) mid: HashMap<(usize, usize), usize>,
     /// Cells below z = H (the base laminate).
@@ -35,23 +40,43 @@ pub(super) struct Solid {
 /// chapter 7 when given): corner nodes first, then the cells layer by layer.
 pub(super) fn extrude(p: &EmbeddedParams, s: &Section) -> Result<Solid, MeshError> {
     let (z, layer_props, zh) = p.layers()?;
-    let mut solid = corner_nodes(s, &z, zh);
+    // The transition rings' widths (coarse to fine vertex), for the template's parity.
+    let widths: Vec<f64> = s
+        .layer_transitions
+        .iter()
+        .flat_map(|t| {
+            (0..2).map(move |q| {
+                let (c, f) = (s.points[t.coarse[q]], s.points[t.fine[q]]);
+                (f[0] - c[0]).hypot(f[1] - c[1])
+            })
+        })
+        .collect();
+    let parity = if widths.is_empty() {
+        0
+    } else {
+        mid_parity(&z, &widths)
+    };
+    let mut solid = corner_nodes(s, &z, zh, parity);
     for (l, &props) in layer_props.iter().enumerate() {
-        solid.layer(p.kind, s, l, props);
+        solid.layer(p.kind, s, l, props)?;
     }
     Ok(solid)
 }
 
-/// The corner nodes (vertex, station) of §3.2, station by station; a vertex strictly inside
-/// the front gets a second (lower) node on z = H right after its upper one.
-fn corner_nodes(s: &Section, z: &[f64], zh: usize) -> Solid {
+/// The corner nodes (vertex, station) of §3.2, station by station, where the vertex's column
+/// has the station; a vertex strictly inside the front gets a second (lower) node on z = H
+/// right after its upper one.
+fn corner_nodes(s: &Section, z: &[f64], zh: usize, parity: usize) -> Solid {
     let nv = s.points.len();
     let mut mesh = Mesh::default();
-    let mut corner = vec![vec![0usize; nv]; z.len()];
+    let mut corner = vec![vec![None; nv]; z.len()];
     let mut lower = vec![None; nv];
     for (l, &zl) in z.iter().enumerate() {
         for (v, pt) in s.points.iter().enumerate() {
-            corner[l][v] = mesh.nodes.len();
+            if !s.column[v].has_station(l, parity) {
+                continue;
+            }
+            corner[l][v] = Some(mesh.nodes.len());
             mesh.nodes.push([pt[0], pt[1], zl]);
             if l == zh && s.inside[v] {
                 lower[v] = Some(mesh.nodes.len());
@@ -64,6 +89,7 @@ fn corner_nodes(s: &Section, z: &[f64], zh: usize) -> Solid {
         corner,
         lower,
         zh,
+        parity,
         mid: HashMap::new(),
         base_cells: Vec::new(),
         sub_cells: Vec::new(),
@@ -71,15 +97,17 @@ fn corner_nodes(s: &Section, z: &[f64], zh: usize) -> Solid {
 }
 
 impl Solid {
-    /// The upper (sublaminate-side) node of vertex v on the delamination plane z = H (§3.2).
-    pub(super) fn upper(&self, v: usize) -> usize {
+    /// The upper (sublaminate-side) node of vertex v on the delamination plane z = H (§3.2),
+    /// if its column has that station (z = H is a station of every column but the layer
+    /// band's middle vertices with N even).
+    pub(super) fn upper(&self, v: usize) -> Option<usize> {
         self.corner[self.zh][v]
     }
 
     /// The base-side node of vertex v on z = H (§3.2): its lower copy inside the front, the
     /// shared node elsewhere.
-    pub(super) fn lower_or_shared(&self, v: usize) -> usize {
-        self.lower[v].unwrap_or(self.corner[self.zh][v])
+    pub(super) fn lower_or_shared(&self, v: usize) -> Option<usize> {
+        self.lower[v].or(self.corner[self.zh][v])
     }
 
     /// The Hex20 mid-edge node between corner nodes a and b, if there is one (at their
@@ -90,40 +118,119 @@ impl Solid {
 
     /// The node of vertex v at station l for a cell below (`below`) or above z = H: below the
     /// plane, the lower copy where there is one (the delamination of §3.2).
-    fn node(&self, l: usize, v: usize, below: bool) -> usize {
+    fn node(&self, l: usize, v: usize, below: bool) -> Result<usize, MeshError> {
         match self.lower[v] {
-            Some(lower) if l == self.zh && below => lower,
-            _ => self.corner[l][v],
+            Some(lower) if l == self.zh && below => Ok(lower),
+            _ => self.corner[l][v].ok_or_else(|| MeshError::Parameter {
+                name: "layer_band",
+                reason: format!("section vertex {v} has no node on thickness station {l}"),
+            }),
         }
     }
 
     /// The cells of layer l (between stations l and l + 1), one per section quad, with their
     /// material and ply angle (chapter 7); base cells below z = H, sublaminate cells above.
-    fn layer(&mut self, kind: ElementKind, s: &Section, l: usize, props: (usize, f64)) {
-        let below_plane = l < self.zh; // cells under z = H use the lower copies on it
+    /// Quads whose vertices skip every other station (the layer band, issue 25) get one cell
+    /// over layers l and l + 1 when l is even, and so do the transition arcs (three cells).
+    fn layer(
+        &mut self,
+        kind: ElementKind,
+        s: &Section,
+        l: usize,
+        props: (usize, f64),
+    ) -> Result<(), MeshError> {
+        let below = l < self.zh; // cells under z = H use the lower copies on it
         for qd in &s.quads {
-            let bottom = qd.iter().map(|&v| self.node(l, v, below_plane));
-            let top = qd.iter().map(|&v| self.node(l + 1, v, below_plane));
-            let mut nodes: Vec<usize> = bottom.chain(top).collect();
-            if kind == ElementKind::Hex20 {
-                for &(a, b) in nonlin3d_element::HEX20_EDGES.iter() {
-                    let id = self.mid_edge_node(nodes[a], nodes[b]);
-                    nodes.push(id);
+            let col = s.column[qd[0]];
+            let full = col.has_station(l, self.parity) && col.has_station(l + 1, self.parity);
+            if !full && l % 2 == 1 {
+                continue;
+            }
+            let top_station = if full { l + 1 } else { l + 2 };
+            let mut nodes = Vec::with_capacity(8);
+            for (station, v) in qd
+                .iter()
+                .map(|&v| (l, v))
+                .chain(qd.iter().map(|&v| (top_station, v)))
+            {
+                nodes.push(self.node(station, v, below)?);
+            }
+            self.cell(kind, nodes, props, below);
+        }
+        if l.is_multiple_of(2) {
+            for t in &s.layer_transitions {
+                self.transition_cells(kind, t, l / 2, props, below)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// The three cells of coarse layer j on one arc of a layer-band transition ring (module
+    /// `layers`): the radial–thickness template on slice line q + 1 as the bottom face and on
+    /// q as the top (or the reverse, whichever gives det J > 0: the coarse-to-fine direction
+    /// points out of or into the centre).
+    fn transition_cells(
+        &mut self,
+        kind: ElementKind,
+        t: &LayerTransition,
+        j: usize,
+        props: (usize, f64),
+        below: bool,
+    ) -> Result<(), MeshError> {
+        for quad in template(j, self.parity) {
+            let mut nodes = Vec::with_capacity(8);
+            for q in [1, 0] {
+                for &(side, station) in &quad {
+                    let v = [t.coarse, t.mid, t.fine][side][q];
+                    nodes.push(self.node(station, v, below)?);
                 }
             }
-            let c = self.mesh.cells.len();
-            let (material, ply_angle_deg) = props;
-            self.mesh.cells.push(Cell {
-                kind,
-                nodes,
-                material,
-                ply_angle_deg,
-            });
-            if below_plane {
-                self.base_cells.push(c)
-            } else {
-                self.sub_cells.push(c)
+            if !self.right_handed(&nodes) {
+                nodes.rotate_left(4);
             }
+            self.cell(kind, nodes, props, below);
+        }
+        Ok(())
+    }
+
+    /// Whether the hexahedron of corner nodes `n` has a positive triple product at corner 0:
+    /// (n₁ − n₀) × (n₃ − n₀) · (n₄ − n₀) > 0.
+    fn right_handed(&self, n: &[usize]) -> bool {
+        let x = |k: usize| self.mesh.nodes[n[k]];
+        let d = |k: usize| {
+            let (a, b) = (x(k), x(0));
+            [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+        };
+        let (u, v, w) = (d(1), d(3), d(4));
+        let cross = [
+            u[1] * v[2] - u[2] * v[1],
+            u[2] * v[0] - u[0] * v[2],
+            u[0] * v[1] - u[1] * v[0],
+        ];
+        cross[0] * w[0] + cross[1] * w[1] + cross[2] * w[2] > 0.0
+    }
+
+    /// Adds a cell on corner nodes `nodes` (and, for Hex20, its mid-edge nodes), in the base
+    /// or the sublaminate set.
+    fn cell(&mut self, kind: ElementKind, mut nodes: Vec<usize>, props: (usize, f64), below: bool) {
+        if kind == ElementKind::Hex20 {
+            for &(a, b) in nonlin3d_element::HEX20_EDGES.iter() {
+                let id = self.mid_edge_node(nodes[a], nodes[b]);
+                nodes.push(id);
+            }
+        }
+        let c = self.mesh.cells.len();
+        let (material, ply_angle_deg) = props;
+        self.mesh.cells.push(Cell {
+            kind,
+            nodes,
+            material,
+            ply_angle_deg,
+        });
+        if below {
+            self.base_cells.push(c)
+        } else {
+            self.sub_cells.push(c)
         }
     }
 

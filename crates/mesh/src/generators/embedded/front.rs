@@ -41,14 +41,14 @@ fn corner_point(
 ) -> Result<FrontPoint, MeshError> {
     let f = s.front_ring;
     let (cf, cb, ca) = (s.rings[f][q], s.rings[f - 1][q], s.rings[f + 1][q]);
-    let c = solid.upper(cf);
-    let (au, al) = (solid.upper(cb), solid.lower_or_shared(cb));
+    let c = solid.upper(cf).ok_or_else(|| missing("c"))?;
+    let au = solid.upper(cb).ok_or_else(|| missing("a"))?;
+    let al = solid.lower_or_shared(cb).ok_or_else(|| missing("a′"))?;
     let (b, d) = if kind == ElementKind::Hex20 {
         let bu = solid.midside(c, au).ok_or_else(|| missing("b"))?;
         let bl = solid.midside(c, al).ok_or_else(|| missing("b′"))?;
-        let d = solid
-            .midside(c, solid.upper(ca))
-            .ok_or_else(|| missing("d"))?;
+        let ahead = solid.upper(ca).ok_or_else(|| missing("d"))?;
+        let d = solid.midside(c, ahead).ok_or_else(|| missing("d"))?;
         (Some((bu, bl)), Some(d))
     } else {
         (None, None)
@@ -72,16 +72,17 @@ fn mid_edge_point(
     q: usize,
 ) -> Result<FrontPoint, MeshError> {
     let (front, behind) = (&s.rings[s.front_ring], &s.rings[s.front_ring - 1]);
-    let c = solid.upper(front[q]);
+    let up = |v: usize| solid.upper(v).ok_or_else(|| missing("c"));
+    let low = |v: usize| solid.lower_or_shared(v).ok_or_else(|| missing("a′"));
     let (cf2, cb, cb2) = (front[q - 1], behind[q], behind[q - 1]);
     let cm = solid
-        .midside(c, solid.upper(cf2))
+        .midside(up(front[q])?, up(cf2)?)
         .ok_or_else(|| missing("mid-edge front"))?;
     let au = solid
-        .midside(solid.upper(cb), solid.upper(cb2))
+        .midside(up(cb)?, up(cb2)?)
         .ok_or_else(|| missing("a (mid-edge)"))?;
     let al = solid
-        .midside(solid.lower_or_shared(cb), solid.lower_or_shared(cb2))
+        .midside(low(cb)?, low(cb2)?)
         .ok_or_else(|| missing("a′ (mid-edge)"))?;
     Ok(FrontPoint::new(
         cm,

@@ -45,6 +45,13 @@ pub struct EmbeddedParams {
     /// (each coarse arc split into three, four quadrilaterals: no hanging node). `None`: every
     /// ring has `slices` arcs (§3.1).
     pub front_band: Option<FrontBand>,
+    /// Refinement through the thickness near the front only (issue 25): `Some(band)` keeps
+    /// `sub_layers` and `base_layers` in the `band.inside` rings behind the front and the
+    /// `band.outside` rings ahead of it, and puts half as many (every other thickness station)
+    /// everywhere else, joined by one conformal 1 → 2 transition ring on each side (a quad
+    /// template in the radial–thickness plane swept along the slices: no hanging node).
+    /// `None`: the same layers everywhere (§3.2).
+    pub layer_band: Option<LayerBand>,
     /// Core (first ring) radius as a fraction of the front circle's radius min(a, b).
     pub core_fraction: f64,
     /// Rings out to `transition`·min(a, b) (radii of the circular mesh, whose front circle has
@@ -78,6 +85,19 @@ impl FrontBand {
     /// The band's arcs per coarse arc: the conformal quadrilateral transition splits an edge
     /// into three (two edges need no interior vertex pattern that quadrilaterals can close).
     pub const FACTOR: usize = 3;
+}
+
+/// The rings around the front that keep the full `sub_layers` and `base_layers` (issue 25);
+/// the rest of the model has half as many.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct LayerBand {
+    /// Rings behind the front with the full layers (≥ 1, < `radial_inside`: one more ring is
+    /// the 1 → 2 transition; not the front band's own count, whose next ring is its in-plane
+    /// transition).
+    pub inside: usize,
+    /// Rings ahead of the front with the full layers (≥ 1, < `radial_outside`, not the front
+    /// band's count).
+    pub outside: usize,
 }
 
 /// The centre of the swept section.
@@ -139,6 +159,7 @@ impl EmbeddedParams {
             front_grading: 0.25,
             front_element: None,
             front_band: None,
+            layer_band: None,
             core_fraction: 0.3,
             transition: 1.4,
             sub_layers: 1,
@@ -207,6 +228,7 @@ impl EmbeddedParams {
                 ),
             );
         }
+        self.check_layer_band()?;
         if !(self.core_fraction > 0.0 && self.core_fraction < 1.0) {
             return bad(
                 "core_fraction",
@@ -240,6 +262,65 @@ impl EmbeddedParams {
         match &self.plies {
             Some(pl) => pl.check(self.h, self.base),
             None => Ok(()),
+        }
+    }
+
+    /// The layer band's checks (issue 25): rings as the front band's (≥ 1, below the ring
+    /// counts), its transition rings not the front band's (one ring cannot carry both
+    /// templates), even layer counts (the far field takes every other station), no ply layers
+    /// (one element per ply cannot be halved).
+    fn check_layer_band(&self) -> Result<(), MeshError> {
+        let Some(lb) = self.layer_band else {
+            return Ok(());
+        };
+        let bad = |reason: String| {
+            Err(MeshError::Parameter {
+                name: "layer_band",
+                reason: format!(
+                    "{} rings inside and {} outside: {reason}",
+                    lb.inside, lb.outside
+                ),
+            })
+        };
+        if !(lb.inside >= 1
+            && lb.outside >= 1
+            && lb.inside < self.radial_inside
+            && lb.outside < self.radial_outside)
+        {
+            return bad(format!(
+                "each at least 1 and below radial_inside = {} and radial_outside = {} (one more \
+                 ring on each side is the 1 → 2 transition)",
+                self.radial_inside, self.radial_outside
+            ));
+        }
+        if let Some(fb) = self.front_band
+            && (fb.inside == lb.inside || fb.outside == lb.outside)
+        {
+            return bad(format!(
+                "the front band's counts are {} and {}: its transition rings would also be the \
+                 layers' (choose a layer band narrower or wider than the front band on each side)",
+                fb.inside, fb.outside
+            ));
+        }
+        if self.sub_layers % 2 == 1 || self.base_layers % 2 == 1 {
+            return bad(format!(
+                "sub_layers = {} and base_layers = {} must be even (half as many away from the \
+                 front)",
+                self.sub_layers, self.base_layers
+            ));
+        }
+        if self.plies.is_some() {
+            return bad("ply-level layers keep one element per ply everywhere".into());
+        }
+        Ok(())
+    }
+
+    /// Whether radial station m0 (index into the radial stations, `front` the front circle's)
+    /// carries the full layers: always without a layer band; inside it otherwise (issue 25).
+    pub(super) fn full_layers_at(&self, m0: usize, front: usize) -> bool {
+        match self.layer_band {
+            Some(lb) => m0 + lb.inside >= front && m0 <= front + lb.outside,
+            None => true,
         }
     }
 

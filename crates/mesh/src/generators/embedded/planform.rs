@@ -3,6 +3,7 @@
 //! transition blended into the square — with every point taken through the planform map
 //! (eq. 3.1.1–3.1.2 or the rectangle, module `maps`).
 
+use super::layers::{Column, LayerTransition, MID_FRACTION};
 use super::maps::{front_radius, planform, radial_stations};
 use super::{Centre, EmbeddedParams, FrontBand};
 use crate::MeshError;
@@ -13,6 +14,11 @@ pub(super) struct Section {
     pub(super) points: Vec<[f64; 2]>,
     /// Whether each vertex lies strictly inside the front (its node on z = H is duplicated).
     pub(super) inside: Vec<bool>,
+    /// Which thickness stations each vertex carries (the layer band, issue 25).
+    pub(super) column: Vec<Column>,
+    /// The arcs of the layer band's 1 → 2 transition rings (module `layers`); their
+    /// quadrilaterals are not in `quads`.
+    pub(super) layer_transitions: Vec<LayerTransition>,
     /// Quadrilaterals, counter-clockwise seen from +z: the centre's, then ring by ring.
     pub(super) quads: Vec<[usize; 4]>,
     /// `rings[m][q]`: the vertex of ring m at slice q (q = 0 on the x axis, q = slices on the
@@ -54,14 +60,22 @@ pub(super) fn section(p: &EmbeddedParams) -> Result<Section, MeshError> {
     let mut s = Section {
         points: Vec::new(),
         inside: Vec::new(),
+        column: Vec::new(),
+        layer_transitions: Vec::new(),
         quads: Vec::new(),
         rings: Vec::new(),
         centre: 0,
         front_ring: front + 1,
     };
+    // The core and its joining ring lie outside every layer band (inside < radial_inside).
+    let core = if p.layer_band.is_some() {
+        Column::Half
+    } else {
+        Column::Full
+    };
     let ring0 = match p.centre {
-        Centre::OGrid => s.o_grid_core(p, 0.5 * rho[0]),
-        Centre::ThesisArc => s.thesis_arc(p),
+        Centre::OGrid => s.o_grid_core(p, 0.5 * rho[0], core),
+        Centre::ThesisArc => s.thesis_arc(p, core),
     };
     s.rings.push(ring0);
     // Ring nodes: the planform map (ellipse or rectangle) of the circle point up to the
@@ -73,13 +87,24 @@ pub(super) fn section(p: &EmbeddedParams) -> Result<Section, MeshError> {
     let wt = p.transition * front_radius(p);
     for (m0, &r) in rho.iter().enumerate() {
         let n = arcs(p, m0, front);
+        let col = column(p, m0, front);
         let ring = (0..=n)
-            .map(|q| s.push(ring_point(p, wt, r, q, n), m0 < front))
+            .map(|q| s.push(ring_point(p, wt, r, q, n), m0 < front, col))
             .collect();
         s.rings.push(ring);
     }
-    s.ring_quads(front);
+    s.ring_quads(p, front);
     Ok(s)
+}
+
+/// The column of the vertices on radial station m0 (`front` the front circle's): every
+/// thickness station in the layer band (or without one), every other one elsewhere.
+fn column(p: &EmbeddedParams, m0: usize, front: usize) -> Column {
+    if p.full_layers_at(m0, front) {
+        Column::Full
+    } else {
+        Column::Half
+    }
 }
 
 /// Ring point at radius `r` (circular mesh) on slice line q of n (§3.1, Fig. 3.1.1c): the
@@ -108,9 +133,10 @@ fn ring_point(p: &EmbeddedParams, wt: f64, r: f64, q: usize, n: usize) -> [f64; 
 
 impl Section {
     /// Adds a vertex of the §3.1 section (`inside`: strictly inside the front); its index.
-    fn push(&mut self, point: [f64; 2], inside: bool) -> usize {
+    fn push(&mut self, point: [f64; 2], inside: bool, column: Column) -> usize {
         self.points.push(point);
         self.inside.push(inside);
+        self.column.push(column);
         self.points.len() - 1
     }
 
@@ -118,13 +144,13 @@ impl Section {
     /// (its corner at 0.71 ρ₀) of k × k cells, k = slices/2, mapped by eq. 3.1.1–3.1.2; one ring
     /// of cells joins its boundary to the first circle ρ₀, so no cell is degenerate. Returns
     /// the core boundary counter-clockwise from the x axis (q ≤ k on x = c, q ≥ k on y = c).
-    fn o_grid_core(&mut self, p: &EmbeddedParams, c: f64) -> Vec<usize> {
+    fn o_grid_core(&mut self, p: &EmbeddedParams, c: f64, col: Column) -> Vec<usize> {
         let k = p.slices / 2;
         let mut core_id = vec![vec![0usize; k + 1]; k + 1];
         for (j, row) in core_id.iter_mut().enumerate() {
             for (i, id) in row.iter_mut().enumerate() {
                 let pt = mapped(p, c * i as f64 / k as f64, c * j as f64 / k as f64);
-                *id = self.push(pt, true);
+                *id = self.push(pt, true, col);
             }
         }
         self.centre = core_id[0][0];
@@ -151,11 +177,11 @@ impl Section {
 
     /// The thesis's centre (§3.1): the axis nodes spread on an arc of radius 1e-9 m (mapped by
     /// eq. 3.1.1–3.1.2), so the first ring of cells is nearly triangular. Returns the arc nodes.
-    fn thesis_arc(&mut self, p: &EmbeddedParams) -> Vec<usize> {
+    fn thesis_arc(&mut self, p: &EmbeddedParams, col: Column) -> Vec<usize> {
         let ring: Vec<usize> = (0..=p.slices)
             .map(|q| {
                 let phi = angle(p, q);
-                self.push(mapped(p, 1e-9 * phi.cos(), 1e-9 * phi.sin()), true)
+                self.push(mapped(p, 1e-9 * phi.cos(), 1e-9 * phi.sin()), true, col)
             })
             .collect();
         self.centre = ring[0];
@@ -164,11 +190,15 @@ impl Section {
 
     /// The quadrilaterals between consecutive rings (Fig. 3.1.1), counter-clockwise from +z;
     /// between a ring of n arcs and one of 3n (the front band's edges, issue 25) the conformal
-    /// transition of [`Section::transition_quads`].
-    fn ring_quads(&mut self, front: usize) {
+    /// transition of [`Section::transition_quads`]; between stations with the full layers and
+    /// with half (the layer band's edges) the arcs of [`Section::layer_transition`] instead.
+    fn ring_quads(&mut self, p: &EmbeddedParams, front: usize) {
         for m in 0..self.rings.len() - 1 {
             let (ni, no) = (self.rings[m].len() - 1, self.rings[m + 1].len() - 1);
-            if ni == no {
+            // Rings m and m + 1 are stations m − 1 and m; inside the front when m ≤ front.
+            if m >= 1 && p.full_layers_at(m - 1, front) != p.full_layers_at(m, front) {
+                self.layer_transition(m, m <= front);
+            } else if ni == no {
                 for q in 0..ni {
                     self.quads.push([
                         self.rings[m][q],
@@ -178,10 +208,38 @@ impl Section {
                     ]);
                 }
             } else {
-                // Rings m and m + 1 are stations m − 1 and m; inside the front when m ≤ front.
-                let inside = m <= front;
-                self.transition_quads(m, inside);
+                let col = self.column[self.rings[m + 1][0]];
+                self.transition_quads(m, m <= front, col);
             }
+        }
+    }
+
+    /// The layer band's 1 → 2 transition between ring m and ring m + 1 (the same arcs; one
+    /// carries every thickness station, the other every other one, module `layers`): a middle
+    /// vertex on each slice line, [`MID_FRACTION`] of the way from the coarse side, and one
+    /// [`LayerTransition`] per arc.
+    fn layer_transition(&mut self, m: usize, inside: bool) {
+        let coarse_inside = self.column[self.rings[m][0]] == Column::Half;
+        let (c, f) = if coarse_inside {
+            (m, m + 1)
+        } else {
+            (m + 1, m)
+        };
+        let n = self.rings[c].len() - 1;
+        let mid: Vec<usize> = (0..=n)
+            .map(|q| {
+                let (pc, pf) = (self.points[self.rings[c][q]], self.points[self.rings[f][q]]);
+                let t = MID_FRACTION;
+                let pt = [pc[0] + t * (pf[0] - pc[0]), pc[1] + t * (pf[1] - pc[1])];
+                self.push(pt, inside, Column::Mid)
+            })
+            .collect();
+        for q in 0..n {
+            self.layer_transitions.push(LayerTransition {
+                coarse: [self.rings[c][q], self.rings[c][q + 1]],
+                mid: [mid[q], mid[q + 1]],
+                fine: [self.rings[f][q], self.rings[f][q + 1]],
+            });
         }
     }
 
@@ -192,7 +250,7 @@ impl Section {
     /// close four quadrilaterals A F0 F1 I1, I1 F1 F2 I2, I2 F2 F3 B and A I1 I2 B (coarse ring
     /// inside; mirrored when the coarse ring is outside). Every vertex is shared, so the mesh
     /// stays conformal and reproduces linear fields exactly.
-    fn transition_quads(&mut self, m: usize, inside: bool) {
+    fn transition_quads(&mut self, m: usize, inside: bool, col: Column) {
         let coarse_inside = self.rings[m].len() < self.rings[m + 1].len();
         let (c, f) = if coarse_inside {
             (m, m + 1)
@@ -208,7 +266,11 @@ impl Section {
                 let t = j as f64 / k as f64;
                 let (pa, pb, pf) = (self.points[a], self.points[b], self.points[fv[j]]);
                 let chord = [pa[0] + t * (pb[0] - pa[0]), pa[1] + t * (pb[1] - pa[1])];
-                self.push([0.5 * (chord[0] + pf[0]), 0.5 * (chord[1] + pf[1])], inside)
+                self.push(
+                    [0.5 * (chord[0] + pf[0]), 0.5 * (chord[1] + pf[1])],
+                    inside,
+                    col,
+                )
             });
             // Each quad as (inner q, outer q, outer q + 1, inner q + 1), as the ring quads.
             let quads = if coarse_inside {

@@ -26,7 +26,7 @@ pub(super) fn add_node_sets(p: &EmbeddedParams, s: &Section, solid: &mut Solid) 
     );
     // The O-grid has a node on the axis; the thesis's centre the arc node on y = 0.
     let top = solid.corner.len() - 1;
-    let centre_top = vec![solid.corner[top][s.centre]];
+    let centre_top = solid.corner[top][s.centre].into_iter().collect();
     let (up, lo) = crack_faces(p.kind, solid);
     let front = front_nodes(p, s, solid);
     let sets = &mut solid.mesh.node_sets;
@@ -41,8 +41,8 @@ pub(super) fn add_node_sets(p: &EmbeddedParams, s: &Section, solid: &mut Solid) 
 fn crack_faces(kind: ElementKind, solid: &Solid) -> (Vec<usize>, Vec<usize>) {
     let (mut up, mut lo) = (Vec::new(), Vec::new());
     for (v, lower) in solid.lower.iter().enumerate() {
-        if let Some(l) = *lower {
-            up.push(solid.upper(v));
+        if let (Some(l), Some(u)) = (*lower, solid.upper(v)) {
+            up.push(u);
             lo.push(l);
         }
     }
@@ -60,7 +60,7 @@ fn crack_faces(kind: ElementKind, solid: &Solid) -> (Vec<usize>, Vec<usize>) {
 /// lower copy or a front node; its partner is keyed by the corresponding upper corners.
 fn mid_edge_crack_pairs(solid: &Solid) -> Vec<(usize, usize)> {
     let upper_of: HashMap<usize, usize> = (0..solid.lower.len())
-        .filter_map(|v| solid.lower[v].map(|l| (l, solid.upper(v))))
+        .filter_map(|v| Some((solid.lower[v]?, solid.upper(v)?)))
         .collect();
     let mut pairs: Vec<(usize, usize)> = Vec::new();
     for (&(na, nb), &id) in &solid.mid {
@@ -81,11 +81,12 @@ fn mid_edge_crack_pairs(solid: &Solid) -> Vec<(usize, usize)> {
 /// nodes from the x axis to the y axis, then for Hex20 the mid-edge nodes between them.
 fn front_nodes(p: &EmbeddedParams, s: &Section, solid: &Solid) -> Vec<usize> {
     let ring = &s.rings[s.front_ring];
-    let mut nodes: Vec<usize> = ring.iter().map(|&v| solid.upper(v)).collect();
+    let mut nodes: Vec<usize> = ring.iter().filter_map(|&v| solid.upper(v)).collect();
     if p.kind == ElementKind::Hex20 {
         for q in 0..ring.len() - 1 {
-            let (na, nb) = (solid.upper(ring[q]), solid.upper(ring[q + 1]));
-            if let Some(id) = solid.midside(na, nb) {
+            if let (Some(na), Some(nb)) = (solid.upper(ring[q]), solid.upper(ring[q + 1]))
+                && let Some(id) = solid.midside(na, nb)
+            {
                 nodes.push(id);
             }
         }
