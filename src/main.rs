@@ -136,17 +136,49 @@ enum Command {
         /// residual; falls back to f64 where f32 is not enough) or profile (the thesis's skyline).
         #[arg(long, default_value = "faer", value_parser = ["faer", "faer-mixed", "profile"])]
         solver: String,
+        /// Factorisations in a static step: auto (bfgs in *STATIC, DIRECT steps, full where
+        /// the increment size follows the iteration count), bfgs (the kept tangent updated by BFGS pairs,
+        /// factorised anew when ‖r‖ falls by less than half, and at each converged increment
+        /// for its negative pivots), modified (the same without BFGS pairs) or full (a
+        /// factorisation every iteration, as CalculiX). An increment bfgs or modified cannot
+        /// converge is redone by full Newton.
+        #[arg(long, default_value = "auto", value_parser = ["auto", "bfgs", "modified", "full"])]
+        newton: String,
+        /// Start of an increment without prescribed-value changes: the step's last converged
+        /// states extrapolated in step time (quadratic through three, linear through two) or
+        /// the last state (none).
+        #[arg(long, default_value = "quadratic", value_parser = ["quadratic", "linear", "none"])]
+        extrapolation: String,
+        /// Keep an extrapolated start only if its ‖r‖∞ is no larger than the last state's.
+        #[arg(long)]
+        guard: bool,
+        /// Backtracking line search on ‖r‖∞ in every iteration (off, as CalculiX iterates).
+        #[arg(long)]
+        line_search: bool,
     },
+}
+
+/// What `solve` takes beyond the deck and the output folder.
+struct SolveFlags<'a> {
+    tolerance: Option<f64>,
+    increment: Option<f64>,
+    solver: &'a str,
+    newton: nonlin3d::deck::Strategy,
+    start: nonlin3d::deck::IncrementStart,
 }
 
 fn solve(
     deck: &Path,
     out: &Path,
-    tolerance: Option<f64>,
-    increment: Option<f64>,
-    solver: &str,
+    flags: &SolveFlags<'_>,
     verbosity: Verbosity,
 ) -> Result<(), Failure> {
+    let SolveFlags {
+        tolerance,
+        increment,
+        solver,
+        ..
+    } = *flags;
     use nonlin3d::deck::Progress;
     let t0 = Instant::now();
     nonlin3d::budget::install(None);
@@ -170,7 +202,8 @@ fn solve(
     let options = nonlin3d::deck::StepOptions {
         newton,
         initial_increment: increment,
-        start: Default::default(),
+        start: flags.start,
+        strategy: flags.newton,
     };
     // Bad input (no step, an inverted element, …) and an output folder that cannot be written
     // are found before anything is solved; each increment lands there as it converges.
@@ -558,7 +591,29 @@ fn main() -> ExitCode {
             tolerance,
             increment,
             solver,
-        }) => solve(&deck, &out, tolerance, increment, &solver, verbosity),
+            newton,
+            extrapolation,
+            guard,
+            line_search,
+        }) => {
+            let flags = SolveFlags {
+                tolerance,
+                increment,
+                solver: &solver,
+                // clap admits only these three names.
+                newton: newton.parse().unwrap_or_default(),
+                start: nonlin3d::deck::IncrementStart {
+                    extrapolation: match extrapolation.as_str() {
+                        "none" => 0,
+                        "linear" => 1,
+                        _ => 2,
+                    },
+                    guarded: guard,
+                    line_search,
+                },
+            };
+            solve(&deck, &out, &flags, verbosity)
+        }
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -15,7 +15,7 @@
 
 use super::contact::{DeckContact, Settled};
 use super::loads::{Frame, History};
-use super::{IncrementSummary, StepOptions};
+use super::{IncrementSummary, StepOptions, Strategy};
 use crate::Error;
 use nonlin3d_mesh::{InpModel, ReadStep};
 use nonlin3d_newton::{
@@ -50,8 +50,10 @@ impl Control {
     }
 }
 
-/// The Newton settings of a step: `base` with the deck's `*CONTROLS` (I_C → iterations, R_n →
-/// relative residual tolerance, C_n → displacement-correction tolerance) and `line_search`.
+/// The Newton settings of a step: `base` with the deck's `*CONTROLS` (I_C → iterations, I_0 →
+/// the divergence test, I_R → the logarithmic convergence test, R_n → relative residual
+/// tolerance, C_n → displacement-correction tolerance) and `line_search`. Without I_0 and I_R
+/// neither test is made (nonlin3d's default: an attempt runs to I_C).
 pub(crate) fn newton_settings(
     base: &NewtonSettings,
     line_search: bool,
@@ -62,6 +64,8 @@ pub(crate) fn newton_settings(
         max_iterations: c.max_iterations.unwrap_or(base.max_iterations),
         relative_tolerance: c.residual_ratio.unwrap_or(base.relative_tolerance),
         displacement_tolerance: c.correction_ratio.unwrap_or(base.displacement_tolerance),
+        divergence_check_from: c.divergence_check.unwrap_or(base.divergence_check_from),
+        slow_check_from: c.slow_check.unwrap_or(base.slow_check_from),
         line_search,
         ..base.clone()
     }
@@ -95,7 +99,21 @@ pub(crate) fn run_step(
 ) -> Result<(), Error> {
     let step = &model.steps[k];
     let p = &step.procedure;
-    let settings = newton_settings(&options.newton, options.start.line_search, step);
+    let base = newton_settings(&options.newton, options.start.line_search, step);
+    let full = Strategy::Full.apply(&base);
+    // A kept-tangent attempt stops at CalculiX's divergence test from its fourth iteration
+    // (CalculiX's default I_0) unless the deck sets I_0, and the increment is then redone by
+    // full Newton (docs/PERFORMANCE.md: from the second iteration, the plate's second
+    // increment was redone for nothing).
+    let strategy = options.strategy.in_step(p.direct || !step.nlgeom);
+    let quick = (strategy != Strategy::Full).then(|| NewtonSettings {
+        divergence_check_from: match base.divergence_check_from {
+            0 => 4,
+            n => n,
+        },
+        ..strategy.apply(&base)
+    });
+    let settings = quick.as_ref().unwrap_or(&full);
     let control = Control::of(step);
     let period = frame.period;
     let eps = 1e-12 * period;
@@ -134,7 +152,16 @@ pub(crate) fn run_step(
         let start = u.clone();
         let predicted = path.predict(t + size);
         let guess = predicted.as_deref().map(|g| Guess { u: g, guarded });
-        let report = predicted_increment(problem, u, 0.0, 1.0, guess, &settings, &mut session)?;
+        let mut report = predicted_increment(problem, u, 0.0, 1.0, guess, settings, &mut session)?;
+        if quick.is_some() && !report.converged() {
+            // The kept tangent failed: the same increment by full Newton from the same start
+            // (`u` is left as it was), before any cutback.
+            let mut failed = IncrementSummary::of(&report, increment + 1, t + size, frame.start);
+            failed.termination = format!("{}; redone by full Newton", failed.termination);
+            attempts.push(failed);
+            session.invalidate();
+            report = predicted_increment(problem, u, 0.0, 1.0, guess, &full, &mut session)?;
+        }
         let iterations = report.iterations.len();
         let mut converged = report.converged();
         let mut summary = IncrementSummary::of(&report, increment + 1, t + size, frame.start);
@@ -142,7 +169,7 @@ pub(crate) fn run_step(
         // theirs is a failed attempt, cut back as one.
         let mut contact_failure = None;
         if let (true, Some(c)) = (converged, contact.as_deref_mut()) {
-            match c.settle(problem, u, &start, &settings, &mut session)? {
+            match c.settle(problem, u, &start, &full, &mut session)? {
                 Settled::Stable(s) => summary.contact = Some(s),
                 Settled::Failed(why) => {
                     converged = false;
@@ -151,6 +178,17 @@ pub(crate) fn run_step(
                     contact_failure = Some(why);
                 }
             }
+        }
+        // A kept tangent's last iteration made no factorisation: the inertia of the converged
+        // state from one made there (the next increment's tangent), where full Newton's last
+        // factorisation gives it (docs/PERFORMANCE.md, "Fewer factorisations in deck steps").
+        let unfactored = report
+            .iterations
+            .last()
+            .is_some_and(|i| i.negative_pivots.is_none());
+        if converged && unfactored {
+            summary.negative_pivots = Some(session.inertia_at(problem, u, 1.0)?);
+            summary.factorisations += 1;
         }
         attempts.push(summary);
         if converged {
@@ -208,7 +246,7 @@ pub(crate) fn run_step(
             easy_before = false;
             let factor = match report.termination {
                 _ if contact_failure.is_some() => control.slow_cutback,
-                Termination::MaxIterations => control.slow_cutback,
+                Termination::MaxIterations | Termination::TooSlow { .. } => control.slow_cutback,
                 _ => control.diverged_cutback,
             };
             dt = size * factor;

@@ -46,6 +46,92 @@ pub struct StepOptions {
     pub initial_increment: Option<f64>,
     /// How each increment starts and iterates.
     pub start: IncrementStart,
+    /// How often the tangent is factorised in the increments of a static step.
+    pub strategy: Strategy,
+}
+
+/// How often the tangent is factorised in a static deck step (thesis §2.1: full or modified
+/// Newton; quasi-Newton after Matthies & Strang 1979). Measured on the plate decks and on
+/// `tests/decks/` in docs/PERFORMANCE.md, "Fewer factorisations in deck steps". A `*STATIC,
+/// RIKS` step always iterates with full Newton.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Strategy {
+    /// [`Bfgs`](Self::Bfgs) in `*STATIC, DIRECT` steps, [`Full`](Self::Full) where the
+    /// increment size follows the iteration count (CalculiX's I_G / I_L are Newton
+    /// iterations: counted on BFGS iterations they shrank `static_control`'s increments, 10
+    /// instead of CalculiX's 6). The default.
+    #[default]
+    Auto,
+    /// A new tangent at every iteration (Newton–Raphson, as CalculiX).
+    Full,
+    /// The factorised tangent kept across iterations and increments, factorised anew when an
+    /// iteration reduced ‖r‖∞ by less than half.
+    Modified,
+    /// The kept tangent updated by up to 20 BFGS pairs, factorised anew when an iteration
+    /// reduced ‖r‖∞ by less than half.
+    Bfgs,
+}
+
+impl Strategy {
+    /// `auto`, `full`, `modified` or `bfgs`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Auto => "auto",
+            Self::Full => "full",
+            Self::Modified => "modified",
+            Self::Bfgs => "bfgs",
+        }
+    }
+
+    /// What [`Auto`](Self::Auto) is in a step with (`direct`) or without fixed increments.
+    pub fn in_step(self, direct: bool) -> Self {
+        match (self, direct) {
+            (Self::Auto, true) => Self::Bfgs,
+            (Self::Auto, false) => Self::Full,
+            (s, _) => s,
+        }
+    }
+
+    /// `base` with this strategy's refactorisation rule ([`Auto`](Self::Auto): full Newton's;
+    /// see [`in_step`](Self::in_step)).
+    pub fn apply(self, base: &NewtonSettings) -> NewtonSettings {
+        let kept = NewtonSettings {
+            keep_tangent: true,
+            refactor_every: usize::MAX,
+            ..base.clone()
+        };
+        match self {
+            Self::Auto | Self::Full => NewtonSettings {
+                keep_tangent: false,
+                refactor_every: 1,
+                quasi_newton: 0,
+                ..base.clone()
+            },
+            Self::Modified => NewtonSettings {
+                refactor_ratio: 0.5,
+                quasi_newton: 0,
+                ..kept
+            },
+            Self::Bfgs => NewtonSettings {
+                refactor_ratio: 0.5,
+                quasi_newton: 20,
+                ..kept
+            },
+        }
+    }
+}
+
+impl std::str::FromStr for Strategy {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "auto" => Ok(Self::Auto),
+            "full" => Ok(Self::Full),
+            "modified" => Ok(Self::Modified),
+            "bfgs" => Ok(Self::Bfgs),
+            _ => Err(format!("{s}: expected auto, full, modified or bfgs")),
+        }
+    }
 }
 
 /// How each increment of a deck step starts and iterates (docs/PERFORMANCE.md, "Fewer
@@ -95,8 +181,13 @@ pub struct IncrementSummary {
     pub converged: bool,
     /// How it ended.
     pub termination: String,
-    /// Negative pivots of the last factorisation (of a Riks increment: at its start).
+    /// Negative pivots of the last factorisation (of a Riks increment: at its start); with a
+    /// kept tangent ([`Strategy`]) of one made at the converged state if its last iteration
+    /// made none.
     pub negative_pivots: Option<usize>,
+    /// Tangents factorised in the attempt: by its iterations, and at its converged state for
+    /// its negative pivots (the tangent predictor's are not counted).
+    pub factorisations: usize,
     /// `*STATIC, RIKS`: the load proportionality factor at the end of the increment.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub lpf: Option<f64>,
@@ -121,6 +212,11 @@ impl IncrementSummary {
             converged: a.converged(),
             termination: a.termination.to_string(),
             negative_pivots: a.negative_pivots(),
+            factorisations: a
+                .iterations
+                .iter()
+                .filter(|i| i.negative_pivots.is_some())
+                .count(),
             lpf: None,
             arc_length: None,
             contact: None,

@@ -85,6 +85,8 @@ pub(crate) fn run_step(
                 n => format!("converged after {n} cutbacks of the arc length"),
             },
             negative_pivots: Some(inc.negative_pivots),
+            // Full Newton: one a corrector iteration (the predictor's not counted).
+            factorisations: inc.iterations,
             lpf: Some(inc.lambda),
             arc_length: Some(inc.arc * riks.period),
             contact: None,

@@ -446,9 +446,9 @@ fn refusals_name_line_keyword_and_parameter() {
             "q_0 = 5.",
         ),
         (
-            format!("*CONTROLS, PARAMETERS=TIME INCREMENTATION\n6\n{STEP}*END STEP\n"),
+            format!("*CONTROLS, PARAMETERS=TIME INCREMENTATION\n6, 3, 7\n{STEP}*END STEP\n"),
             "*CONTROLS data",
-            "I_0 = 6",
+            "I_P = 7",
         ),
         (
             format!("{STEP}*NODE PRINT, NSET=TOP, TIME POINTS=T\nU\n*END STEP\n"),

@@ -43,6 +43,15 @@ pub struct NewtonSettings {
     /// Also require the correction ‖Δu‖∞ of the last iteration ≤ displacement_tolerance·‖u‖∞
     /// (0 = residual only, the default).
     pub displacement_tolerance: f64,
+    /// CalculiX's I_0: from this iteration on (1-based), an attempt whose residual after the
+    /// last two iterations stayed above the one before them (r_{i−1} > r_{i−2} and r_i > r_{i−2},
+    /// r_i above the tolerance) stops as [`Termination::Diverging`]. 0 = never (the default).
+    pub divergence_check_from: usize,
+    /// CalculiX's I_R: from this iteration on, the iterations an attempt still needs are
+    /// estimated by logarithmic convergence, i + ln(tol/r_i)/ln(r_i/r_{i−1}) (while the
+    /// residual falls); an estimate above `max_iterations` stops it as
+    /// [`Termination::TooSlow`]. 0 = never (the default).
+    pub slow_check_from: usize,
 }
 
 impl Default for NewtonSettings {
@@ -58,6 +67,8 @@ impl Default for NewtonSettings {
             quasi_newton: 0,
             solver: SolverKind::FaerLdlt,
             displacement_tolerance: 0.0,
+            divergence_check_from: 0,
+            slow_check_from: 0,
         }
     }
 }
@@ -89,6 +100,15 @@ pub enum Termination {
     Diverged,
     /// A residual or displacement became NaN or infinite.
     NonFinite,
+    /// From [`NewtonSettings::divergence_check_from`] on, the residual stayed above the one two
+    /// iterations back for two iterations (CalculiX's divergence test, cut back by D_F).
+    Diverging,
+    /// From [`NewtonSettings::slow_check_from`] on, the logarithmic estimate of the iterations
+    /// to convergence exceeded the limit (CalculiX's "too slow convergence", cut back by D_C).
+    TooSlow {
+        /// The estimated total of iterations.
+        estimate: usize,
+    },
     /// The tangent could not be factored (zero pivot, …): the message names the DOF.
     Singular(String),
     /// The residual met the tolerance, but the tangent there has more negative pivots
@@ -111,6 +131,14 @@ impl std::fmt::Display for Termination {
             Self::MaxIterations => write!(f, "no convergence within the iteration limit"),
             Self::Diverged => write!(f, "diverged (residual above 1e8 times its initial value)"),
             Self::NonFinite => write!(f, "a residual or displacement became NaN or infinite"),
+            Self::Diverging => write!(
+                f,
+                "diverging (the residual stayed above the one two iterations back for two iterations)"
+            ),
+            Self::TooSlow { estimate } => write!(
+                f,
+                "too slow convergence (about {estimate} iterations estimated, more than allowed)"
+            ),
             Self::Singular(why) => write!(f, "singular tangent: {why}"),
             Self::InertiaChanged { before, after } => write!(
                 f,
@@ -423,9 +451,46 @@ fn iterations(
             report.termination = Termination::Diverged;
             return Ok(report);
         }
+        if let Some(stop) = early_stop(settings, &report, tolerance) {
+            cache.invalidate();
+            report.termination = stop;
+            return Ok(report);
+        }
     }
     cache.invalidate();
     Ok(report)
+}
+
+/// CalculiX's checks of an unconverged attempt after its i-th iteration (checkconvergence):
+/// from I_0 ([`NewtonSettings::divergence_check_from`]) on, r_{i−1} > r_{i−2} and r_i > r_{i−2}
+/// (r_0 the initial residual) is divergence; from I_R
+/// ([`NewtonSettings::slow_check_from`]) on, while the residual falls, the logarithmic
+/// estimate i + ln(tol/r_i)/ln(r_i/r_{i−1}) of the iterations to convergence (linear
+/// convergence at the last rate) above `max_iterations` is too slow.
+fn early_stop(
+    settings: &NewtonSettings,
+    report: &IncrementReport,
+    tolerance: f64,
+) -> Option<Termination> {
+    let i = report.iterations.len();
+    let r = |k: usize| match k {
+        0 => report.initial_residual,
+        k => report.iterations[k - 1].residual,
+    };
+    let from = |n: usize| n > 0 && i >= n;
+    if from(settings.divergence_check_from) && i >= 2 && r(i - 1) > r(i - 2) && r(i) > r(i - 2) {
+        return Some(Termination::Diverging);
+    }
+    if from(settings.slow_check_from) && r(i) < r(i - 1) && tolerance > 0.0 {
+        let more = (tolerance / r(i)).ln() / (r(i) / r(i - 1)).ln();
+        let estimate = (i as f64 + more).ceil();
+        if estimate > settings.max_iterations as f64 {
+            return Some(Termination::TooSlow {
+                estimate: estimate.min(1e9) as usize,
+            });
+        }
+    }
+    None
 }
 
 /// Refuses `refactor_every` or `max_iterations` of 0 and a `refactor_ratio` not above 0.

@@ -139,6 +139,12 @@ pub struct Controls {
     pub residual_ratio: Option<f64>,
     /// `PARAMETERS=FIELD` C_n: and the largest correction ≤ C_n × the largest displacement.
     pub correction_ratio: Option<f64>,
+    /// `TIME INCREMENTATION` I_0: from this iteration on, a residual that stays above the one
+    /// two iterations back for two iterations is divergence (cut back by D_F).
+    pub divergence_check: Option<usize>,
+    /// I_R: from this iteration on, a logarithmic estimate of the iterations to convergence
+    /// above I_C is too slow convergence (cut back by D_C).
+    pub slow_check: Option<usize>,
     /// `TIME INCREMENTATION` I_C: iterations before an increment is cut back.
     pub max_iterations: Option<usize>,
     /// I_L: more iterations than this shrink the next increment by D_B.

@@ -467,6 +467,8 @@ impl Reader {
                     }
                 };
                 match name {
+                    "I_0" => c.divergence_check = Some(int_of(v)?.max(1)),
+                    "I_R" => c.slow_check = Some(int_of(v)?.max(1)),
                     "I_C" => c.max_iterations = Some(int_of(v)?.max(1)),
                     "I_L" => c.slow_iterations = Some(int_of(v)?),
                     "I_G" => c.easy_iterations = Some(int_of(v)?),
