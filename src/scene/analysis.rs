@@ -32,15 +32,16 @@ impl RuleName {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "kebab-case")]
 pub enum NewtonName {
-    /// Full Newton–Raphson (tangent every iteration).
+    /// Full Newton–Raphson (tangent every iteration; the default).
+    #[default]
     Full,
-    /// Modified Newton–Raphson (the default): K_T factorised at each increment's start and
+    /// Modified Newton–Raphson: K_T factorised at each increment's start and
     /// then every `refactor_every` iterations, or after an iteration that did not halve ‖r‖∞;
     /// the same converged states as `full` to the residual tolerance, in about 0.6 of its
     /// factorisations. The levels up to the one that takes the §3.2 perturbation are solved
-    /// with full Newton (the branch is picked there; docs/PERFORMANCE.md, "Modified Newton by
-    /// default").
-    #[default]
+    /// with full Newton (the branch is picked there). Not the default: on the hard case of a
+    /// level 4× past buckling it lands on unstable states (docs/PERFORMANCE.md, "Modified Newton
+    /// as an option").
     Modified,
     /// Quasi-Newton: BFGS updates (20 pairs) of a factorised tangent kept across increments,
     /// refactorised when an iteration lets ‖r‖∞ grow; the stability of each converged level

@@ -32,7 +32,7 @@ fn knobs_merge_into_the_scene_field_by_field_case_over_common() {
     assert_ne!(base.mesh.inside, Some(3));
     assert!(base.mesh.element.is_some());
     assert_eq!(base.loads.strains.len(), 5);
-    assert_eq!(base.analysis.newton, NewtonName::Modified);
+    assert_eq!(base.analysis.newton, NewtonName::Full);
     assert_ne!(base.contact.crack_faces, CrackFacesName::On);
     let plan = Plan::from_toml(PLAN).unwrap();
     let scenes = plan.scenes(&base).unwrap();
@@ -49,7 +49,7 @@ fn knobs_merge_into_the_scene_field_by_field_case_over_common() {
     let (sliced, other) = (&scenes[0], &scenes[1]);
     assert_eq!(sliced.mesh.slices, Some(4));
     assert_eq!(sliced.contact.crack_faces, CrackFacesName::Off);
-    assert_eq!(sliced.analysis.newton, NewtonName::Modified);
+    assert_eq!(sliced.analysis.newton, NewtonName::Full);
     // The case's table over [common]'s of the same name, the scene's slices kept.
     assert_eq!(other.mesh.slices, Some(8));
     assert_eq!(other.contact.crack_faces, CrackFacesName::On);
