@@ -17,8 +17,7 @@
 //! With [`super::FaerSplit::Halves`] the f32 factor is the split one (f32 halves, S in f64)
 //! and the same rules hold; the f64 fallback is then the f64 split.
 
-use super::pivots::{PivotRule, negative_pivots};
-use super::split::Attempt;
+use super::pivots::{Attempt, PivotRule, negative_pivots};
 use super::{FaerSolver, factor_diagonal};
 use crate::{Factorization, SolverError, SymmetricMatrix};
 use faer::dyn_stack::{MemStack, StackReq};

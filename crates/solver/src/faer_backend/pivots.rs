@@ -4,6 +4,10 @@
 
 use crate::SolverError;
 
+/// A factorisation's outcome: the factor, or why it cannot be trusted (the caller takes
+/// another path), or an error of A itself.
+pub(super) type Attempt<T> = Result<Result<T, &'static str>, SolverError>;
+
 /// How a pivot is judged.
 #[derive(Debug, Clone, Copy)]
 pub(super) enum PivotRule {

@@ -18,7 +18,7 @@
 //! S's in f64).
 
 use super::factor_diagonal;
-use super::pivots::{PivotRule, negative_pivots};
+use super::pivots::{Attempt, PivotRule, negative_pivots};
 use crate::{Factorization, SolverError, SymmetricMatrix, SymmetricPattern};
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::ldlt::factor::{LdltError, LdltRegularization};
@@ -116,10 +116,6 @@ impl Real for f32 {
         }
     }
 }
-
-/// A factorisation's outcome: the factor, or why it cannot be trusted (the caller takes
-/// another path), or an error of A itself.
-pub(super) type Attempt<T> = Result<Result<T, &'static str>, SolverError>;
 
 /// The split factor: two halves and the dense separator block.
 pub(super) struct Split {
