@@ -306,7 +306,7 @@ pub fn table(results: &Results) -> String {
         let _ = writeln!(
             s,
             "± G max: the largest estimated discretisation error of G_I, G_II, G_III, G_T over \
-             the front, from the same levels on a mesh twice as coarse ({dofs} DOFs; per point \
+             the front, from the same levels on a coarser companion mesh ({dofs} DOFs; per point \
              in front_K.csv and results.json)"
         );
     }

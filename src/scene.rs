@@ -348,8 +348,9 @@ pub struct MeshControls {
     #[serde(default)]
     pub elliptic_map: Option<MapName>,
     /// The discretisation-error estimate reported with every G (docs/ACCURACY.md §3):
-    /// `companion` (default: the same levels on a mesh twice as coarse, about a tenth of the
-    /// run's time) or `off`.
+    /// `companion` (default: the same levels on a coarser companion mesh — in-plane counts
+    /// halved, the sublaminate layers kept where there are two or more — about 12–30 % of the
+    /// run's CPU) or `off`.
     #[serde(default)]
     pub error_estimate: Option<ErrorEstimateName>,
     /// Target relative error of G at the front (e.g. 0.02): picks the front-resolving mesh

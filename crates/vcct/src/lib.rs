@@ -9,7 +9,7 @@
 //! | [`closure_energy`] | Σ G_T·area, the VCCT estimate of −ΔU | — |
 //! | [`respect_contact`], [`FaceState`] | G_I = 0 where contact holds the faces behind a point; open/closed/overlap per point | §5.4 |
 //! | [`MixedMode`] | power law (Wu and Reuter 1965) and Benzeggagh–Kenane (1996) failure indices, mode mix | — |
-//! | [`estimate`] | the discretisation error of G per point from a companion mesh twice as coarse | — |
+//! | [`estimate`] | the discretisation error of G per point from a coarser companion mesh (in-plane counts halved; the layers that set the mode split kept) | — |
 //! | [`critical_strain`] | onset strain of a strain sweep by interpolation | — |
 //!
 //! The front topology (c, d ahead; a, a′, b, b′ behind), local frames and S come with the mesh
