@@ -9,7 +9,7 @@ use nonlin3d_element::{
 };
 use nonlin3d_laminate::materials;
 use nonlin3d_mesh::{
-    EllipticMap, EmbeddedParams, MeshError, embedded_delamination_with_front, quality,
+    EllipticMap, EmbeddedParams, Mesh, MeshError, embedded_delamination_with_front, quality,
 };
 
 #[path = "front_resolving/front_band.rs"]
@@ -245,4 +245,56 @@ fn ply_layers_keep_their_plies_and_take_the_radial_grading() {
     assert!((z[8] - top).abs() < 1e-12);
     assert!(nonlin3d_mesh::thin_film(&graded(0.1e-3)).is_ok());
     assert!(nonlin3d_mesh::edge_delamination(&graded(0.1e-3)).is_ok());
+}
+
+/// Faces by their sorted corner nodes: each interior face twice; those seen once lie on the
+/// outer planes or on the crack (z = H inside the front). The volume is W²(H + h) and no two
+/// nodes coincide but the crack pairs: the template closes the column with no gap, overlap or
+/// duplicate.
+pub(crate) fn assert_conformal(p: &EmbeddedParams, m: &Mesh) {
+    const FACES: [[usize; 4]; 6] = [
+        [0, 1, 2, 3],
+        [4, 5, 6, 7],
+        [0, 1, 5, 4],
+        [1, 2, 6, 5],
+        [2, 3, 7, 6],
+        [3, 0, 4, 7],
+    ];
+    let mut faces = std::collections::HashMap::new();
+    for c in &m.cells {
+        for f in FACES {
+            let mut key: Vec<usize> = f.iter().map(|&i| c.nodes[i]).collect();
+            key.sort_unstable();
+            *faces.entry(key).or_insert(0usize) += 1;
+        }
+    }
+    let tol = 1e-9 * p.w;
+    for (key, count) in faces {
+        let x: Vec<[f64; 3]> = key.iter().map(|&n| m.nodes[n]).collect();
+        let plane = |k: usize, v: f64| x.iter().all(|y| (y[k] - v).abs() < tol);
+        let outer = plane(0, 0.0)
+            || plane(1, 0.0)
+            || plane(2, 0.0)
+            || plane(0, p.w)
+            || plane(1, p.w)
+            || plane(2, p.base + p.h);
+        let crack = plane(2, p.base) && x.iter().all(|y| y[0].hypot(y[1]) <= p.a * (1.0 + 1e-12));
+        assert!(
+            count == 2 || (count == 1 && (outer || crack)),
+            "face {x:?} used {count} times"
+        );
+    }
+    let volume = m.volume().unwrap();
+    let exact = p.w * p.w * (p.base + p.h);
+    assert!(
+        (volume - exact).abs() < 1e-10 * exact,
+        "{volume} vs {exact}"
+    );
+    let mut sorted: Vec<[f64; 3]> = m.nodes.clone();
+    sorted.sort_by(|a, b| a.partial_cmp(b).unwrap());
+    let coincident = sorted
+        .windows(2)
+        .filter(|w| (0..3).all(|k| (w[0][k] - w[1][k]).abs() < tol))
+        .count();
+    assert_eq!(coincident, m.node_sets["crack_upper"].len());
 }

@@ -1,7 +1,7 @@
 //! The front band (issue 25, `EmbeddedParams::front_band`): three times the slices in the rings
 //! either side of the front, joined to the coarse rings by a conformal 1 → 3 transition ring.
 
-use super::{graded, patch_test};
+use super::{assert_conformal, graded, patch_test};
 use nonlin3d_element::ElementKind;
 use nonlin3d_mesh::{
     EllipticMap, EmbeddedParams, FrontBand, MeshError, embedded_delamination_with_front, quality,
@@ -64,46 +64,7 @@ fn the_band_puts_three_times_the_slices_on_the_front_and_stays_conformal() {
         assert!((x[0].hypot(x[1]) - p.a).abs() < 1e-12, "{x:?}");
         assert!((fp.delta_a - 0.2e-3).abs() < 1e-12, "Δa {}", fp.delta_a);
     }
-    let volume = m.volume().unwrap();
-    let exact = p.w * p.w * (p.base + p.h);
-    assert!(
-        (volume - exact).abs() < 1e-10 * exact,
-        "{volume} vs {exact}"
-    );
-    // Faces by their sorted corner nodes: each interior face twice; the faces seen once lie on
-    // the outer planes or on z = H inside the front (the crack's two faces).
-    let mut faces = std::collections::HashMap::new();
-    const FACES: [[usize; 4]; 6] = [
-        [0, 1, 2, 3],
-        [4, 5, 6, 7],
-        [0, 1, 5, 4],
-        [1, 2, 6, 5],
-        [2, 3, 7, 6],
-        [3, 0, 4, 7],
-    ];
-    for c in &m.cells {
-        for f in FACES {
-            let mut key: Vec<usize> = f.iter().map(|&i| c.nodes[i]).collect();
-            key.sort_unstable();
-            *faces.entry(key).or_insert(0usize) += 1;
-        }
-    }
-    let tol = 1e-9 * p.w;
-    for (key, count) in faces {
-        let x: Vec<[f64; 3]> = key.iter().map(|&n| m.nodes[n]).collect();
-        let plane = |k: usize, v: f64| x.iter().all(|y| (y[k] - v).abs() < tol);
-        let outer = plane(0, 0.0)
-            || plane(1, 0.0)
-            || plane(2, 0.0)
-            || plane(0, p.w)
-            || plane(1, p.w)
-            || plane(2, p.base + p.h);
-        let crack = plane(2, p.base) && x.iter().all(|y| y[0].hypot(y[1]) <= p.a * (1.0 + 1e-12));
-        assert!(
-            count == 2 || (count == 1 && (outer || crack)),
-            "face {x:?} used {count} times"
-        );
-    }
+    assert_conformal(&p, &m);
 }
 
 /// Quality (docs/MESH.md's bounds, measured): the transition's cells are the worst. Their
