@@ -226,7 +226,11 @@ impl LinearSolver for FaerSolver {
         self.mixed = mixed::MixedState::default();
         self.split_state = None;
         self.split_fallback = None;
+        // The orders the split may need: our nested dissection's with its top sides, METIS's
+        // alone (its top sides are found from the order after the choice, `split/top.rs`).
+        let wants_split = self.split == FaerSplit::Halves && self.mode == FaerMode::Ldlt;
         let top = std::cell::Cell::new(None);
+        let metis_order = std::cell::Cell::new(None);
         let symbolic_for = |ordering: SymmetricOrdering<'_, usize>| {
             factorize_symbolic_cholesky(a, Side::Lower, ordering, params).map_err(|e| match e {
                 faer::sparse::FaerError::OutOfMemory => SolverError::OutOfMemory {
@@ -245,6 +249,9 @@ impl LinearSolver for FaerSolver {
         let metis = || {
             let perm = crate::metis_nested_dissection(pattern)?;
             let p = faer::perm::PermRef::new_checked(perm.forward(), perm.inverse(), n);
+            if wants_split {
+                metis_order.set(Some(perm.forward().to_vec()));
+            }
             symbolic_for(SymmetricOrdering::Custom(p))
         };
         let (symbolic, chosen) = match self.ordering {
@@ -295,10 +302,14 @@ impl LinearSolver for FaerSolver {
         })?;
         let flops = factor_flops(&symbolic);
         let lower_nonzeros = column_counts(&symbolic).iter().sum();
-        let splits = self.split == FaerSplit::Halves
-            && self.mode == FaerMode::Ldlt
-            && chosen == FaerOrdering::NestedDissection;
-        if let (true, Some((forward, sides))) = (splits, top.take()) {
+        let sides = match chosen {
+            FaerOrdering::NestedDissection => top.take(),
+            FaerOrdering::Metis => metis_order
+                .take()
+                .and_then(|f| split::top_split(pattern, &f).map(|s| (f, s))),
+            _ => None,
+        };
+        if let (true, Some((forward, sides))) = (wants_split, sides) {
             // The unsplit factor is allocated only if a fallback needs it.
             self.split_state = split::Split::analyze(pattern, &forward, sides)?;
         }

@@ -49,15 +49,16 @@ pub enum FaerOrdering {
 /// From this many DOFs on, [`FaerOrdering::Auto`] leaves AMD out of its comparison.
 pub const AUTO_WITHOUT_AMD_DOFS: usize = 200_000;
 
-/// Whether [`FaerSolver`]'s LDLᵀ splits the matrix at the nested-dissection order's top
+/// Whether [`super::FaerSolver`]'s LDLᵀ splits the matrix at the nested-dissection order's top
 /// separator and factors the two halves on two threads (tree-level parallelism, `split.rs`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum FaerSplit {
     /// One faer factorisation (the default).
     #[default]
     Off,
-    /// Split whenever the chosen ordering is nested dissection and its top level was
-    /// dissected (LDLᵀ only: LLᵀ ignores it). In f64 it falls back to the unsplit factor when
+    /// Split whenever the chosen ordering is nested dissection (ours or METIS's) and its top
+    /// level was dissected into halves of at least a fifth of the interior each (LDLᵀ only:
+    /// LLᵀ ignores it). In f64 it falls back to the unsplit factor when
     /// a half's separator block meets a pivot below 1e-8 of its diagonal; with
     /// [`FaerPrecision::Mixed`] the halves are f32, the split solve is refined in f64, and
     /// every fallback of mixed precision goes to the f64 split (then to the unsplit factor).
