@@ -10,7 +10,8 @@
 //! out the profile solver, `-- noamd` to leave out faer with AMD, `-- mixed` to add faer ND
 //! with an f32 factor refined in f64, `-- split` to add faer ND split at the top separator
 //! (`FaerSplit::Halves`, halves on two threads), `-- splitmixed` to add the split with f32
-//! halves refined in f64, `-- metis` to add faer with METIS's order,
+//! halves refined in f64, `-- metis` to add faer with METIS's order (and the `split`,
+//! `mixed` and `splitmixed` rows on METIS's order beside ND's; `nond` leaves ND's out),
 //! `-- auto` to add faer with `FaerOrdering::Auto` (its symbolic time is every candidate's
 //! analysis, its label the order chosen), `-- nond` to leave out faer with our nested
 //! dissection, `-- rounds=N` to run every solver of a case N times in
@@ -346,6 +347,14 @@ fn main() {
         // The tree-level split (two halves on two threads, `FaerSplit::Halves`) in f64, and
         // mixed precision (f32 factor refined in f64) unsplit and split.
         let mut faers: Vec<(FaerSolver, String)> = Vec::new();
+        // On our nested dissection's order (unless `nond`) and on METIS's (with `metis`).
+        let split_orderings: Vec<(FaerOrdering, &str)> = [
+            (FaerOrdering::NestedDissection, "ND", !has("nond")),
+            (FaerOrdering::Metis, "METIS", has("metis")),
+        ]
+        .into_iter()
+        .filter_map(|(o, n, keep)| keep.then_some((o, n)))
+        .collect();
         for (flag, split, precision, name) in [
             ("split", FaerSplit::Halves, FaerPrecision::Double, "split"),
             (
@@ -364,32 +373,36 @@ fn main() {
             if !has(flag) {
                 continue;
             }
-            for threads in [1, 2] {
-                let mut s = FaerSolver::new(FaerMode::Ldlt)
-                    .with_ordering(FaerOrdering::NestedDissection)
-                    .with_threads(threads);
-                s.precision = precision;
-                s.split = split;
-                faers.push((
-                    s,
-                    format!(
-                        "faer LDLᵀ ND {name}, {threads} thread{}",
-                        if threads > 1 { "s" } else { "" }
-                    ),
-                ));
+            for &(ordering, oname) in &split_orderings {
+                for threads in [1, 2] {
+                    let mut s = FaerSolver::new(FaerMode::Ldlt)
+                        .with_ordering(ordering)
+                        .with_threads(threads);
+                    s.precision = precision;
+                    s.split = split;
+                    faers.push((
+                        s,
+                        format!(
+                            "faer LDLᵀ {oname} {name}, {threads} thread{}",
+                            if threads > 1 { "s" } else { "" }
+                        ),
+                    ));
+                }
             }
         }
         // The split's shape: the two threads' work and the join's (what decides whether a
         // deeper split would balance better).
-        if has("split") || has("splitmixed") {
-            let mut s =
-                FaerSolver::new(FaerMode::Ldlt).with_ordering(FaerOrdering::NestedDissection);
+        for &(ordering, oname) in split_orderings
+            .iter()
+            .filter(|_| has("split") || has("splitmixed"))
+        {
+            let mut s = FaerSolver::new(FaerMode::Ldlt).with_ordering(ordering);
             s.split = FaerSplit::Halves;
             if let Ok(whole) = s.analyze(k.pattern())
                 && let (Some((n0, n1, ns)), Some([w0, w1, ws])) = (s.split_sizes(), s.split_work())
             {
                 println!(
-                    "split of {case}: interiors {n0} / {n1} DOF, separator {ns}; Σc² halves {:.2} / {:.2} G (ratio {:.3}), S {:.2} G; unsplit {:.2} G",
+                    "split of {case} ({oname}): interiors {n0} / {n1} DOF, separator {ns}; Σc² halves {:.2} / {:.2} G (ratio {:.3}), S {:.2} G; unsplit {:.2} G",
                     w0 / 1e9,
                     w1 / 1e9,
                     w0.max(w1) / w0.min(w1),

@@ -18,74 +18,16 @@ use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Conj, MatMut, Par, Side};
 use std::sync::Arc;
 
+mod choice;
 mod counts;
 use counts::{column_counts, factor_flops};
+mod dispatch;
 mod mixed;
+mod options;
 mod pivots;
 mod split;
 pub use mixed::{FaerPrecision, MixedStats};
-
-/// Which factorisation faer computes.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum FaerMode {
-    /// LDLᵀ without pivoting: positive definite and indefinite matrices, inertia from D.
-    #[default]
-    Ldlt,
-    /// Cholesky LLᵀ: positive definite only; a non-positive pivot is
-    /// [`SolverError::NotPositiveDefinite`].
-    Llt,
-}
-
-/// Simplicial (column by column) or supernodal (dense blocks) factor structure.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum FaerStructure {
-    /// faer decides from the flop count (the default): simplicial for small or very sparse
-    /// factors, supernodal otherwise.
-    #[default]
-    Auto,
-    /// Always simplicial.
-    Simplicial,
-    /// Always supernodal.
-    Supernodal,
-}
-
-/// The fill-reducing ordering of the faer backend.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum FaerOrdering {
-    /// Approximate minimum degree (faer's port of SuiteSparse AMD) on the DOF graph.
-    Amd,
-    /// Nested dissection on the node graph ([`crate::nested_dissection`]).
-    NestedDissection,
-    /// METIS's nested dissection on the node graph ([`crate::metis_nested_dissection`]).
-    Metis,
-    /// The candidates' symbolic factors compared by flops (Σ c_k² over the column counts),
-    /// the fewest kept (ties: AMD, then nested dissection, then METIS). The default. Below
-    /// [`AUTO_WITHOUT_AMD_DOFS`] DOFs the candidates are AMD, nested dissection and METIS; at
-    /// and above it nested dissection and METIS (AMD needed 1.6–6× the best one's flops on
-    /// every model measured from 10 k DOF up, and its large symbolic factor is the costliest
-    /// analysis there; neither nested dissection nor METIS was always the better:
-    /// docs/PERFORMANCE.md). A METIS failure only removes it from the comparison.
-    #[default]
-    Auto,
-}
-
-/// From this many DOFs on, [`FaerOrdering::Auto`] leaves AMD out of its comparison.
-pub const AUTO_WITHOUT_AMD_DOFS: usize = 200_000;
-
-/// Whether [`FaerSolver`]'s LDLᵀ splits the matrix at the nested-dissection order's top
-/// separator and factors the two halves on two threads (tree-level parallelism, `split.rs`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum FaerSplit {
-    /// One faer factorisation (the default).
-    #[default]
-    Off,
-    /// Split whenever the chosen ordering is nested dissection and its top level was
-    /// dissected (LDLᵀ only: LLᵀ ignores it). In f64 it falls back to the unsplit factor when
-    /// a half's separator block meets a pivot below 1e-8 of its diagonal; with
-    /// [`FaerPrecision::Mixed`] the halves are f32, the split solve is refined in f64, and
-    /// every fallback of mixed precision goes to the f64 split (then to the unsplit factor).
-    Halves,
-}
+pub use options::{AUTO_WITHOUT_AMD_DOFS, FaerMode, FaerOrdering, FaerSplit, FaerStructure};
 
 /// faer's sparse Cholesky behind [`LinearSolver`].
 pub struct FaerSolver {
@@ -240,61 +182,6 @@ fn pivot_position(simplicial: bool, index: usize) -> usize {
     }
 }
 
-/// A symbolic factor, or why it could not be made.
-type SymbolicResult = Result<SymbolicCholesky<usize>, SolverError>;
-
-/// [`FaerOrdering::Auto`]'s comparison: AMD (if `with_amd`), nested dissection and METIS, the
-/// symbolic factor with the fewest flops kept, earlier candidates winning ties. One symbolic
-/// factor is kept alive beside the one being made: a loser's structure is dropped at once
-/// (AMD's is rebuilt from its order if it wins). A METIS failure only removes METIS from the
-/// comparison.
-fn auto_choice(
-    symbolic_for: &dyn Fn(SymmetricOrdering<'_, usize>) -> SymbolicResult,
-    nested: &dyn Fn() -> SymbolicResult,
-    metis: &dyn Fn() -> SymbolicResult,
-    with_amd: bool,
-    n: usize,
-) -> Result<(SymbolicCholesky<usize>, FaerOrdering), SolverError> {
-    let mut best_flops = f64::INFINITY;
-    let mut amd_perm: Option<Option<(Vec<usize>, Vec<usize>)>> = None;
-    if with_amd {
-        let amd = symbolic_for(SymmetricOrdering::Amd)?;
-        best_flops = factor_flops(&amd);
-        amd_perm = Some(
-            amd.perm()
-                .map(|p| (p.arrays().0.to_vec(), p.arrays().1.to_vec())),
-        );
-    }
-    let mut best: Option<(SymbolicCholesky<usize>, FaerOrdering)> = None;
-    let nd = nested()?;
-    if factor_flops(&nd) < best_flops {
-        best_flops = factor_flops(&nd);
-        best = Some((nd, FaerOrdering::NestedDissection));
-    } else {
-        drop(nd);
-    }
-    if let Ok(m) = metis()
-        && factor_flops(&m) < best_flops
-    {
-        best = Some((m, FaerOrdering::Metis));
-    }
-    match (best, amd_perm) {
-        (Some(b), _) => Ok(b),
-        (None, Some(Some((fwd, inv)))) => Ok((
-            symbolic_for(SymmetricOrdering::Custom(faer::perm::PermRef::new_checked(
-                &fwd, &inv, n,
-            )))?,
-            FaerOrdering::Amd,
-        )),
-        // AMD won with no permutation (faer's identity) — or nothing was compared, which
-        // cannot happen: nested dissection always gives a factor or an error.
-        (None, _) => Ok((
-            symbolic_for(SymmetricOrdering::Identity)?,
-            FaerOrdering::Amd,
-        )),
-    }
-}
-
 /// Threads of the triangular solves: one. faer's column-major matrix-vector product (a solve
 /// with one right-hand side, blocks of 256² entries and more) splits the *depth* between
 /// threads and adds the partial sums, so its bits depend on the thread count; the solve is
@@ -339,7 +226,11 @@ impl LinearSolver for FaerSolver {
         self.mixed = mixed::MixedState::default();
         self.split_state = None;
         self.split_fallback = None;
+        // The orders the split may need: our nested dissection's with its top sides, METIS's
+        // alone (its top sides are found from the order after the choice, `split/top.rs`).
+        let wants_split = self.split == FaerSplit::Halves && self.mode == FaerMode::Ldlt;
         let top = std::cell::Cell::new(None);
+        let metis_order = std::cell::Cell::new(None);
         let symbolic_for = |ordering: SymmetricOrdering<'_, usize>| {
             factorize_symbolic_cholesky(a, Side::Lower, ordering, params).map_err(|e| match e {
                 faer::sparse::FaerError::OutOfMemory => SolverError::OutOfMemory {
@@ -358,6 +249,9 @@ impl LinearSolver for FaerSolver {
         let metis = || {
             let perm = crate::metis_nested_dissection(pattern)?;
             let p = faer::perm::PermRef::new_checked(perm.forward(), perm.inverse(), n);
+            if wants_split {
+                metis_order.set(Some(perm.forward().to_vec()));
+            }
             symbolic_for(SymmetricOrdering::Custom(p))
         };
         let (symbolic, chosen) = match self.ordering {
@@ -365,7 +259,7 @@ impl LinearSolver for FaerSolver {
             FaerOrdering::NestedDissection => (nested()?, FaerOrdering::NestedDissection),
             FaerOrdering::Metis => (metis()?, FaerOrdering::Metis),
             FaerOrdering::Auto => {
-                auto_choice(&symbolic_for, &nested, &metis, n < AUTO_WITHOUT_AMD_DOFS, n)?
+                choice::auto_choice(&symbolic_for, &nested, &metis, n < AUTO_WITHOUT_AMD_DOFS, n)?
             }
         };
         let req = match self.mode {
@@ -408,10 +302,14 @@ impl LinearSolver for FaerSolver {
         })?;
         let flops = factor_flops(&symbolic);
         let lower_nonzeros = column_counts(&symbolic).iter().sum();
-        let splits = self.split == FaerSplit::Halves
-            && self.mode == FaerMode::Ldlt
-            && chosen == FaerOrdering::NestedDissection;
-        if let (true, Some((forward, sides))) = (splits, top.take()) {
+        let sides = match chosen {
+            FaerOrdering::NestedDissection => top.take(),
+            FaerOrdering::Metis => metis_order
+                .take()
+                .and_then(|f| split::top_split(pattern, &f).map(|s| (f, s))),
+            _ => None,
+        };
+        if let (true, Some((forward, sides))) = (wants_split, sides) {
             // The unsplit factor is allocated only if a fallback needs it.
             self.split_state = split::Split::analyze(pattern, &forward, sides)?;
         }
@@ -462,29 +360,6 @@ impl LinearSolver for FaerSolver {
 }
 
 impl FaerSolver {
-    /// Whether factorisations go through the f32 path.
-    fn uses_mixed(&self) -> bool {
-        self.precision != FaerPrecision::Double && self.mode == FaerMode::Ldlt
-    }
-
-    /// The f64 factorisation: split when the analysis split, else unsplit.
-    fn factorize_f64(&mut self, a: &SymmetricMatrix) -> Result<Factorization, SolverError> {
-        if self.split_state.is_some() {
-            self.factorize_split(a)
-        } else {
-            self.factorize_double(a)
-        }
-    }
-
-    /// Solves with the f64 factor, split or not.
-    fn solve_f64(&mut self, b: &mut [f64], nrhs: usize) -> Result<(), SolverError> {
-        if self.solve_split(b, nrhs) {
-            Ok(())
-        } else {
-            self.solve_double(b, nrhs)
-        }
-    }
-
     /// The f64 numeric factorisation of `a` into `l_values` (allocated if an f32 factor held
     /// its place), with pivot checks and inertia.
     fn factorize_double(&mut self, a: &SymmetricMatrix) -> Result<Factorization, SolverError> {

@@ -1,5 +1,6 @@
 //! The split LDLᵀ (`FaerSplit::Halves`) against the unsplit factor on the same
-//! nested-dissection order: the same inertia, backward errors of the same size, and solutions
+//! nested-dissection order (ours, whose top separator the ordering reports, and METIS's, whose
+//! top separator is found from the order): the same inertia, backward errors of the same size, and solutions
 //! that differ by no more than the condition number allows.
 //!
 //! Tolerance: both solutions x, x̂ of A x = b come from backward-stable factorisations, with
@@ -22,8 +23,8 @@ use nonlin3d_solver::{
 };
 use nonlin3d_testkit::Lcg;
 
-fn solver(split: FaerSplit) -> FaerSolver {
-    let mut s = FaerSolver::new(FaerMode::Ldlt).with_ordering(FaerOrdering::NestedDissection);
+fn solver(split: FaerSplit, ordering: FaerOrdering) -> FaerSolver {
+    let mut s = FaerSolver::new(FaerMode::Ldlt).with_ordering(ordering);
     s.split = split;
     s
 }
@@ -85,20 +86,22 @@ fn inverse_norm(s: &mut FaerSolver, n: usize) -> f64 {
 /// unsplit one, and the solutions agree within κ∞(ω + ω̂).
 #[test]
 fn split_matches_the_unsplit_factor() {
-    for (shift, precision) in [0.0, 1.5]
-        .into_iter()
-        .flat_map(|s| [(s, FaerPrecision::Double), (s, FaerPrecision::mixed())])
-    {
+    let orderings = [FaerOrdering::NestedDissection, FaerOrdering::Metis];
+    for (shift, precision, ordering) in [0.0, 1.5].into_iter().flat_map(|s| {
+        [FaerPrecision::Double, FaerPrecision::mixed()]
+            .into_iter()
+            .flat_map(move |p| orderings.map(|o| (s, p, o)))
+    }) {
         let a = box_matrix([6, 6, 4], shift);
         let n = a.n();
         let mut rng = Lcg::new(5);
         let b: Vec<f64> = (0..n).map(|_| rng.uniform(-1.0, 1.0)).collect();
-        let mut whole = solver(FaerSplit::Off);
+        let mut whole = solver(FaerSplit::Off, ordering);
         whole.analyze(a.pattern()).unwrap();
         let f = whole.factorize(&a).unwrap();
         let mut x = b.clone();
         whole.solve_in_place(&mut x, 1).unwrap();
-        let mut split = solver(FaerSplit::Halves);
+        let mut split = solver(FaerSplit::Halves, ordering);
         split.precision = precision;
         split.analyze(a.pattern()).unwrap();
         let (n0, n1, ns) = split.split_sizes().expect("the box is dissected");
@@ -106,7 +109,7 @@ fn split_matches_the_unsplit_factor() {
         assert!(n0 > ns && n1 > ns, "halves {n0}, {n1}, separator {ns}");
         let g = split.factorize(&a).unwrap();
         assert_eq!(split.split_fallback(), None);
-        let case = format!("shift {shift}, {precision:?}");
+        let case = format!("shift {shift}, {precision:?}, {ordering:?}");
         assert_eq!(g.negative_pivots, f.negative_pivots, "{case}");
         if shift > 0.0 {
             assert!(

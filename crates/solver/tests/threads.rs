@@ -8,7 +8,8 @@
 //! pseudo-random Σ (element rank-one + diagonal) blocks assembly shifted to be indefinite: bitwise
 //! equality depends on the order of the sums, not on the physics of the values. Both the
 //! unsplit factor and the split one (`FaerSplit::Halves`: halves on two threads, S on all) are
-//! checked, in f64 and with f32 halves refined in f64 (`FaerPrecision::mixed()`).
+//! checked, in f64 and with f32 halves refined in f64 (`FaerPrecision::mixed()`), the split on
+//! our nested-dissection order and on METIS's.
 
 mod common;
 
@@ -26,10 +27,11 @@ fn solve_on(
     threads: usize,
     split: FaerSplit,
     precision: FaerPrecision,
+    ordering: FaerOrdering,
 ) -> (Vec<f64>, usize) {
     let mut s = FaerSolver::new(FaerMode::Ldlt)
         .with_structure(FaerStructure::Supernodal)
-        .with_ordering(FaerOrdering::NestedDissection)
+        .with_ordering(ordering)
         .with_threads(threads);
     s.split = split;
     s.precision = precision;
@@ -53,17 +55,20 @@ fn solve_on(
 #[test]
 fn factors_and_solutions_are_bitwise_equal_on_1_2_and_3_threads() {
     let mixed = FaerPrecision::mixed();
-    for (shift, split, precision) in [0.0, 1.5].into_iter().flat_map(|s| {
+    let (nd, metis) = (FaerOrdering::NestedDissection, FaerOrdering::Metis);
+    for (shift, split, precision, ordering) in [0.0, 1.5].into_iter().flat_map(|s| {
         [
-            (s, FaerSplit::Off, FaerPrecision::Double),
-            (s, FaerSplit::Halves, FaerPrecision::Double),
-            (s, FaerSplit::Halves, mixed),
+            (s, FaerSplit::Off, FaerPrecision::Double, nd),
+            (s, FaerSplit::Halves, FaerPrecision::Double, nd),
+            (s, FaerSplit::Halves, mixed, nd),
+            (s, FaerSplit::Halves, FaerPrecision::Double, metis),
+            (s, FaerSplit::Halves, mixed, metis),
         ]
     }) {
         let a = box_matrix([10, 10, 6], shift);
-        let (x1, neg1) = solve_on(&a, 1, split, precision);
+        let (x1, neg1) = solve_on(&a, 1, split, precision, ordering);
         for threads in [2, 3] {
-            let (x, neg) = solve_on(&a, threads, split, precision);
+            let (x, neg) = solve_on(&a, threads, split, precision, ordering);
             assert_eq!(neg, neg1, "shift {shift}, {threads} threads");
             let differ = x
                 .iter()
@@ -72,7 +77,7 @@ fn factors_and_solutions_are_bitwise_equal_on_1_2_and_3_threads() {
                 .count();
             assert_eq!(
                 differ, 0,
-                "shift {shift}, {split:?}, {precision:?}, {threads} threads: {differ} entries differ"
+                "shift {shift}, {split:?}, {precision:?}, {ordering:?}, {threads} threads: {differ} entries differ"
             );
         }
         if shift > 0.0 {

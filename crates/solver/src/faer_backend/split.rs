@@ -1,5 +1,6 @@
 //! Tree-level parallelism for [`FaerSolver`]'s LDLᵀ (issue 20). The nested-dissection order's
-//! top separator s splits A into two independent halves,
+//! top separator s (ours reports it; METIS's is found from the order, `top.rs`) splits A into
+//! two independent halves,
 //!
 //! A = [A₁₁ 0 A₁ₛ; 0 A₂₂ A₂ₛ; Aₛ₁ Aₛ₂ Aₛₛ],
 //!
@@ -38,6 +39,8 @@ use faer::{Accum, Conj, Mat, MatMut, Par, Side};
 
 mod half;
 use half::Half;
+mod top;
+pub(super) use top::top_split;
 
 /// Pivots of S′ᵢ (a half's separator block) below this fraction of their diagonal entry
 /// (f64 halves; f32 ones use the mixed pivot floor) make the rebuild of S′ᵢ inexact: the

@@ -134,11 +134,18 @@ impl Half {
         );
         let mat = SparseColMatRef::new(sym, &values);
         let l = T::slot(&mut self.l, self.symbolic.len_val())?;
-        let done = self.symbolic.factorize_numeric_ldlt(
+        // The half's own numbering is its elimination order (identity permutation) and its
+        // pattern is the lower triangle faer's supernodal kernel reads, so the kernel is
+        // called directly: `factorize_numeric_ldlt` would first copy Mᵢ through the
+        // permutation (a transpose-and-scatter of every entry, each factorisation).
+        let SymbolicCholeskyRaw::Supernodal(sn) = self.symbolic.raw() else {
+            unreachable!("split halves are supernodal")
+        };
+        let done = supernodal::factorize_supernodal_numeric_ldlt(
             l,
             mat,
-            Side::Lower,
             LdltRegularization::default(),
+            sn,
             Par::Seq,
             MemStack::new(&mut self.buffer),
             Default::default(),

@@ -1,0 +1,66 @@
+//! The options of [`super::FaerSolver`]: factorisation, factor structure, fill-reducing
+//! ordering and the tree-level split (the precision is in `mixed.rs`, beside the refinement
+//! it controls).
+
+/// Which factorisation faer computes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum FaerMode {
+    /// LDLᵀ without pivoting: positive definite and indefinite matrices, inertia from D.
+    #[default]
+    Ldlt,
+    /// Cholesky LLᵀ: positive definite only; a non-positive pivot is
+    /// [`crate::SolverError::NotPositiveDefinite`].
+    Llt,
+}
+
+/// Simplicial (column by column) or supernodal (dense blocks) factor structure.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum FaerStructure {
+    /// faer decides from the flop count (the default): simplicial for small or very sparse
+    /// factors, supernodal otherwise.
+    #[default]
+    Auto,
+    /// Always simplicial.
+    Simplicial,
+    /// Always supernodal.
+    Supernodal,
+}
+
+/// The fill-reducing ordering of the faer backend.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum FaerOrdering {
+    /// Approximate minimum degree (faer's port of SuiteSparse AMD) on the DOF graph.
+    Amd,
+    /// Nested dissection on the node graph ([`crate::nested_dissection`]).
+    NestedDissection,
+    /// METIS's nested dissection on the node graph ([`crate::metis_nested_dissection`]).
+    Metis,
+    /// The candidates' symbolic factors compared by flops (Σ c_k² over the column counts),
+    /// the fewest kept (ties: AMD, then nested dissection, then METIS). The default. Below
+    /// [`AUTO_WITHOUT_AMD_DOFS`] DOFs the candidates are AMD, nested dissection and METIS; at
+    /// and above it nested dissection and METIS (AMD needed 1.6–6× the best one's flops on
+    /// every model measured from 10 k DOF up, and its large symbolic factor is the costliest
+    /// analysis there; neither nested dissection nor METIS was always the better:
+    /// docs/PERFORMANCE.md). A METIS failure only removes it from the comparison.
+    #[default]
+    Auto,
+}
+
+/// From this many DOFs on, [`FaerOrdering::Auto`] leaves AMD out of its comparison.
+pub const AUTO_WITHOUT_AMD_DOFS: usize = 200_000;
+
+/// Whether [`super::FaerSolver`]'s LDLᵀ splits the matrix at the nested-dissection order's top
+/// separator and factors the two halves on two threads (tree-level parallelism, `split.rs`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum FaerSplit {
+    /// One faer factorisation (the default).
+    #[default]
+    Off,
+    /// Split whenever the chosen ordering is nested dissection (ours or METIS's) and its top
+    /// level was dissected into halves of at least a fifth of the interior each (LDLᵀ only:
+    /// LLᵀ ignores it). In f64 it falls back to the unsplit factor when
+    /// a half's separator block meets a pivot below 1e-8 of its diagonal; with
+    /// [`FaerPrecision::Mixed`] the halves are f32, the split solve is refined in f64, and
+    /// every fallback of mixed precision goes to the f64 split (then to the unsplit factor).
+    Halves,
+}

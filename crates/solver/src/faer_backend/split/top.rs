@@ -1,0 +1,126 @@
+//! The top separator of an elimination order that does not say where it is (METIS's: its
+//! nested dissection numbers the first part, then the second, then their separator, but
+//! returns only the order).
+//!
+//! For a cut n₀ of the order, the DOFs at positions < n₀ are coupled to later ones only at
+//! positions ≥ R(n₀) = min{ pos(j) : a_ij ≠ 0, pos(i) < n₀ ≤ pos(j) }, so positions
+//! [0, n₀) and [n₀, R(n₀)) are two halves that do not touch and [R(n₀), n) separates them.
+//! On a nested-dissection order the cut between the first and second part of the top level
+//! gives the largest R (the shortest separator): a cut inside a part meets that part's own
+//! separator earlier, a cut inside the separator leaves no second half. So the cut kept is the
+//! one with the largest R(n₀) among those whose halves each hold at least [`MIN_SHARE`] of
+//! the interior; ties go to the more even halves. Deterministic (no randomness, no threads).
+
+use crate::SymmetricPattern;
+use std::cmp::Reverse;
+use std::collections::BinaryHeap;
+
+/// The smaller half must hold at least this share of the interior DOFs: a cut that leaves a
+/// few DOFs on one side has nothing to run beside the other half.
+pub(crate) const MIN_SHARE: f64 = 0.2;
+
+/// (n₀, n₁) for the order `forward` (`forward[new] = old`) of `pattern`'s DOFs: the halves
+/// `forward[..n₀]` and `forward[n₀..n₀ + n₁]` share no entry of A, the rest is the separator
+/// (module docs). `None` when no cut leaves two halves of at least [`MIN_SHARE`] and a
+/// non-empty separator.
+pub(crate) fn top_split(pattern: &SymmetricPattern, forward: &[usize]) -> Option<(usize, usize)> {
+    let n = pattern.n();
+    if forward.len() != n || n < 3 {
+        return None;
+    }
+    let mut pos = vec![0usize; n];
+    for (k, &d) in forward.iter().enumerate() {
+        pos[d] = k;
+    }
+    // Each off-diagonal entry as (earlier position, later position), bucketed by the earlier.
+    let mut start = vec![0usize; n + 1];
+    for j in 0..n {
+        for &i in pattern.column(j) {
+            if i != j {
+                start[pos[i].min(pos[j]) + 1] += 1;
+            }
+        }
+    }
+    for k in 0..n {
+        start[k + 1] += start[k];
+    }
+    let mut later = vec![0usize; start[n]];
+    let mut fill = start.clone();
+    for j in 0..n {
+        for &i in pattern.column(j) {
+            if i != j {
+                let (lo, hi) = (pos[i].min(pos[j]), pos[i].max(pos[j]));
+                later[fill[lo]] = hi;
+                fill[lo] += 1;
+            }
+        }
+    }
+    drop(fill);
+    // Sweep the cut: the heap holds the later ends of entries that start before it.
+    let mut heap = BinaryHeap::new();
+    let mut best: Option<(usize, usize)> = None;
+    let mut best_key = (0usize, Reverse(usize::MAX));
+    for n0 in 1..n {
+        heap.extend(later[start[n0 - 1]..start[n0]].iter().map(|&h| Reverse(h)));
+        while heap.peek().is_some_and(|&Reverse(h)| h < n0) {
+            heap.pop();
+        }
+        let r = heap.peek().map_or(n, |&Reverse(h)| h);
+        if r >= n {
+            continue;
+        }
+        let small = n0.min(r - n0);
+        if (small as f64) < MIN_SHARE * r as f64 {
+            continue;
+        }
+        let key = (r, Reverse((2 * n0).abs_diff(r)));
+        if key > best_key {
+            best_key = key;
+            best = Some((n0, r - n0));
+        }
+    }
+    best
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A path 0–1–…–(n−1), ordered as nested dissection would: the middle vertex last.
+    #[test]
+    fn a_path_splits_at_its_middle_vertex() {
+        let n = 9;
+        let lists: Vec<Vec<usize>> = (0..n - 1).map(|i| vec![i, i + 1]).collect();
+        let p = SymmetricPattern::from_dof_lists(n, &lists).unwrap();
+        // Left 0..4, right 5..9, separator 4.
+        let forward = vec![0, 1, 2, 3, 5, 6, 7, 8, 4];
+        assert_eq!(top_split(&p, &forward), Some((4, 4)));
+        // The natural order of a path has no separator at its end that leaves two halves.
+        let natural: Vec<usize> = (0..n).collect();
+        assert_eq!(top_split(&p, &natural), None);
+    }
+
+    /// A 5 × 5 grid ordered [left columns, right columns, middle column]: the middle column
+    /// is the separator, and cuts inside the left part (whose own separator comes earlier)
+    /// are not taken.
+    #[test]
+    fn a_grid_splits_at_its_middle_column() {
+        let (w, h) = (5, 5);
+        let id = |x: usize, y: usize| y * w + x;
+        let mut lists = Vec::new();
+        for y in 0..h {
+            for x in 0..w {
+                if x + 1 < w {
+                    lists.push(vec![id(x, y), id(x + 1, y)]);
+                }
+                if y + 1 < h {
+                    lists.push(vec![id(x, y), id(x, y + 1)]);
+                }
+            }
+        }
+        let p = SymmetricPattern::from_dof_lists(w * h, &lists).unwrap();
+        let column = |x: usize| (0..h).map(move |y| id(x, y));
+        let forward: Vec<usize> = [0, 1, 3, 4, 2].into_iter().flat_map(column).collect();
+        assert_eq!(top_split(&p, &forward), Some((10, 10)));
+    }
+}
