@@ -10,6 +10,8 @@
 //!   function it derives from;
 //! - [`dense`]: dense oracles (Gaussian elimination with partial pivoting, matrix–vector
 //!   products, norms) to check sparse solvers and assembled systems;
+//! - [`blister`]: the closed form of the straight-sided buckle-driven blister (Hutchinson & Suo
+//!   1992), G and the mode-mix angle ψ, for the through-width delamination;
 //! - [`Lcg`]: a small seeded generator for reproducible test data.
 //!
 //! A seeded random right-hand side, solved with the dense oracle and checked by its product:
@@ -26,6 +28,7 @@
 //! ```
 #![deny(missing_docs)]
 
+pub mod blister;
 pub mod block;
 pub mod dense;
 pub mod diff;
