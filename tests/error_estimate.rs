@@ -23,8 +23,8 @@ fn nonlin3d(dir: &Path, args: &[&str]) -> Output {
 /// The reference circle on a tiny mesh (4 slices, 2 + 3 rings, 1 + 2 layers: 1 773 DOFs, its
 /// companion 2 slices), one level past buckling, the scene's contact (`auto`: without it every
 /// point of so coarse a mesh overlaps and no G is physical), with `extra` lines under `[mesh]`.
-fn scene(dir: &Path, extra: &str) -> PathBuf {
-    let text = nonlin3d::scene::DEFAULT_SCENE
+fn tiny_scene(extra: &str) -> String {
+    nonlin3d::scene::DEFAULT_SCENE
         .replace(
             "slices = 8",
             &format!(
@@ -34,20 +34,15 @@ fn scene(dir: &Path, extra: &str) -> PathBuf {
         .replace(
             "strains = [-0.001, -0.002, -0.003, -0.004, -0.005]",
             "strains = [-0.004]",
-        );
-    let p = dir.join("scene.toml");
-    std::fs::write(&p, text).unwrap();
-    p
+        )
 }
 
-fn json(dir: &Path) -> serde_json::Value {
-    serde_json::from_str(&std::fs::read_to_string(dir.join("out/results.json")).unwrap()).unwrap()
-}
-
-#[test]
-fn results_and_csv_carry_the_estimate_and_a_tight_target_warns() {
-    let dir = tmp("tight");
-    let s = scene(&dir, "accuracy = 0.001");
+/// Writes `text` as the scene of a fresh directory `name`, runs it on one thread into `out/`,
+/// and returns the directory and the run's output (the run must succeed).
+fn run_scene(name: &str, text: &str) -> (PathBuf, Output) {
+    let dir = tmp(name);
+    let s = dir.join("scene.toml");
+    std::fs::write(&s, text).unwrap();
     let out = nonlin3d(
         &dir,
         &["run", s.to_str().unwrap(), "--out", "out", "--threads", "1"],
@@ -57,6 +52,16 @@ fn results_and_csv_carry_the_estimate_and_a_tight_target_warns() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
+    (dir, out)
+}
+
+fn json(dir: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(dir.join("out/results.json")).unwrap()).unwrap()
+}
+
+#[test]
+fn results_and_csv_carry_the_estimate_and_a_tight_target_warns() {
+    let (dir, out) = run_scene("tight", &tiny_scene("accuracy = 0.001"));
     let r = json(&dir);
     let acc = &r["accuracy"];
     assert_eq!(acc["error_estimate"], "companion");
@@ -134,17 +139,7 @@ fn results_and_csv_carry_the_estimate_and_a_tight_target_warns() {
 
 #[test]
 fn no_estimate_when_off() {
-    let dir = tmp("off");
-    let s = scene(&dir, "error_estimate = \"off\"");
-    let out = nonlin3d(
-        &dir,
-        &["run", s.to_str().unwrap(), "--out", "out", "--threads", "1"],
-    );
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let (dir, _) = run_scene("off", &tiny_scene("error_estimate = \"off\""));
     let r = json(&dir);
     assert!(r.get("accuracy").is_none());
     assert!(r["levels"][0].get("error_estimate").is_none());
@@ -180,7 +175,6 @@ fn a_tighter_target_picks_a_finer_mesh() {
 /// brackets the true error and is at most 6× it (between the two, on a log scale).
 #[test]
 fn a_band_mesh_companion_keeps_the_split_and_brackets_g_ii_within_a_few_times() {
-    let dir = tmp("band");
     let text = nonlin3d::scene::DEFAULT_SCENE
         .replace(
             "slices = 8",
@@ -192,17 +186,7 @@ fn a_band_mesh_companion_keeps_the_split_and_brackets_g_ii_within_a_few_times() 
             "strains = [-0.004]",
         )
         + "\n[contact]\ncrack_faces = \"off\"\n";
-    let s = dir.join("scene.toml");
-    std::fs::write(&s, text).unwrap();
-    let out = nonlin3d(
-        &dir,
-        &["run", s.to_str().unwrap(), "--out", "out", "--threads", "1"],
-    );
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let (dir, _) = run_scene("band", &text);
     let r = json(&dir);
     assert_eq!(r["model"]["dofs"], 10035);
     let p0 = &r["levels"][0]["front"][0];
