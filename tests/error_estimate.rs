@@ -69,7 +69,7 @@ fn results_and_csv_carry_the_estimate_and_a_tight_target_warns() {
     let dofs = r["model"]["dofs"].as_u64().unwrap();
     assert!(acc["companion_dofs"].as_u64().unwrap() < dofs / 2);
     // Every front point has ±G of every mode, non-negative, and G_T's is at least the floor
-    // (0.15 of the error at the G_T max, itself > 0 between meshes this coarse).
+    // (1.2 × 0.2 of the difference at the G_T max, itself > 0 between meshes this coarse).
     let level = &r["levels"][0];
     let front = level["front"].as_array().unwrap();
     assert!(!front.is_empty());
@@ -171,8 +171,10 @@ fn a_tighter_target_picks_a_finer_mesh() {
 /// converged G_II at S = 0 is 84.55 ± 0.13 J/m²; Q gives 81.73, a true error of 2.82).
 /// The old companion halved the two sublaminate and the two base layers to one each, and one
 /// layer moves G_II(0) by 12–45 % whatever the rest: its ±G_II(0) was 37 J/m², 13× the true
-/// error. The companion that keeps them measured 8.8 J/m² (3.1×). Asserted: the estimate
-/// brackets the true error and is at most 6× it (between the two, on a log scale).
+/// error. The companion that keeps them gives a difference of 8.8 J/m² (3.1×), and the rule
+/// for such a companion halves it (Richardson at p = 1.58: 4.4 J/m², 1.6×). Asserted: the
+/// estimate brackets the true error and is at most 3× it (issue 25's bound), both over the
+/// whole range the reference's uncertainty allows (the plain difference fails the second).
 #[test]
 fn a_band_mesh_companion_keeps_the_split_and_brackets_g_ii_within_a_few_times() {
     let text = nonlin3d::scene::DEFAULT_SCENE
@@ -195,9 +197,37 @@ fn a_band_mesh_companion_keeps_the_split_and_brackets_g_ii_within_a_few_times() 
     let est = p0["error"]["g_ii"].as_f64().unwrap();
     let (reference, uncertainty) = (84.55, 0.13);
     let err = (g_ii - reference).abs();
-    assert!(est >= err - uncertainty, "±{est} < |{g_ii} − {reference}|");
+    assert!(est >= err + uncertainty, "±{est} < |{g_ii} − {reference}|");
     assert!(
-        est <= 6.0 * (err + uncertainty),
-        "±{est} > 6 × |{g_ii} − {reference}|"
+        est <= 3.0 * (err - uncertainty),
+        "±{est} > 3 × |{g_ii} − {reference}|"
+    );
+}
+
+/// The 15 mm semicircular edge delamination on the default mesh (8, 4, 5, 1, 3; 6 789 DOFs),
+/// one level at ε = −0.004 without contact: one sublaminate layer, so the companion halves
+/// everything (the thesis's 4-slice mesh) and the split converges slowly (order ≈ 0.9):
+/// G_II at S = 0 is 33.37 J/m² against the converged 59.29 ± 0.04 (docs/ACCURACY.md §3), a
+/// true error of 25.9, and the companion's 9.27 gives a difference of 24.1 only — the plain
+/// difference missed it. The rule for such a companion (a = 1.2, Richardson at p = 0.87)
+/// gives 28.9: asserted, the estimate brackets the true error and is at most 3× it.
+#[test]
+fn a_one_layer_companion_brackets_the_slow_split_of_the_edge_delamination() {
+    let text = include_str!("../examples/scenes/fig_5_5_1_edge_semicircle_15mm.toml")
+        .replace("strains = [-0.002, -0.003, -0.004]", "strains = [-0.004]")
+        + "\n[contact]\ncrack_faces = \"off\"\n";
+    let (dir, _) = run_scene("edge", &text);
+    let r = json(&dir);
+    assert_eq!(r["model"]["dofs"], 6789);
+    let p0 = &r["levels"][0]["front"][0];
+    assert_eq!(p0["s_mm"], 0.0);
+    let g_ii = p0["g_ii"].as_f64().unwrap();
+    let est = p0["error"]["g_ii"].as_f64().unwrap();
+    let (reference, uncertainty) = (59.29, 0.04);
+    let err = (g_ii - reference).abs();
+    assert!(est >= err + uncertainty, "±{est} < |{g_ii} − {reference}|");
+    assert!(
+        est <= 3.0 * (err - uncertainty),
+        "±{est} > 3 × |{g_ii} − {reference}|"
     );
 }
