@@ -199,8 +199,13 @@ fn front_g(level: &LevelResult) -> (Vec<f64>, Vec<Modes>, Vec<bool>) {
     (at, g, open)
 }
 
-/// Fills each level's per-point errors and summary from the companion's matching level.
-fn fill_level(level: &mut LevelResult, companion: &LevelResult) -> Result<(), Error> {
+/// Fills each level's per-point errors and summary from the companion's matching level, with
+/// the estimate's factors for what the companion coarsens.
+fn fill_level(
+    level: &mut LevelResult,
+    companion: &LevelResult,
+    rule: estimate::Rule,
+) -> Result<(), Error> {
     let (at, g, open) = front_g(level);
     let (cat, cg, _) = front_g(companion);
     let est = estimate::companion(
@@ -214,7 +219,7 @@ fn fill_level(level: &mut LevelResult, companion: &LevelResult) -> Result<(), Er
             g: &cg,
             open: None,
         },
-        estimate::FLOOR,
+        rule,
     )
     .map_err(|e| Error::Scene(e.to_string()))?;
     for (row, e) in level.front.iter_mut().zip(&est) {
@@ -276,8 +281,10 @@ pub(crate) fn attach(
         let run = companion_scene(scene).and_then(|c| super::run(&c, &mut |_| Ok(())));
         match run {
             Ok(c) if c.levels.len() == results.levels.len() => {
+                let keeps = embedded_of(scene).is_some_and(|p| p.resolves_the_split());
+                let rule = estimate::Rule::for_companion(keeps);
                 for (level, cl) in results.levels.iter_mut().zip(&c.levels) {
-                    fill_level(level, cl)?;
+                    fill_level(level, cl, rule)?;
                 }
                 report.companion_dofs = Some(c.model.dofs);
                 report.companion_s = Some(t.elapsed().as_secs_f64());

@@ -366,7 +366,8 @@ pub struct MeshControls {
 pub enum ErrorEstimateName {
     /// No estimate.
     Off,
-    /// max(|G(M) − G(M/2)|, 0.15·|ΔG_T at the G_T max|) per point and mode.
+    /// a·max(|G(M) − G(M/2)|, 0.2·|ΔG_T at the G_T max|) per point and mode (a = 0.5 or
+    /// 1.2 by what the companion coarsens: docs/ACCURACY.md §3).
     #[default]
     Companion,
 }

@@ -23,8 +23,8 @@ fn nonlin3d(dir: &Path, args: &[&str]) -> Output {
 /// The reference circle on a tiny mesh (4 slices, 2 + 3 rings, 1 + 2 layers: 1 773 DOFs, its
 /// companion 2 slices), one level past buckling, the scene's contact (`auto`: without it every
 /// point of so coarse a mesh overlaps and no G is physical), with `extra` lines under `[mesh]`.
-fn scene(dir: &Path, extra: &str) -> PathBuf {
-    let text = nonlin3d::scene::DEFAULT_SCENE
+fn tiny_scene(extra: &str) -> String {
+    nonlin3d::scene::DEFAULT_SCENE
         .replace(
             "slices = 8",
             &format!(
@@ -34,20 +34,15 @@ fn scene(dir: &Path, extra: &str) -> PathBuf {
         .replace(
             "strains = [-0.001, -0.002, -0.003, -0.004, -0.005]",
             "strains = [-0.004]",
-        );
-    let p = dir.join("scene.toml");
-    std::fs::write(&p, text).unwrap();
-    p
+        )
 }
 
-fn json(dir: &Path) -> serde_json::Value {
-    serde_json::from_str(&std::fs::read_to_string(dir.join("out/results.json")).unwrap()).unwrap()
-}
-
-#[test]
-fn results_and_csv_carry_the_estimate_and_a_tight_target_warns() {
-    let dir = tmp("tight");
-    let s = scene(&dir, "accuracy = 0.001");
+/// Writes `text` as the scene of a fresh directory `name`, runs it on one thread into `out/`,
+/// and returns the directory and the run's output (the run must succeed).
+fn run_scene(name: &str, text: &str) -> (PathBuf, Output) {
+    let dir = tmp(name);
+    let s = dir.join("scene.toml");
+    std::fs::write(&s, text).unwrap();
     let out = nonlin3d(
         &dir,
         &["run", s.to_str().unwrap(), "--out", "out", "--threads", "1"],
@@ -57,6 +52,16 @@ fn results_and_csv_carry_the_estimate_and_a_tight_target_warns() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
+    (dir, out)
+}
+
+fn json(dir: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(dir.join("out/results.json")).unwrap()).unwrap()
+}
+
+#[test]
+fn results_and_csv_carry_the_estimate_and_a_tight_target_warns() {
+    let (dir, out) = run_scene("tight", &tiny_scene("accuracy = 0.001"));
     let r = json(&dir);
     let acc = &r["accuracy"];
     assert_eq!(acc["error_estimate"], "companion");
@@ -64,7 +69,7 @@ fn results_and_csv_carry_the_estimate_and_a_tight_target_warns() {
     let dofs = r["model"]["dofs"].as_u64().unwrap();
     assert!(acc["companion_dofs"].as_u64().unwrap() < dofs / 2);
     // Every front point has ±G of every mode, non-negative, and G_T's is at least the floor
-    // (0.15 of the error at the G_T max, itself > 0 between meshes this coarse).
+    // (1.2 × 0.2 of the difference at the G_T max, itself > 0 between meshes this coarse).
     let level = &r["levels"][0];
     let front = level["front"].as_array().unwrap();
     assert!(!front.is_empty());
@@ -134,17 +139,7 @@ fn results_and_csv_carry_the_estimate_and_a_tight_target_warns() {
 
 #[test]
 fn no_estimate_when_off() {
-    let dir = tmp("off");
-    let s = scene(&dir, "error_estimate = \"off\"");
-    let out = nonlin3d(
-        &dir,
-        &["run", s.to_str().unwrap(), "--out", "out", "--threads", "1"],
-    );
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let (dir, _) = run_scene("off", &tiny_scene("error_estimate = \"off\""));
     let r = json(&dir);
     assert!(r.get("accuracy").is_none());
     assert!(r["levels"][0].get("error_estimate").is_none());
@@ -176,11 +171,12 @@ fn a_tighter_target_picks_a_finer_mesh() {
 /// converged G_II at S = 0 is 84.55 ± 0.13 J/m²; Q gives 81.73, a true error of 2.82).
 /// The old companion halved the two sublaminate and the two base layers to one each, and one
 /// layer moves G_II(0) by 12–45 % whatever the rest: its ±G_II(0) was 37 J/m², 13× the true
-/// error. The companion that keeps them measured 8.8 J/m² (3.1×). Asserted: the estimate
-/// brackets the true error and is at most 6× it (between the two, on a log scale).
+/// error. The companion that keeps them gives a difference of 8.8 J/m² (3.1×), and the rule
+/// for such a companion halves it (Richardson at p = 1.58: 4.4 J/m², 1.6×). Asserted: the
+/// estimate brackets the true error and is at most 3× it (issue 25's bound), both over the
+/// whole range the reference's uncertainty allows (the plain difference fails the second).
 #[test]
 fn a_band_mesh_companion_keeps_the_split_and_brackets_g_ii_within_a_few_times() {
-    let dir = tmp("band");
     let text = nonlin3d::scene::DEFAULT_SCENE
         .replace(
             "slices = 8",
@@ -192,17 +188,7 @@ fn a_band_mesh_companion_keeps_the_split_and_brackets_g_ii_within_a_few_times() 
             "strains = [-0.004]",
         )
         + "\n[contact]\ncrack_faces = \"off\"\n";
-    let s = dir.join("scene.toml");
-    std::fs::write(&s, text).unwrap();
-    let out = nonlin3d(
-        &dir,
-        &["run", s.to_str().unwrap(), "--out", "out", "--threads", "1"],
-    );
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let (dir, _) = run_scene("band", &text);
     let r = json(&dir);
     assert_eq!(r["model"]["dofs"], 10035);
     let p0 = &r["levels"][0]["front"][0];
@@ -211,9 +197,37 @@ fn a_band_mesh_companion_keeps_the_split_and_brackets_g_ii_within_a_few_times() 
     let est = p0["error"]["g_ii"].as_f64().unwrap();
     let (reference, uncertainty) = (84.55, 0.13);
     let err = (g_ii - reference).abs();
-    assert!(est >= err - uncertainty, "±{est} < |{g_ii} − {reference}|");
+    assert!(est >= err + uncertainty, "±{est} < |{g_ii} − {reference}|");
     assert!(
-        est <= 6.0 * (err + uncertainty),
-        "±{est} > 6 × |{g_ii} − {reference}|"
+        est <= 3.0 * (err - uncertainty),
+        "±{est} > 3 × |{g_ii} − {reference}|"
+    );
+}
+
+/// The 15 mm semicircular edge delamination on the default mesh (8, 4, 5, 1, 3; 6 789 DOFs),
+/// one level at ε = −0.004 without contact: one sublaminate layer, so the companion halves
+/// everything (the thesis's 4-slice mesh) and the split converges slowly (order ≈ 0.9):
+/// G_II at S = 0 is 33.37 J/m² against the converged 59.29 ± 0.04 (docs/ACCURACY.md §3), a
+/// true error of 25.9, and the companion's 9.27 gives a difference of 24.1 only — the plain
+/// difference missed it. The rule for such a companion (a = 1.2, Richardson at p = 0.87)
+/// gives 28.9: asserted, the estimate brackets the true error and is at most 3× it.
+#[test]
+fn a_one_layer_companion_brackets_the_slow_split_of_the_edge_delamination() {
+    let text = include_str!("../examples/scenes/fig_5_5_1_edge_semicircle_15mm.toml")
+        .replace("strains = [-0.002, -0.003, -0.004]", "strains = [-0.004]")
+        + "\n[contact]\ncrack_faces = \"off\"\n";
+    let (dir, _) = run_scene("edge", &text);
+    let r = json(&dir);
+    assert_eq!(r["model"]["dofs"], 6789);
+    let p0 = &r["levels"][0]["front"][0];
+    assert_eq!(p0["s_mm"], 0.0);
+    let g_ii = p0["g_ii"].as_f64().unwrap();
+    let est = p0["error"]["g_ii"].as_f64().unwrap();
+    let (reference, uncertainty) = (59.29, 0.04);
+    let err = (g_ii - reference).abs();
+    assert!(est >= err + uncertainty, "±{est} < |{g_ii} − {reference}|");
+    assert!(
+        est <= 3.0 * (err - uncertainty),
+        "±{est} > 3 × |{g_ii} − {reference}|"
     );
 }
