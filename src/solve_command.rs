@@ -181,6 +181,12 @@ pub(crate) fn solve(
                         i.iterations
                     ));
                 }
+                // `--solver faer-mixed`: whether the f32 factor held, by increment.
+                for i in r.increments.iter() {
+                    if let Some(mp) = &i.mixed_precision {
+                        m.say(&format!("  increment {:3}: {}", i.increment, mp.line()));
+                    }
+                }
                 // The next step's events are numbered within it.
                 m.begin(r.step + 1, 0.0);
             }
