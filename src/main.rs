@@ -4,8 +4,8 @@
 //!   none, the thesis's reference case (30 mm circle, ε = −0.001 … −0.005). Prints a table,
 //!   writes `DIR/results.json`, `front_K.csv`, `model.pvd` + `model_K.vtu`, SVG plots.
 //! - `nonlin3d export SCENE.toml --inp FILE`: the scene as a CalculiX deck.
-//! - `run` and `export` take `--max-memory SIZE` (2GiB, 500MB): the run stays below it and
-//!   below the machine's and the process's own limits, or stops with the estimate.
+//! - `run`, `export` and `solve` take `--max-memory SIZE` (2GiB, 500MB): the run stays below
+//!   it and below the machine's and the process's own limits, or stops with the estimate.
 //! - `nonlin3d eigen-check`: the element eigen-check of thesis §2.5.
 //! - `nonlin3d study SCENE.toml --knobs KNOBS.toml --out DIR`: speed against error over the
 //!   knobs file's cases (`DIR/study.json`, `study.csv`, `study.svg`, a table).
@@ -29,10 +29,10 @@
 //! (summary.json for `solve`).
 
 mod progress;
+mod solve_command;
 mod study_command;
 
 use clap::{Parser, Subcommand};
-use nonlin3d::newton::NewtonSettings;
 use progress::{Monitor, Shared, Verbosity};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -118,176 +118,7 @@ enum Command {
         jobs: Option<usize>,
     },
     /// Solve an Abaqus/CalculiX .inp deck (static steps, NLGEOM or linear).
-    Solve {
-        /// The deck.
-        deck: PathBuf,
-        /// Output directory.
-        #[arg(long, default_value = "nonlin3d-solve-out")]
-        out: PathBuf,
-        /// Absolute residual tolerance in N instead of the default relative criterion
-        /// (‖r‖∞ ≤ 1e-8 of the largest external or reaction force; docs/THEORY.md).
-        #[arg(long)]
-        tolerance: Option<f64>,
-        /// First increment of every NLGEOM step as a fraction of its period, every increment
-        /// with DIRECT (default: the deck's *STATIC initial increment).
-        #[arg(long)]
-        increment: Option<f64>,
-        /// Linear solver: faer (LDLᵀ, f64), faer-mixed (f32 factor refined in f64 to the same
-        /// residual; falls back to f64 where f32 is not enough) or profile (the thesis's skyline).
-        #[arg(long, default_value = "faer", value_parser = ["faer", "faer-mixed", "profile"])]
-        solver: String,
-        /// Factorisations in a static step: auto (bfgs in *STATIC, DIRECT steps, full where
-        /// the increment size follows the iteration count), bfgs (the kept tangent updated by BFGS pairs,
-        /// factorised anew when ‖r‖ falls by less than half, and at each converged increment
-        /// for its negative pivots), modified (the same without BFGS pairs) or full (a
-        /// factorisation every iteration, as CalculiX). An increment bfgs or modified cannot
-        /// converge is redone by full Newton.
-        #[arg(long, default_value = "auto", value_parser = ["auto", "bfgs", "modified", "full"])]
-        newton: String,
-        /// Start of an increment without prescribed-value changes: the step's last converged
-        /// states extrapolated in step time (quadratic through three, linear through two) or
-        /// the last state (none).
-        #[arg(long, default_value = "quadratic", value_parser = ["quadratic", "linear", "none"])]
-        extrapolation: String,
-        /// Keep an extrapolated start only if its ‖r‖∞ is no larger than the last state's.
-        #[arg(long)]
-        guard: bool,
-        /// Backtracking line search on ‖r‖∞ in every iteration (off, as CalculiX iterates).
-        #[arg(long)]
-        line_search: bool,
-    },
-}
-
-/// What `solve` takes beyond the deck and the output folder.
-struct SolveFlags<'a> {
-    tolerance: Option<f64>,
-    increment: Option<f64>,
-    solver: &'a str,
-    newton: nonlin3d::deck::Strategy,
-    start: nonlin3d::deck::IncrementStart,
-}
-
-fn solve(
-    deck: &Path,
-    out: &Path,
-    flags: &SolveFlags<'_>,
-    verbosity: Verbosity,
-) -> Result<(), Failure> {
-    let SolveFlags {
-        tolerance,
-        increment,
-        solver,
-        ..
-    } = *flags;
-    use nonlin3d::deck::Progress;
-    let t0 = Instant::now();
-    nonlin3d::budget::install(None);
-    let model = nonlin3d::mesh::read_inp_file(deck)
-        .map_err(|e| Failure::Input(nonlin3d::Error::from(e)))?;
-    let input = nonlin3d::provenance::input_file(deck).map_err(Failure::Input)?;
-    let mut newton = match tolerance {
-        // An absolute tolerance replaces the relative one, as in a scene's tolerance_n.
-        Some(t) => NewtonSettings {
-            force_tolerance: t,
-            relative_tolerance: 0.0,
-            ..NewtonSettings::default()
-        },
-        None => NewtonSettings::default(),
-    };
-    newton.solver = match solver {
-        "faer-mixed" => nonlin3d::solver::SolverKind::FaerLdltMixed(0),
-        "profile" => nonlin3d::solver::SolverKind::Profile,
-        _ => nonlin3d::solver::SolverKind::FaerLdlt,
-    };
-    let options = nonlin3d::deck::StepOptions {
-        newton,
-        initial_increment: increment,
-        start: flags.start,
-        strategy: flags.newton,
-    };
-    // Bad input (no step, an inverted element, …) and an output folder that cannot be written
-    // are found before anything is solved; each increment lands there as it converges.
-    nonlin3d::deck::check(&model, &options).map_err(Failure::Input)?;
-    let mut provenance =
-        nonlin3d::provenance::Provenance::new(Some(input), None, options.newton.solver);
-    provenance.stage("read_and_check", t0.elapsed().as_secs_f64());
-    let mut output = nonlin3d::deck::DeckOutput::create(out, &model).map_err(Failure::Input)?;
-    output.set_provenance(provenance).map_err(Failure::Run)?;
-    stop_on_signals(output.interrupt_handle()).map_err(Failure::Run)?;
-    let monitor = watch(verbosity, "step", output.status_files());
-    let steps = model.steps.len();
-    lock(&monitor).units(steps);
-    for n in &model.not_used {
-        lock(&monitor).say(&format!("not used: {}, {}: {}", n.at, n.keyword, n.reason));
-    }
-    let outcome = nonlin3d::deck::solve_deck_with(&model, &options, &mut |p| {
-        let mut m = lock(&monitor);
-        match p {
-            Progress::Increment(r) => {
-                let last = r.increments.iter().rev().find(|i| i.converged);
-                let done = last.map_or(0.0, |i| i.step_time / r.period.max(f64::MIN_POSITIVE));
-                m.begin(r.step, done);
-            }
-            Progress::Step(r) => {
-                let iterations: usize = r.increments.iter().map(|i| i.iterations).sum();
-                let done = r.increments.iter().filter(|i| i.converged).count();
-                let contact = r
-                    .increments
-                    .iter()
-                    .rev()
-                    .find_map(|i| i.contact.as_ref())
-                    .map(|c| {
-                        format!(
-                            "; contact: {} pairs closed, max force {:.4e}",
-                            c.pairs_closed, c.max_force
-                        )
-                    })
-                    .unwrap_or_default();
-                m.say(&format!(
-                    "step {}: {done} increments ({} attempts), {iterations} iterations{}{contact}",
-                    r.step,
-                    r.increments.len(),
-                    if r.nlgeom { " (NLGEOM)" } else { "" }
-                ));
-                // A Riks step: the load proportionality factor by increment, as Abaqus's
-                // status file lists it.
-                for i in r.increments.iter().filter(|i| i.lpf.is_some()) {
-                    m.say(&format!(
-                        "  increment {:3}: LPF {:+.6e}, arc length {:.4e}, {} iterations",
-                        i.increment,
-                        i.lpf.unwrap_or_default(),
-                        i.arc_length.unwrap_or_default(),
-                        i.iterations
-                    ));
-                }
-                // The next step's events are numbered within it.
-                m.begin(r.step + 1, 0.0);
-            }
-            Progress::Failed(_) => {}
-        }
-        drop(m);
-        output.progress(p)
-    });
-    let status_error = lock(&monitor).finish();
-    let results = match outcome {
-        Ok(r) => r,
-        Err(e) => {
-            // Keep what converged, say why it stopped; the write error (if any) is secondary.
-            let _ = output.failed(&e);
-            return Err(Failure::Run(nonlin3d::Error::Partial {
-                source: Box::new(e),
-                folder: out.to_path_buf(),
-                kept: "increments",
-                summary: "summary.json",
-            }));
-        }
-    };
-    output.finish(&results).map_err(Failure::Run)?;
-    if let Some(e) = status_error {
-        return Err(Failure::Run(e));
-    }
-    lock(&monitor).say(&format!("results in {}", out.display()));
-    Ok(())
+    Solve(solve_command::SolveArgs),
 }
 
 /// The monitor of a command, fed with Newton's events through `tracing` and writing them to
@@ -585,35 +416,7 @@ fn main() -> ExitCode {
                 }
             })
             .map_err(Failure::Run),
-        Some(Command::Solve {
-            deck,
-            out,
-            tolerance,
-            increment,
-            solver,
-            newton,
-            extrapolation,
-            guard,
-            line_search,
-        }) => {
-            let flags = SolveFlags {
-                tolerance,
-                increment,
-                solver: &solver,
-                // clap admits only these three names.
-                newton: newton.parse().unwrap_or_default(),
-                start: nonlin3d::deck::IncrementStart {
-                    extrapolation: match extrapolation.as_str() {
-                        "none" => 0,
-                        "linear" => 1,
-                        _ => 2,
-                    },
-                    guarded: guard,
-                    line_search,
-                },
-            };
-            solve(&deck, &out, &flags, verbosity)
-        }
+        Some(Command::Solve(args)) => solve_command::run(&args, verbosity),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -135,3 +135,65 @@ fn unreadable_sizes_are_usage_errors() {
     assert_eq!(o.status.code(), Some(2), "{stderr}");
     assert!(stderr.contains("memory size '2XB'"), "{stderr}");
 }
+
+/// `solve DECK --max-memory 1MB`: the 30×5×4 mm cantilever deck (603 DOFs) needs about 9 MiB
+/// (its factor, matrix and workspace; the process itself holds more than 1 MB before it
+/// starts), so the solve is refused before the numeric phase: exit 1, the estimate and the
+/// option named, and `summary.json` says it stopped with nothing solved.
+#[test]
+fn solve_max_memory_refuses_what_does_not_fit() {
+    let dir = tmp("solve-memory-option");
+    let deck = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/decks/cantilever_linear.inp");
+    let out = dir.join("out");
+    let o = Command::new(env!("CARGO_BIN_EXE_nonlin3d"))
+        .args([
+            "solve",
+            "--quiet",
+            "--threads",
+            "1",
+            "--max-memory",
+            "1MB",
+            "--out",
+        ])
+        .arg(&out)
+        .arg(&deck)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{stderr}");
+    // 1 MB = 10⁶ bytes, 0.95 MiB, printed to a tenth.
+    assert!(stderr.contains("--max-memory of 1.0 MiB"), "{stderr}");
+    assert!(
+        stderr.contains("entries in the faer LDLᵀ factor need"),
+        "{stderr}"
+    );
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(json["complete"], false, "{json}");
+}
+
+/// The same deck under `--max-memory 2GiB` (it peaks below 100 MiB resident) is solved.
+#[test]
+fn solve_max_memory_lets_what_fits_run() {
+    let dir = tmp("solve-memory-fits");
+    let deck = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/decks/cantilever_linear.inp");
+    let out = dir.join("out");
+    let o = Command::new(env!("CARGO_BIN_EXE_nonlin3d"))
+        .args([
+            "solve",
+            "--quiet",
+            "--threads",
+            "1",
+            "--max-memory",
+            "2GiB",
+            "--out",
+        ])
+        .arg(&out)
+        .arg(&deck)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(json["complete"], true, "{json}");
+}

@@ -15,7 +15,7 @@
 
 use super::contact::{DeckContact, Settled};
 use super::loads::{Frame, History};
-use super::{IncrementSummary, StepOptions, Strategy};
+use super::{IncrementSummary, MixedPrecision, StepOptions, Strategy};
 use crate::Error;
 use nonlin3d_mesh::{InpModel, ReadStep};
 use nonlin3d_newton::{
@@ -150,6 +150,7 @@ pub(crate) fn run_step(
             c.reinstall(problem, u, &mut session)?;
         }
         let start = u.clone();
+        let mixed_before = session.mixed_stats();
         let predicted = path.predict(t + size);
         let guess = predicted.as_deref().map(|g| Guess { u: g, guarded });
         let mut report = predicted_increment(problem, u, 0.0, 1.0, guess, settings, &mut session)?;
@@ -190,6 +191,9 @@ pub(crate) fn run_step(
             summary.negative_pivots = Some(session.inertia_at(problem, u, 1.0)?);
             summary.factorisations += 1;
         }
+        summary.mixed_precision = session
+            .mixed_stats()
+            .map(|now| MixedPrecision::between(mixed_before, now));
         attempts.push(summary);
         if converged {
             increment += 1;

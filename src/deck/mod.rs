@@ -31,7 +31,7 @@ use nonlin3d_element::{IntegrationRule, Kinematics};
 use nonlin3d_laminate::ShearCoupling;
 use nonlin3d_mesh::InpModel;
 use nonlin3d_newton::{IncrementReport, NewtonSettings, StructuralProblem};
-use nonlin3d_solver::SolverKind;
+use nonlin3d_solver::{MixedStats, SolverKind};
 use serde::Serialize;
 use std::collections::BTreeMap;
 
@@ -198,6 +198,75 @@ pub struct IncrementSummary {
     /// The contact state at the end of a converged increment (decks with `*CONTACT PAIR`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub contact: Option<IncrementContact>,
+    /// `--solver faer-mixed`: what the f32 factor did in this attempt (with a redo by full
+    /// Newton and the inertia factorisation at the converged state counted in).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mixed_precision: Option<MixedPrecision>,
+}
+
+/// Mixed precision over one attempt (the solver's `MixedStats`, counted from the attempt's
+/// start): whether the f32 factor held or the f64 one was made.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct MixedPrecision {
+    /// Factorisations kept in f32.
+    pub f32_factorisations: usize,
+    /// Factorisations made in f64 because the f32 one was in doubt (`fallback` says why).
+    pub f64_factorisations: usize,
+    /// Iterative-refinement steps (one f32 solve and one f64 product each).
+    pub refinement_steps: usize,
+    /// The normwise backward error ‖b − A x‖∞ / (‖A‖∞‖x‖∞ + ‖b‖∞) the last refined
+    /// solution reached (null if none was refined).
+    pub backward_error: Option<f64>,
+    /// Why the last f64 factorisation of the attempt was made, if one was.
+    pub fallback: Option<String>,
+}
+
+impl MixedPrecision {
+    /// The change from `before` to `now`; a new analysis in between (the counts restart)
+    /// counts from zero.
+    pub fn between(before: Option<MixedStats>, now: MixedStats) -> Self {
+        let b = before
+            .filter(|b| {
+                b.single_factorizations <= now.single_factorizations
+                    && b.double_factorizations <= now.double_factorizations
+                    && b.refinement_steps <= now.refinement_steps
+            })
+            .unwrap_or_default();
+        let f64_factorisations = now.double_factorizations - b.double_factorizations;
+        let refinement_steps = now.refinement_steps - b.refinement_steps;
+        Self {
+            f32_factorisations: now.single_factorizations - b.single_factorizations,
+            f64_factorisations,
+            refinement_steps,
+            backward_error: (refinement_steps > 0).then_some(now.last_backward_error),
+            fallback: now
+                .last_fallback
+                .filter(|_| f64_factorisations > 0)
+                .map(str::to_string),
+        }
+    }
+
+    /// A line for the terminal: "f32 factor held (1 factorisation, 3 refinement steps,
+    /// backward error 2.1e-15)" or "f64 fall-back: … (…)".
+    pub fn line(&self) -> String {
+        let refined = match self.backward_error {
+            Some(e) => format!(
+                ", {} refinement steps, backward error {e:.1e}",
+                self.refinement_steps
+            ),
+            None => String::new(),
+        };
+        match &self.fallback {
+            None => format!(
+                "f32 factor held ({} factorisations{refined})",
+                self.f32_factorisations
+            ),
+            Some(why) => format!(
+                "f64 fall-back ({why}): {} f64 and {} f32 factorisations{refined}",
+                self.f64_factorisations, self.f32_factorisations
+            ),
+        }
+    }
 }
 
 impl IncrementSummary {
@@ -221,6 +290,7 @@ impl IncrementSummary {
             lpf: None,
             arc_length: None,
             contact: None,
+            mixed_precision: None,
         }
     }
 }

@@ -90,6 +90,7 @@ pub(crate) fn run_step(
             lpf: Some(inc.lambda),
             arc_length: Some(inc.arc * riks.period),
             contact: None,
+            mixed_precision: None,
         });
         let told = on_increment(Converged {
             increment: inc.index,

@@ -57,6 +57,12 @@ impl PathSolver {
         })
     }
 
+    /// What the solver's mixed precision did since its last analysis (f32 factorisations,
+    /// f64 fall-backs, refinement steps, the last backward error); `None` for an f64 solver.
+    pub fn mixed_stats(&self) -> Option<nonlin3d_solver::MixedStats> {
+        self.solver.mixed_stats()
+    }
+
     /// Symbolic analyses this session made (1 unless the pattern or the solver kind changed
     /// under it): a change of constraints within the pattern (a replaced tie group, a
     /// released DOF) costs none.

@@ -357,6 +357,10 @@ impl LinearSolver for FaerSolver {
             self.solve_f64(b, nrhs)
         }
     }
+
+    fn mixed_stats(&self) -> Option<MixedStats> {
+        self.uses_mixed().then(|| FaerSolver::mixed_stats(self))
+    }
 }
 
 impl FaerSolver {

@@ -43,6 +43,11 @@ pub trait LinearSolver: Send {
     fn factorize(&mut self, a: &SymmetricMatrix) -> Result<Factorization, SolverError>;
     /// Overwrites the `nrhs` column-major right-hand sides in `b` (n·nrhs values) with A⁻¹b.
     fn solve_in_place(&mut self, b: &mut [f64], nrhs: usize) -> Result<(), SolverError>;
+    /// What mixed precision did since the last `analyze` (f32 factorisations kept, f64
+    /// fall-backs, refinement steps); `None` for a solver that factorises in f64 only.
+    fn mixed_stats(&self) -> Option<crate::MixedStats> {
+        None
+    }
 }
 
 /// The solvers nonlin3d ships, by name.

@@ -187,6 +187,19 @@ impl FaerSolver {
     ) -> Result<Factorization, SolverError> {
         self.mixed.l32 = Vec::new();
         self.mixed.single = false;
+        // The analysis budgeted the f32 factor; the f64 one (twice its size) is checked now,
+        // with the f32 one freed and the matrices already counted as in use: an error naming
+        // the size and the limit, not an abort in the allocation.
+        if self.split_state.is_none() && self.l_values.is_empty() {
+            crate::budget::Need {
+                what: "faer LDLᵀ factor in f64 (mixed precision's fall-back)",
+                entries: self.mixed.len,
+                factor_bytes: self.mixed.len.saturating_mul(std::mem::size_of::<f64>()),
+                workspace_bytes: 0,
+                matrix_bytes: 0,
+            }
+            .check(crate::budget::current_budget(self.memory_budget.as_ref()))?;
+        }
         self.mixed.stats.last_fallback = Some(reason);
         self.mixed.stats.double_factorizations += 1;
         self.mixed.last_negative = None;
