@@ -107,6 +107,7 @@ pub fn run(
     crate::budget::check_scene(&resolved, &crate::budget::limit())?;
     let t0 = Instant::now();
     let model = build_model(&resolved)?;
+    let asked = resolved.analysis.threads;
     // All cores (threads = 0) on a small model: one thread factorises (the bits do not
     // depend on it).
     if resolved.analysis.threads == 0 && 3 * model.mesh.nodes.len() < ONE_THREAD_BELOW_DOFS {
@@ -127,7 +128,19 @@ pub fn run(
         dofs,
         levels: load_factors(scene).0.len(),
     })?;
-    let mut sweep = sweep(scene, &model, &mut problem, sub.as_mut(), progress)?;
+    // With two or more threads the companion mesh of the error estimate (an independent run)
+    // goes on beside the sweep, in the same pool; sequentially it runs after it. The bits are
+    // the same either way (tests/concurrent_estimate.rs).
+    let beside = estimate::wanted(scene) && asked != 1 && rayon::current_num_threads() >= 2;
+    let mut companion = None;
+    let mut sweep = if beside {
+        rayon::in_place_scope(|s| {
+            s.spawn(|_| companion = Some(estimate::run_companion(scene)));
+            sweep(scene, &model, &mut problem, sub.as_mut(), progress)
+        })
+    } else {
+        sweep(scene, &model, &mut problem, sub.as_mut(), progress)
+    }?;
     let critical = criterion(scene, model.kind, &mut sweep.levels)?;
     let mut results = Results {
         title: scene.title.clone(),
@@ -168,7 +181,7 @@ pub fn run(
     };
     // The error estimate of every level (the companion mesh) and the target's verdict; its
     // warnings after the scene's and before the stability ones (a run's end says last).
-    estimate::attach(scene, choice, &mut results)?;
+    estimate::attach(scene, choice, companion, &mut results)?;
     let estimated = std::mem::take(&mut results.warnings);
     results.warnings = scene.warnings();
     results.warnings.extend(estimated);
@@ -247,6 +260,8 @@ fn sweep(
         ));
     }
     let mut from = 0.0;
+    // Negative pivots at the last converged state (the unloaded one: none).
+    let mut before = 0;
     for (k, (&lambda, &value)) in factors.iter().zip(values).enumerate() {
         // Newton's `attempt` spans and events (crate::log) nest in it.
         let _level = tracing::debug_span!("level", level = k + 1, value).entered();
@@ -304,6 +319,7 @@ fn sweep(
                         pert,
                         (newton, &stepping),
                         &mut session,
+                        before,
                     )
                     .map_err(level_error)?;
                     (start, step) = (last_start, last);
@@ -327,6 +343,7 @@ fn sweep(
         if solved.perturbed {
             out.perturbed_at = Some(value);
         }
+        before = solved.pivots.unwrap_or(before);
         out.solve_s += t.elapsed().as_secs_f64();
         let (level, vcct_s) = record_level(
             scene,
