@@ -190,10 +190,11 @@ pub fn run(
 }
 
 /// Below this many DOF a run asked for all cores (`threads = 0`, `--threads` not given)
-/// factorises on one thread: on the 2-vCPU machine, shared (load average 10), two threads took
-/// 1.16× the wall time of one at 6 789 DOF and 1.20× at 9 849 (1.6–1.8× the CPU), and at
-/// 12.6 k DOF on a quieter machine they gained nothing (docs/PERFORMANCE.md).
-pub const ONE_THREAD_BELOW_DOFS: usize = 15_000;
+/// factorises on one thread (the error estimate's companion still runs beside it on the other
+/// core): on the 2-vCPU machine two threads took 1.16× the wall time of one at 6 789 DOF and
+/// 1.20× at 9 849 under load 10, and at 18 393 DOF (thesis model 6) at load 2.5 1.27× the wall
+/// time and 1.28× the CPU of one (docs/PERFORMANCE.md, "The scene's time"); they pay at 45 k.
+pub const ONE_THREAD_BELOW_DOFS: usize = 20_000;
 
 /// What the sweep over the levels gives [`run`].
 struct Sweep {
