@@ -107,6 +107,7 @@ pub fn run(
     crate::budget::check_scene(&resolved, &crate::budget::limit())?;
     let t0 = Instant::now();
     let model = build_model(&resolved)?;
+    let asked = resolved.analysis.threads;
     // All cores (threads = 0) on a small model: one thread factorises (the bits do not
     // depend on it).
     if resolved.analysis.threads == 0 && 3 * model.mesh.nodes.len() < ONE_THREAD_BELOW_DOFS {
@@ -127,7 +128,19 @@ pub fn run(
         dofs,
         levels: load_factors(scene).0.len(),
     })?;
-    let mut sweep = sweep(scene, &model, &mut problem, sub.as_mut(), progress)?;
+    // With two or more threads the companion mesh of the error estimate (an independent run)
+    // goes on beside the sweep, in the same pool; sequentially it runs after it. The bits are
+    // the same either way (tests/concurrent_estimate.rs).
+    let beside = estimate::wanted(scene) && asked != 1 && rayon::current_num_threads() >= 2;
+    let mut companion = None;
+    let mut sweep = if beside {
+        rayon::in_place_scope(|s| {
+            s.spawn(|_| companion = Some(estimate::run_companion(scene)));
+            sweep(scene, &model, &mut problem, sub.as_mut(), progress)
+        })
+    } else {
+        sweep(scene, &model, &mut problem, sub.as_mut(), progress)
+    }?;
     let critical = criterion(scene, model.kind, &mut sweep.levels)?;
     let mut results = Results {
         title: scene.title.clone(),
@@ -168,7 +181,7 @@ pub fn run(
     };
     // The error estimate of every level (the companion mesh) and the target's verdict; its
     // warnings after the scene's and before the stability ones (a run's end says last).
-    estimate::attach(scene, choice, &mut results)?;
+    estimate::attach(scene, choice, companion, &mut results)?;
     let estimated = std::mem::take(&mut results.warnings);
     results.warnings = scene.warnings();
     results.warnings.extend(estimated);
@@ -177,10 +190,11 @@ pub fn run(
 }
 
 /// Below this many DOF a run asked for all cores (`threads = 0`, `--threads` not given)
-/// factorises on one thread: on the 2-vCPU machine, shared (load average 10), two threads took
-/// 1.16× the wall time of one at 6 789 DOF and 1.20× at 9 849 (1.6–1.8× the CPU), and at
-/// 12.6 k DOF on a quieter machine they gained nothing (docs/PERFORMANCE.md).
-pub const ONE_THREAD_BELOW_DOFS: usize = 15_000;
+/// factorises on one thread (the error estimate's companion still runs beside it on the other
+/// core): on the 2-vCPU machine two threads took 1.16× the wall time of one at 6 789 DOF and
+/// 1.20× at 9 849 under load 10, and at 18 393 DOF (thesis model 6) at load 2.5 1.27× the wall
+/// time and 1.28× the CPU of one (docs/PERFORMANCE.md, "The scene's time"); they pay at 45 k.
+pub const ONE_THREAD_BELOW_DOFS: usize = 20_000;
 
 /// What the sweep over the levels gives [`run`].
 struct Sweep {
@@ -247,6 +261,8 @@ fn sweep(
         ));
     }
     let mut from = 0.0;
+    // Negative pivots at the last converged state (the unloaded one: none).
+    let mut before = 0;
     for (k, (&lambda, &value)) in factors.iter().zip(values).enumerate() {
         // Newton's `attempt` spans and events (crate::log) nest in it.
         let _level = tracing::debug_span!("level", level = k + 1, value).entered();
@@ -304,6 +320,7 @@ fn sweep(
                         pert,
                         (newton, &stepping),
                         &mut session,
+                        before,
                     )
                     .map_err(level_error)?;
                     (start, step) = (last_start, last);
@@ -327,6 +344,7 @@ fn sweep(
         if solved.perturbed {
             out.perturbed_at = Some(value);
         }
+        before = solved.pivots.unwrap_or(before);
         out.solve_s += t.elapsed().as_secs_f64();
         let (level, vcct_s) = record_level(
             scene,

@@ -249,12 +249,31 @@ fn fill_level(
     Ok(())
 }
 
-/// Runs the companion (when the scene asks for an estimate), fills the per-point errors and
-/// the levels' summaries, and reports them with the target's choice in `results.accuracy`;
-/// a warning when the estimate exceeds the target, or when the companion could not run.
+/// The companion's run: its results (or why it failed) and its wall seconds.
+pub(crate) type CompanionRun = (Result<Results, Error>, f64);
+
+/// Whether the scene asks for the companion's estimate.
+pub(crate) fn wanted(scene: &Scene) -> bool {
+    scene.mesh.error_estimate.unwrap_or_default() == ErrorEstimateName::Companion
+}
+
+/// The companion mesh's run ([`companion_scene`], then [`super::run`] on it, silently): an
+/// independent run, so it may go on beside the main one (`super::run` does so with two or
+/// more threads); its results do not depend on when or on which thread it runs.
+pub(crate) fn run_companion(scene: &Scene) -> CompanionRun {
+    let t = Instant::now();
+    let run = companion_scene(scene).and_then(|c| super::run(&c, &mut |_| Ok(())));
+    (run, t.elapsed().as_secs_f64())
+}
+
+/// Fills the per-point errors and the levels' summaries from the companion's run
+/// (`companion`: run beside the main one; None: run here, after it, when the scene asks for
+/// an estimate), and reports them with the target's choice in `results.accuracy`; a warning
+/// when the estimate exceeds the target, or when the companion could not run.
 pub(crate) fn attach(
     scene: &Scene,
     choice: Option<MeshChoice>,
+    companion: Option<CompanionRun>,
     results: &mut Results,
 ) -> Result<(), Error> {
     let method = scene.mesh.error_estimate.unwrap_or_default();
@@ -277,8 +296,7 @@ pub(crate) fn attach(
         chosen_mesh: choice,
     };
     if method == ErrorEstimateName::Companion {
-        let t = Instant::now();
-        let run = companion_scene(scene).and_then(|c| super::run(&c, &mut |_| Ok(())));
+        let (run, seconds) = companion.unwrap_or_else(|| run_companion(scene));
         match run {
             Ok(c) if c.levels.len() == results.levels.len() => {
                 let keeps = embedded_of(scene).is_some_and(|p| p.resolves_the_split());
@@ -287,7 +305,7 @@ pub(crate) fn attach(
                     fill_level(level, cl, rule)?;
                 }
                 report.companion_dofs = Some(c.model.dofs);
-                report.companion_s = Some(t.elapsed().as_secs_f64());
+                report.companion_s = Some(seconds);
             }
             Ok(c) => {
                 report.unavailable = Some(format!(

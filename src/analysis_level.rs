@@ -96,9 +96,20 @@ pub(super) struct Solved {
     pub(super) fallback: bool,
 }
 
-/// One level from `from` to `to` by [`solve_level`]; with a kept tangent (BFGS) redone by full
-/// Newton from the same start if BFGS fails or lands on the branch buckled into the base
-/// (`inward` of the converged state; always false with contact `auto`/`on`).
+/// Whether `newton` iterates on an older tangent (BFGS, or modified Newton's
+/// `refactor_every` > 1): its iteration map may carry a long step to another equilibrium than
+/// full Newton's.
+pub(super) fn kept_tangent(newton: &NewtonSettings) -> bool {
+    newton.keep_tangent || newton.refactor_every > 1
+}
+
+/// One level from `from` to `to` by [`solve_level`]; with a kept tangent ([`kept_tangent`]:
+/// BFGS, modified Newton) redone by full Newton from the same start if it fails, lands on the
+/// branch buckled into the base (`inward` of the converged state; always false with contact
+/// `auto`/`on`), or ends with more negative pivots than `before`, the count at the start
+/// state (thesis §2.5: an unstable state the path did not cross into by a bifurcation the
+/// §3.2 protocol handled; the levels that offer the perturbation are full Newton's already).
+#[allow(clippy::too_many_arguments)]
 pub(super) fn solve_or_redo(
     inward: &mut dyn FnMut(&[f64]) -> bool,
     problem: &mut StructuralProblem,
@@ -107,15 +118,21 @@ pub(super) fn solve_or_redo(
     pert: &[(usize, f64)],
     (newton, stepping): (&NewtonSettings, &Stepping),
     session: &mut PathSolver,
+    before: usize,
 ) -> Result<Solved, Error> {
     let start = u.clone();
     let first = solve_level(problem, u, from, lambda, pert, newton, stepping, session)
         .map(|l| (l.attempts, l.perturbed, l.negative_pivots));
     // BFGS's early directions come from an older tangent and can carry the sublaminate
     // across to the branch buckled into the base (seen on the reference scene at −0.003);
-    // full Newton follows the outward branch, so the level is redone with it — also when
-    // BFGS does not converge at all.
-    let redo = newton.keep_tangent && first.as_ref().map_or(true, |_| inward(u));
+    // a kept tangent's long steps may end on an unstable state full Newton would not reach
+    // (the contact loop's passes do so far past buckling: docs/PERFORMANCE.md, "The scene's
+    // time"); full Newton follows the stable branch, so the level is redone with it — also
+    // when the kept tangent does not converge at all.
+    let redo = kept_tangent(newton)
+        && first.as_ref().map_or(true, |(_, _, pivots)| {
+            inward(u) || pivots.is_some_and(|p| p > before)
+        });
     let (mut attempts, mut perturbed, mut pivots) = match first {
         Err(_) if redo => (Vec::new(), false, None),
         r => r?,
@@ -145,7 +162,8 @@ pub(super) type Stepped = (Solved, Vec<f64>, (f64, f64));
 /// `auto` before contact engages: the level `from` → `lambda` in the contact loop's steps
 /// ([`ContactStage::plain_steps`]), each by [`solve_or_redo`] (the perturbation offered until
 /// one applies it), up to the first step whose state overlaps (src/contact.rs). Returns what
-/// was solved, the state at the start of the last step solved and that step.
+/// was solved, the state at the start of the last step solved and that step. `before`: the
+/// negative pivots at the level's start ([`solve_or_redo`]).
 #[allow(clippy::too_many_arguments)]
 pub(super) fn solve_in_steps(
     stage: &ContactStage,
@@ -157,11 +175,13 @@ pub(super) fn solve_in_steps(
     pert: &[(usize, f64)],
     (newton, stepping): (&NewtonSettings, &Stepping),
     session: &mut PathSolver,
+    before: usize,
 ) -> Result<Stepped, Error> {
     let mut all = Solved::default();
     let mut start = u.clone();
     let mut step = (from, lambda);
     let mut at = from;
+    let mut before = before;
     for end in stage.plain_steps(from, lambda) {
         start.clone_from(u);
         step = (at, end);
@@ -174,7 +194,9 @@ pub(super) fn solve_in_steps(
             offered,
             (newton, stepping),
             session,
+            before,
         )?;
+        before = s.pivots.unwrap_or(before);
         all.attempts.extend(s.attempts);
         all.perturbed |= s.perturbed;
         all.pivots = s.pivots;

@@ -110,9 +110,10 @@ pub fn perturbed_redo<P: NonlinearProblem + DeadLoads>(
     perturbed_step(problem, u, from, to, perturbation, &patient, &fine)
 }
 
-/// Negative pivots at the converged state `u` at λ = `to`: with a kept tangent one extra
-/// factorisation there ([`PathSolver::inertia_at`]), else those of the last converged
-/// attempt's last factorisation.
+/// Negative pivots at the converged state `u` at λ = `to`: with a kept tangent (BFGS, or
+/// modified Newton's `refactor_every` > 1, whose last factorisation may be several iterations
+/// old) one extra factorisation there ([`PathSolver::inertia_at`]), else those of the last
+/// converged attempt's last factorisation.
 fn inertia(
     problem: &mut dyn NonlinearProblem,
     u: &[f64],
@@ -121,7 +122,7 @@ fn inertia(
     attempts: &[IncrementReport],
     session: &mut PathSolver,
 ) -> Result<Option<usize>, NewtonError> {
-    if newton.keep_tangent {
+    if newton.keep_tangent || newton.refactor_every > 1 {
         session.inertia_at(problem, u, to).map(Some)
     } else {
         Ok(attempts
