@@ -86,7 +86,7 @@ pub struct AnalysisOptions {
     /// whose forces make it unreachable in double precision (below 1e-14·F).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub tolerance_n: Option<f64>,
-    /// Modified (default), full or quasi-Newton.
+    /// Full (default), modified or quasi-Newton.
     #[serde(default)]
     pub newton: NewtonName,
     /// Iterations between refactorisations for modified Newton.
@@ -147,7 +147,7 @@ impl Default for AnalysisOptions {
         Self {
             integration: RuleName::Gauss2,
             tolerance_n: None,
-            newton: NewtonName::Modified,
+            newton: NewtonName::Full,
             path: PathName::Load,
             refactor_every: default_refactor(),
             vcct_forces: ForceKinematics::Nonlinear,
@@ -156,5 +156,20 @@ impl Default for AnalysisOptions {
             solver: SolverName::Faer,
             threads: default_threads(),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A scene without an `[analysis]` table and one with an empty table get the same options:
+    /// `Default` and the fields' serde defaults must not drift apart (they did once: a scene
+    /// without the table ran modified Newton while the documented default was full).
+    #[test]
+    fn no_table_and_an_empty_table_mean_the_same() {
+        let empty: AnalysisOptions = toml::from_str("").unwrap();
+        assert_eq!(AnalysisOptions::default(), empty);
+        assert_eq!(empty.newton, NewtonName::Full);
     }
 }
