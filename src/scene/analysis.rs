@@ -160,6 +160,7 @@ impl Default for AnalysisOptions {
 }
 
 #[cfg(test)]
+#[allow(clippy::unwrap_used)]
 mod tests {
     use super::*;
 

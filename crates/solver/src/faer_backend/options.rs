@@ -60,7 +60,7 @@ pub enum FaerSplit {
     /// level was dissected into halves of at least a fifth of the interior each (LDLᵀ only:
     /// LLᵀ ignores it). In f64 it falls back to the unsplit factor when
     /// a half's separator block meets a pivot below 1e-8 of its diagonal; with
-    /// [`FaerPrecision::Mixed`] the halves are f32, the split solve is refined in f64, and
+    /// [`FaerPrecision::Mixed`](super::FaerPrecision::Mixed) the halves are f32, the split solve is refined in f64, and
     /// every fallback of mixed precision goes to the f64 split (then to the unsplit factor).
     Halves,
 }
