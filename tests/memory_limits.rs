@@ -136,15 +136,11 @@ fn unreadable_sizes_are_usage_errors() {
     assert!(stderr.contains("memory size '2XB'"), "{stderr}");
 }
 
-/// `solve DECK --max-memory 1MB`: the 30×5×4 mm cantilever deck (603 DOFs) needs about 9 MiB
-/// (its factor, matrix and workspace; the process itself holds more than 1 MB before it
-/// starts), so the solve is refused before the numeric phase: exit 1, the estimate and the
-/// option named, and `summary.json` says it stopped with nothing solved.
-#[test]
-fn solve_max_memory_refuses_what_does_not_fit() {
-    let dir = tmp("solve-memory-option");
+/// `nonlin3d solve --quiet --threads 1 --max-memory LIMIT` on the 603-DOF cantilever deck, into
+/// a fresh directory named `name`; the process output and the output directory.
+fn solve_cantilever(name: &str, limit: &str) -> (std::process::Output, std::path::PathBuf) {
+    let out = tmp(name).join("out");
     let deck = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/decks/cantilever_linear.inp");
-    let out = dir.join("out");
     let o = Command::new(env!("CARGO_BIN_EXE_nonlin3d"))
         .args([
             "solve",
@@ -152,13 +148,23 @@ fn solve_max_memory_refuses_what_does_not_fit() {
             "--threads",
             "1",
             "--max-memory",
-            "1MB",
+            limit,
             "--out",
         ])
         .arg(&out)
         .arg(&deck)
         .output()
         .unwrap();
+    (o, out)
+}
+
+/// `solve DECK --max-memory 1MB`: the 30×5×4 mm cantilever deck (603 DOFs) needs about 9 MiB
+/// (its factor, matrix and workspace; the process itself holds more than 1 MB before it
+/// starts), so the solve is refused before the numeric phase: exit 1, the estimate and the
+/// option named, and `summary.json` says it stopped with nothing solved.
+#[test]
+fn solve_max_memory_refuses_what_does_not_fit() {
+    let (o, out) = solve_cantilever("solve-memory-option", "1MB");
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(1), "{stderr}");
     // 1 MB = 10⁶ bytes, 0.95 MiB, printed to a tenth.
@@ -175,23 +181,7 @@ fn solve_max_memory_refuses_what_does_not_fit() {
 /// The same deck under `--max-memory 2GiB` (it peaks below 100 MiB resident) is solved.
 #[test]
 fn solve_max_memory_lets_what_fits_run() {
-    let dir = tmp("solve-memory-fits");
-    let deck = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/decks/cantilever_linear.inp");
-    let out = dir.join("out");
-    let o = Command::new(env!("CARGO_BIN_EXE_nonlin3d"))
-        .args([
-            "solve",
-            "--quiet",
-            "--threads",
-            "1",
-            "--max-memory",
-            "2GiB",
-            "--out",
-        ])
-        .arg(&out)
-        .arg(&deck)
-        .output()
-        .unwrap();
+    let (o, out) = solve_cantilever("solve-memory-fits", "2GiB");
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
