@@ -13,8 +13,14 @@
 //! Signals: every METIS entry point installs GKlib's own SIGABRT/SIGTERM handlers (its error
 //! exit) for the length of the call and puts back the previous ones with `signal()`, which
 //! loses their flags; the handlers in force before the call are saved and restored here with
-//! `sigaction`. A SIGTERM arriving *during* the call is taken by GKlib's handler (the call then
-//! fails and the ordering falls back, see [`crate::FaerOrdering::Auto`]).
+//! `sigaction`. A SIGTERM arriving *during* the call is taken by GKlib's handler, which
+//! unwinds METIS to `METIS_ERROR` (the same code GKlib's own error exit gives, which raises the
+//! same signal); the signal would then be lost and the run would go on to the end (seen once in
+//! `tests/deck_reliability.rs`: a SIGTERM sent as `solve` ordered a step's pattern exited 0).
+//! So after the handlers are put back a `METIS_ERROR` passes SIGTERM on to the process: the
+//! program's own handler stops the run with the converged results kept (exit 143), as for a
+//! SIGTERM at any other moment. Still open: a SIGTERM delivered to *another* thread during the
+//! call runs GKlib's handler there, whose jump buffer is thread-local and unset (undefined).
 
 use crate::nested::compress;
 use crate::{Permutation, SolverError, SymmetricPattern};
@@ -57,11 +63,11 @@ pub fn metis_nested_dissection(pattern: &SymmetricPattern) -> Result<Permutation
         // A poisoned lock only means another METIS call panicked: the state it guards is
         // re-seeded by every call.
         let _guard = METIS_LOCK.lock().unwrap_or_else(|e| e.into_inner());
-        let _signals = SavedHandlers::save();
+        let signals = SavedHandlers::save();
         // SAFETY: the arrays have the lengths METIS_NodeND reads and writes (xadj nv + 1,
         // adjncy xadj[nv], vwgt/perm/iperm nv, options METIS_NOPTIONS); indices were checked
         // to fit idx_t (i32) above; METIS keeps no pointer after returning.
-        unsafe {
+        let status = unsafe {
             ffi::METIS_SetDefaultOptions(options.as_mut_ptr());
             options[ffi::moptions_et_METIS_OPTION_SEED as usize] = METIS_SEED;
             options[ffi::moptions_et_METIS_OPTION_NUMBERING as usize] = 0;
@@ -74,7 +80,12 @@ pub fn metis_nested_dissection(pattern: &SymmetricPattern) -> Result<Permutation
                 perm.as_mut_ptr(),
                 iperm.as_mut_ptr(),
             )
+        };
+        drop(signals);
+        if status == ffi::rstatus_et_METIS_ERROR {
+            pass_on_sigterm();
         }
+        status
     };
     match status {
         s if s == ffi::rstatus_et_METIS_OK => {}
@@ -99,6 +110,16 @@ pub fn metis_nested_dissection(pattern: &SymmetricPattern) -> Result<Permutation
         forward.extend_from_slice(&members[v]);
     }
     Permutation::from_forward(forward)
+}
+
+/// Sends SIGTERM to this process again, now that the handlers in force before the METIS call
+/// are back: `METIS_ERROR` is how GKlib reports the SIGTERM its handler took during the call.
+fn pass_on_sigterm() {
+    #[cfg(unix)]
+    // SAFETY: kill(2) on our own pid with a standard signal; no memory is touched.
+    unsafe {
+        libc::kill(libc::getpid(), libc::SIGTERM);
+    }
 }
 
 /// The SIGABRT and SIGTERM dispositions in force before a METIS call, put back on drop.
