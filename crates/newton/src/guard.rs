@@ -58,11 +58,6 @@ impl InertiaGuard {
         }
     }
 
-    /// Negative pivots at the last accepted state, if known.
-    pub(crate) fn reference(&self) -> Option<usize> {
-        self.reference
-    }
-
     /// Whether a rise is pending (seen, not yet accepted): the step should not grow.
     pub(crate) fn pending(&self) -> bool {
         self.first.is_some()

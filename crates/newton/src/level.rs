@@ -33,18 +33,11 @@ pub struct LevelReport {
 
 /// Solves one level: from the converged state `u` at load factor `from` to `to`. If the
 /// converged state is unstable (negative pivots of K_T: the trivial path past a bifurcation,
-/// §2.5) and a `perturbation` is given, the step is redone by the §3.2 protocol
+/// §2.5) and a `perturbation` is given, the step is redone from `from` by the §3.2 protocol
 /// ([`perturbed_step`](crate::perturbed_step): perturbation on along the step, in quarters of
-/// the level's step with 4× the iterations, removed at `to`) to land on the buckled branch;
-/// `perturbation` lists (DOF, force) pairs, empty for none. The first increment is at most the
-/// level's step.
-///
-/// The redo starts from the last stable state of the first pass
-/// ([`PathReport::last_stable`](crate::PathReport::last_stable)) when it lies inside the
-/// level, else from `from`: below the bifurcation the equilibrium with the dead perturbation
-/// load is unique near the trivial path, so the perturbed path from either start reaches the
-/// same states (to the Newton tolerance), and the increments from `from` up to the last stable
-/// λ are not solved twice. The redo uses `session`'s analysis ([`perturbed_redo_with`]).
+/// it with 4× the iterations, removed at `to`) to land on the buckled branch, on `session`'s
+/// analysis ([`perturbed_redo_with`]); `perturbation` lists (DOF, force) pairs, empty for
+/// none. The first increment is at most the level's step.
 ///
 /// The thesis applied the perturbation at the first level and left it to the analyst to pick
 /// that level above the buckling strain; here the change of inertia picks the level, so a
@@ -68,21 +61,16 @@ pub fn solve_level<P: NonlinearProblem + DeadLoads>(
         ..stepping.clone()
     };
     let start = u.clone();
-    let path = follow_path_with(problem, u, from, &[to], newton, &stepping, session)?;
-    let mut attempts = path.attempts;
+    let mut attempts =
+        follow_path_with(problem, u, from, &[to], newton, &stepping, session)?.attempts;
     let mut pivots = inertia(problem, u, to, newton, &attempts, session)?;
     let unstable = pivots.is_some_and(|p| p > 0);
     let mut perturbed = false;
     if unstable && !perturbation.is_empty() {
-        let (at, state) = path
-            .last_stable
-            .filter(|&(at, _)| inside(at, (from, to)))
-            .unwrap_or((from, start));
-        *u = state;
+        *u = start;
         attempts.extend(perturbed_redo_with(
             problem,
             u,
-            at,
             (from, to),
             perturbation,
             newton,
@@ -99,17 +87,11 @@ pub fn solve_level<P: NonlinearProblem + DeadLoads>(
     })
 }
 
-/// Whether λ = `at` lies strictly inside the level `from` → `to` (beyond a rounding of λ).
-fn inside(at: f64, (from, to): (f64, f64)) -> bool {
-    let eps = 1e-12 * to.abs().max(from.abs()).max(1.0);
-    (at - from) * (to - from).signum() > eps && (to - at) * (to - from).signum() > eps
-}
-
 /// The perturbation protocol's redo of a level (thesis §3.2) from the level's start `u`: the
 /// perturbed step in 4 equal increments with 4 times the iteration limit, the perturbation applied and removed
 /// ([`perturbed_step`](crate::perturbed_step)), with a solver of its own. Shared by the
 /// callers that follow a perturbed level again (the contact loop's fallback);
-/// [`perturbed_redo_with`] starts elsewhere and with the caller's session.
+/// [`perturbed_redo_with`] is the same on the caller's session.
 pub fn perturbed_redo<P: NonlinearProblem + DeadLoads>(
     problem: &mut P,
     u: &mut Vec<f64>,
@@ -122,7 +104,6 @@ pub fn perturbed_redo<P: NonlinearProblem + DeadLoads>(
     perturbed_redo_with(
         problem,
         u,
-        from,
         (from, to),
         perturbation,
         newton,
@@ -131,16 +112,14 @@ pub fn perturbed_redo<P: NonlinearProblem + DeadLoads>(
     )
 }
 
-/// [`perturbed_redo`] of the level `from` → `to` from `u` converged at λ = `at` (the level's
-/// start, or a stable state inside the level: [`solve_level`]), with `session`'s solver
-/// ([`perturbed_step_with`]: no new symbolic analysis). The increments stay quarters of the
-/// level's step (|to − from|/4, the branch choice needs them: one increment put the 60 mm
-/// circle's sublaminate into the base), so a later start takes fewer of them.
+/// [`perturbed_redo`] with `session`'s solver (the level's: [`solve_level`], the arc-length
+/// level) through [`perturbed_step_with`]: no new symbolic analysis (fill-reducing orderings
+/// compared, symbolic factorisation) for the perturbed path nor for the removal; the steps are
+/// bitwise those of new solvers.
 #[allow(clippy::too_many_arguments)]
 pub fn perturbed_redo_with<P: NonlinearProblem + DeadLoads>(
     problem: &mut P,
     u: &mut Vec<f64>,
-    at: f64,
     (from, to): (f64, f64),
     perturbation: &[(usize, f64)],
     newton: &NewtonSettings,
@@ -157,7 +136,15 @@ pub fn perturbed_redo_with<P: NonlinearProblem + DeadLoads>(
         max_iterations: PERTURBED_PATIENCE * newton.max_iterations,
         ..newton.clone()
     };
-    perturbed_step_with(problem, u, (at, to), perturbation, &patient, &fine, session)
+    perturbed_step_with(
+        problem,
+        u,
+        (from, to),
+        perturbation,
+        &patient,
+        &fine,
+        session,
+    )
 }
 
 /// Negative pivots at the converged state `u` at λ = `to`: with a kept tangent (BFGS, or
@@ -228,67 +215,5 @@ mod tests {
         assert_eq!(level.negative_pivots, Some(0));
         assert!(w > 0.3, "w/h = {w}");
         assert!(level.attempts.len() > plain.attempts.len());
-    }
-
-    /// The redo of an unstable level starts from the first pass's last stable state (λ_s, the
-    /// last accepted state before the inertia guard's crossing) instead of the level's start:
-    /// its first attempt is at λ_s + Δ/4 (Δ the level's step), and it ends on the same
-    /// buckled branch, stable and lifted, as the redo from the start.
-    #[test]
-    fn the_redo_starts_from_the_last_stable_state() {
-        let newton = NewtonSettings::default();
-        let stepping = Stepping {
-            initial: 0.25,
-            max: 0.25,
-            ..Stepping::default()
-        };
-        let (mut problem, top, h) = compressed();
-        let mut session = PathSolver::new(&problem, newton.solver).unwrap();
-        let mut u = vec![0.0; problem.n()];
-        let mut trivial = u.clone();
-        let first = crate::follow_path_with(
-            &mut problem,
-            &mut trivial,
-            0.0,
-            &[1.0],
-            &newton,
-            &stepping,
-            &mut session,
-        )
-        .unwrap();
-        let (at, _) = first.last_stable.clone().unwrap();
-        assert!(at > 0.0 && at < 1.0, "λ_s = {at}");
-        let mut session = PathSolver::new(&problem, newton.solver).unwrap();
-        let dof = 3 * top + 2;
-        let level = solve_level(
-            &mut problem,
-            &mut u,
-            0.0,
-            1.0,
-            &[(dof, 0.5)],
-            &newton,
-            &stepping,
-            &mut session,
-        )
-        .unwrap();
-        assert!(level.perturbed);
-        let redo = &level.attempts[first.attempts.len()..];
-        let expected = (at + 0.25).min(1.0);
-        assert!(
-            (redo[0].lambda - expected).abs() < 1e-12,
-            "{} against {expected}",
-            redo[0].lambda
-        );
-        assert!(redo.iter().all(|a| a.lambda > at));
-        assert_eq!(level.negative_pivots, Some(0));
-        assert!(u[dof] / h > 0.3, "w/h = {}", u[dof] / h);
-    }
-
-    /// A state at the level's start or end is not inside it; between, in either direction, it is.
-    #[test]
-    fn inside_is_strict_both_ways() {
-        use super::inside;
-        assert!(inside(0.3, (0.2, 0.4)) && inside(0.3, (0.4, 0.2)));
-        assert!(!inside(0.2, (0.2, 0.4)) && !inside(0.4, (0.2, 0.4)) && !inside(0.5, (0.2, 0.4)));
     }
 }

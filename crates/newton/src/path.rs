@@ -73,12 +73,6 @@ pub struct PathReport {
     pub attempts: Vec<IncrementReport>,
     /// (λ, u) at each target reached.
     pub states: Vec<(f64, Vec<f64>)>,
-    /// The last accepted state with no negative pivot (λ, u) before an accepted increment
-    /// that gained some (thesis §2.5: the trivial path crossing a bifurcation), the latest
-    /// such crossing's; None when the path never left a state known to be stable. Kept at the
-    /// crossing only (one copy of u per crossing): the perturbation protocol (§3.2) restarts
-    /// from it instead of from the level's start ([`crate::solve_level`]).
-    pub last_stable: Option<(f64, Vec<f64>)>,
 }
 
 impl PathReport {
@@ -220,8 +214,6 @@ pub fn follow_path_with(
             }
             let mut converged = attempt.converged();
             let iterations = attempt.iterations.len();
-            // Whether u, the start of this increment, is known to be stable.
-            let from_stable = guard.reference() == Some(0);
             if converged {
                 let next = delta * stepping.cutback;
                 if guard.judge(&mut attempt, lambda, delta, next, stepping.min) == Verdict::Refuse {
@@ -242,11 +234,7 @@ pub fn follow_path_with(
             attempts += 1;
             if converged {
                 session.accept(&trial, pivots);
-                let left = std::mem::replace(u, trial);
-                if from_stable && pivots.is_some_and(|p| p > 0) {
-                    report.last_stable = Some((lambda, left.clone()));
-                }
-                previous = Some((left, dir * delta));
+                previous = Some((std::mem::replace(u, trial), dir * delta));
                 lambda = to;
                 if iterations <= stepping.easy && !guard.pending() {
                     step = (step * stepping.grow).min(stepping.max);

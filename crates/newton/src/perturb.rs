@@ -48,7 +48,6 @@ pub fn perturbed_path<P: NonlinearProblem + DeadLoads>(
     let mut report = PathReport {
         attempts,
         states: vec![(first, u.clone())],
-        last_stable: None,
     };
     let more = follow_path_from(problem, u, first, rest, settings, stepping)?;
     report.attempts.extend(more.attempts);

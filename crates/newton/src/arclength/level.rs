@@ -28,8 +28,9 @@ fn report_of(inc: &ArcIncrement) -> IncrementReport {
 /// past it (λ_a < to ≤ λ_b: u = u_a + (to − λ_a)/(λ_b − λ_a)·(u_b − u_a)), or, if that fails,
 /// from u_b. A limit point below `to` is passed (the path turns and comes back, within
 /// `arc.max_increments`). Past a bifurcation (negative pivots at `to`) with a `perturbation`,
-/// the level is redone by the §3.2 protocol ([`perturbed_step`](crate::perturbed_step), `stepping` its increments),
-/// as [`solve_level`](crate::solve_level) does.
+/// the level is redone by the §3.2 protocol ([`perturbed_step`](crate::perturbed_step),
+/// `stepping` its increments, on `session`'s analysis), as [`solve_level`](crate::solve_level)
+/// does.
 #[allow(clippy::too_many_arguments)]
 pub fn solve_level_arc<P: NonlinearProblem + DeadLoads>(
     problem: &mut P,
@@ -118,7 +119,6 @@ pub fn solve_level_arc<P: NonlinearProblem + DeadLoads>(
         attempts.extend(perturbed_redo_with(
             problem,
             u,
-            from,
             (from, to),
             perturbation,
             newton,
