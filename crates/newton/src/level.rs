@@ -4,7 +4,7 @@
 
 use crate::{
     DeadLoads, IncrementReport, NewtonError, NewtonSettings, NonlinearProblem, PathSolver,
-    Stepping, follow_path_with, perturbed_step,
+    Stepping, follow_path_with, perturbed_step_with,
 };
 
 /// The perturbed step is taken in this many increments of the level's step: the perturbed
@@ -34,9 +34,10 @@ pub struct LevelReport {
 /// Solves one level: from the converged state `u` at load factor `from` to `to`. If the
 /// converged state is unstable (negative pivots of K_T: the trivial path past a bifurcation,
 /// §2.5) and a `perturbation` is given, the step is redone from `from` by the §3.2 protocol
-/// ([`perturbed_step`]: perturbation on along the step, in quarters of it with 4× the
-/// iterations, removed at `to`) to land on the buckled branch; `perturbation` lists (DOF,
-/// force) pairs, empty for none. The first increment is at most the level's step.
+/// ([`perturbed_step`](crate::perturbed_step): perturbation on along the step, in quarters of
+/// it with 4× the iterations, removed at `to`) to land on the buckled branch, on `session`'s
+/// analysis ([`perturbed_redo_with`]); `perturbation` lists (DOF, force) pairs, empty for
+/// none. The first increment is at most the level's step.
 ///
 /// The thesis applied the perturbation at the first level and left it to the analyst to pick
 /// that level above the buckling strain; here the change of inertia picks the level, so a
@@ -67,13 +68,14 @@ pub fn solve_level<P: NonlinearProblem + DeadLoads>(
     let mut perturbed = false;
     if unstable && !perturbation.is_empty() {
         *u = start;
-        attempts.extend(perturbed_redo(
+        attempts.extend(perturbed_redo_with(
             problem,
             u,
             (from, to),
             perturbation,
             newton,
             &stepping,
+            session,
         )?);
         perturbed = true;
         pivots = inertia(problem, u, to, newton, &attempts, session)?;
@@ -87,8 +89,9 @@ pub fn solve_level<P: NonlinearProblem + DeadLoads>(
 
 /// The perturbation protocol's redo of a level (thesis §3.2) from the level's start `u`: the
 /// perturbed step in 4 equal increments with 4 times the iteration limit, the perturbation applied and removed
-/// ([`perturbed_step`]). Shared by [`solve_level`], the arc-length level and callers that
-/// follow a perturbed level again (the contact loop's fallback).
+/// ([`perturbed_step`](crate::perturbed_step)), with a solver of its own. Shared by the
+/// callers that follow a perturbed level again (the contact loop's fallback);
+/// [`perturbed_redo_with`] is the same on the caller's session.
 pub fn perturbed_redo<P: NonlinearProblem + DeadLoads>(
     problem: &mut P,
     u: &mut Vec<f64>,
@@ -96,6 +99,32 @@ pub fn perturbed_redo<P: NonlinearProblem + DeadLoads>(
     perturbation: &[(usize, f64)],
     newton: &NewtonSettings,
     stepping: &Stepping,
+) -> Result<Vec<IncrementReport>, NewtonError> {
+    let mut session = PathSolver::new(problem, newton.solver)?;
+    perturbed_redo_with(
+        problem,
+        u,
+        (from, to),
+        perturbation,
+        newton,
+        stepping,
+        &mut session,
+    )
+}
+
+/// [`perturbed_redo`] with `session`'s solver (the level's: [`solve_level`], the arc-length
+/// level) through [`perturbed_step_with`]: no new symbolic analysis (fill-reducing orderings
+/// compared, symbolic factorisation) for the perturbed path nor for the removal; the steps are
+/// bitwise those of new solvers.
+#[allow(clippy::too_many_arguments)]
+pub fn perturbed_redo_with<P: NonlinearProblem + DeadLoads>(
+    problem: &mut P,
+    u: &mut Vec<f64>,
+    (from, to): (f64, f64),
+    perturbation: &[(usize, f64)],
+    newton: &NewtonSettings,
+    stepping: &Stepping,
+    session: &mut PathSolver,
 ) -> Result<Vec<IncrementReport>, NewtonError> {
     let part = ((to - from) / PERTURBED_INCREMENTS).abs().max(stepping.min);
     let fine = Stepping {
@@ -107,7 +136,15 @@ pub fn perturbed_redo<P: NonlinearProblem + DeadLoads>(
         max_iterations: PERTURBED_PATIENCE * newton.max_iterations,
         ..newton.clone()
     };
-    perturbed_step(problem, u, from, to, perturbation, &patient, &fine)
+    perturbed_step_with(
+        problem,
+        u,
+        (from, to),
+        perturbation,
+        &patient,
+        &fine,
+        session,
+    )
 }
 
 /// Negative pivots at the converged state `u` at λ = `to`: with a kept tangent (BFGS, or

@@ -10,7 +10,7 @@
 //! | [`Stepping`], [`follow_path`] | load stepping to a list of targets with cutback and regrowth |
 //! | [`Extrapolation`], [`predicted_increment`], [`Guess`] | an increment's start extrapolated from the last converged states (linear or quadratic in step time), kept only if its residual is not larger than the plain start's |
 //! | [`PathSolver`], [`follow_path_with`] | a solver, tangent and kept factorisation carried over the levels of a sweep |
-//! | [`DeadLoads`], [`perturbed_path`], [`perturbed_step`], [`perturbed_redo`] | the thesis's perturbation load (§3.2) as a dead load, converged with a level and then removed; any problem with dead loads; a level redone by the protocol |
+//! | [`DeadLoads`], [`perturbed_path`], [`perturbed_step`], [`perturbed_redo`], [`perturbed_step_with`], [`perturbed_redo_with`] | the thesis's perturbation load (§3.2) as a dead load, converged with a level and then removed; any problem with dead loads; a level redone by the protocol (`_with`: on the caller's [`PathSolver`], no new analysis) |
 //! | [`solve_level`], [`LevelReport`] | one level of a sweep: to the level, the stability test there (§2.5) and, past a bifurcation, the perturbation protocol |
 //! | [`IncrementReport`], [`Termination`] | what happened, iteration by iteration, with the inertia |
 //! | [`ArcLength`], [`follow_arc_length`] | arc-length path following through limit points (Crisfield 1981/1983): cylindrical or spherical constraint, predictor sign from the inertia, arc length adapted to the iterations |
@@ -91,9 +91,11 @@ pub use arclength::{
 pub use cache::TangentCache;
 pub use error::NewtonError;
 pub use extrapolate::Extrapolation;
-pub use level::{LevelReport, perturbed_redo, solve_level};
+pub use level::{LevelReport, perturbed_redo, perturbed_redo_with, solve_level};
 pub use path::{PathReport, Stepping, follow_path, follow_path_from, follow_path_with};
-pub use perturb::{DeadLoads, MIN_REMOVAL_PART, perturbed_path, perturbed_step};
+pub use perturb::{
+    DeadLoads, MIN_REMOVAL_PART, perturbed_path, perturbed_step, perturbed_step_with,
+};
 pub use predict::{Guess, predicted_increment};
 pub use problem::{NonlinearProblem, StructuralProblem};
 pub use session::PathSolver;

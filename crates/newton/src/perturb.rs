@@ -3,8 +3,8 @@
 //! branch. Generic over [`DeadLoads`], so a problem that wraps another can use it.
 
 use crate::{
-    IncrementReport, NewtonError, NewtonSettings, NonlinearProblem, PathReport, Stepping,
-    follow_path_from, solve_increment,
+    IncrementReport, NewtonError, NewtonSettings, NonlinearProblem, PathReport, PathSolver,
+    Stepping, follow_path_from, follow_path_with, solve_increment,
 };
 
 /// A problem whose external force has a λ-independent part: r(u, λ) = f_int(u) − λ·f_ref −
@@ -73,12 +73,49 @@ pub fn perturbed_step<P: NonlinearProblem + DeadLoads>(
     settings: &NewtonSettings,
     stepping: &Stepping,
 ) -> Result<Vec<IncrementReport>, NewtonError> {
+    let mut session = PathSolver::new(problem, settings.solver)?;
+    perturbed_step_with(
+        problem,
+        u,
+        (from, to),
+        perturbation,
+        settings,
+        stepping,
+        &mut session,
+    )
+}
+
+/// [`perturbed_step`] with the caller's [`PathSolver`] (the level's): its symbolic analysis
+/// serves the perturbed path and the removal (the pattern is the same; the dead loads change
+/// only the right-hand side), no new one. What the session held is forgotten before and
+/// after (its factorisation and last state belong to the unperturbed problem): the steps are
+/// those of a new session, bitwise.
+#[allow(clippy::too_many_arguments)]
+pub fn perturbed_step_with<P: NonlinearProblem + DeadLoads>(
+    problem: &mut P,
+    u: &mut Vec<f64>,
+    (from, to): (f64, f64),
+    perturbation: &[(usize, f64)],
+    settings: &NewtonSettings,
+    stepping: &Stepping,
+    session: &mut PathSolver,
+) -> Result<Vec<IncrementReport>, NewtonError> {
+    forget(session);
     let mut trial = u.clone();
     set_scaled(problem, perturbation, 1.0)?;
-    let loaded = follow_path_from(problem, &mut trial, from, &[to], settings, stepping);
+    let loaded = follow_path_with(
+        problem,
+        &mut trial,
+        from,
+        &[to],
+        settings,
+        stepping,
+        session,
+    );
     let mut attempts = match loaded {
         Ok(report) => report.attempts,
         Err(e) => {
+            forget(session);
             set_scaled(problem, perturbation, 0.0)?;
             return Err(e);
         }
@@ -90,13 +127,23 @@ pub fn perturbed_step<P: NonlinearProblem + DeadLoads>(
         perturbation,
         settings,
         &mut attempts,
+        session,
     );
+    forget(session);
     if let Err(e) = removed {
         set_scaled(problem, perturbation, 0.0)?;
         return Err(e);
     }
     *u = trial;
     Ok(attempts)
+}
+
+/// Leaves `session` as a new one would be, its analysis kept: no factorisation vouched for,
+/// no last state (so no inertia known for any state).
+fn forget(session: &mut PathSolver) {
+    session.cache.invalidate();
+    session.state.clear();
+    session.pivots = None;
 }
 
 /// The smallest part of the perturbation load [`perturbed_step`] removes in one solve: 1/64.
@@ -113,10 +160,10 @@ fn remove_in_parts<P: NonlinearProblem + DeadLoads>(
     perturbation: &[(usize, f64)],
     settings: &NewtonSettings,
     attempts: &mut Vec<IncrementReport>,
+    session: &mut PathSolver,
 ) -> Result<(), NewtonError> {
-    let mut solver = settings.solver.build();
-    solver.analyze(&problem.pattern())?;
-    let mut k = nonlin3d_solver::SymmetricMatrix::zeros(problem.pattern());
+    session.fit(problem, settings.solver)?;
+    let PathSolver { solver, k, .. } = session;
     let (mut remaining, mut part, mut cutbacks) = (1.0f64, 1.0f64, 0);
     while remaining > 0.0 {
         part = part.min(remaining);
@@ -124,14 +171,7 @@ fn remove_in_parts<P: NonlinearProblem + DeadLoads>(
         let next = remaining - part;
         set_scaled(problem, perturbation, next)?;
         let mut trial = u.to_vec();
-        let r = solve_increment(
-            problem,
-            &mut trial,
-            lambda,
-            settings,
-            solver.as_mut(),
-            &mut k,
-        )?;
+        let r = solve_increment(problem, &mut trial, lambda, settings, solver.as_mut(), k)?;
         let ok = r.converged();
         let reason = r.termination.to_string();
         attempts.push(r);

@@ -4,7 +4,7 @@
 //! and the perturbation protocol (thesis §2.5, §3.2) as [`solve_level`](crate::solve_level).
 
 use super::{ArcIncrement, ArcLength, ArcStop, follow_arc_length};
-use crate::level::perturbed_redo;
+use crate::level::perturbed_redo_with;
 use crate::{
     DeadLoads, IncrementReport, LevelReport, NewtonError, NewtonSettings, NonlinearProblem,
     PathSolver, Stepping, Termination,
@@ -28,8 +28,9 @@ fn report_of(inc: &ArcIncrement) -> IncrementReport {
 /// past it (λ_a < to ≤ λ_b: u = u_a + (to − λ_a)/(λ_b − λ_a)·(u_b − u_a)), or, if that fails,
 /// from u_b. A limit point below `to` is passed (the path turns and comes back, within
 /// `arc.max_increments`). Past a bifurcation (negative pivots at `to`) with a `perturbation`,
-/// the level is redone by the §3.2 protocol ([`perturbed_step`](crate::perturbed_step), `stepping` its increments),
-/// as [`solve_level`](crate::solve_level) does.
+/// the level is redone by the §3.2 protocol ([`perturbed_step`](crate::perturbed_step),
+/// `stepping` its increments, on `session`'s analysis), as [`solve_level`](crate::solve_level)
+/// does.
 #[allow(clippy::too_many_arguments)]
 pub fn solve_level_arc<P: NonlinearProblem + DeadLoads>(
     problem: &mut P,
@@ -115,13 +116,14 @@ pub fn solve_level_arc<P: NonlinearProblem + DeadLoads>(
     let mut perturbed = false;
     if pivots.is_some_and(|p| p > 0) && !perturbation.is_empty() {
         *u = start;
-        attempts.extend(perturbed_redo(
+        attempts.extend(perturbed_redo_with(
             problem,
             u,
             (from, to),
             perturbation,
             newton,
             stepping,
+            session,
         )?);
         perturbed = true;
         pivots = Some(session.inertia_at(problem, u, to)?);

@@ -1,14 +1,15 @@
 //! The perturbation protocol on a problem that wraps [`StructuralProblem`].
 
 use crate::{
-    DeadLoads, NewtonError, NewtonSettings, NonlinearProblem, Stepping, StructuralProblem,
-    perturbed_step,
+    DeadLoads, NewtonError, NewtonSettings, NonlinearProblem, PathSolver, Stepping,
+    StructuralProblem, follow_path_with, perturbed_step, perturbed_step_with, solve_level,
 };
 use nonlin3d_assembly::{Assembler, Constraints};
 use nonlin3d_element::{IntegrationRule, Kinematics};
 use nonlin3d_laminate::{ShearCoupling, materials};
 use nonlin3d_mesh::{ThroughWidthParams, through_width_delamination};
 use nonlin3d_solver::{SymmetricMatrix, SymmetricPattern};
+use std::cell::Cell;
 use std::sync::Arc;
 
 /// A problem of a crate above newton: the finite element model plus a log of the dead loads
@@ -16,6 +17,19 @@ use std::sync::Arc;
 struct Wrapped {
     inner: StructuralProblem,
     dead: Vec<(usize, f64)>,
+    /// Calls of `pattern()`: a symbolic analysis needs one (and a new tangent's storage
+    /// another); a session asks once per path call to check that its analysis still fits.
+    patterns: Cell<usize>,
+}
+
+impl Wrapped {
+    fn new(inner: StructuralProblem) -> Self {
+        Self {
+            inner,
+            dead: Vec::new(),
+            patterns: Cell::new(0),
+        }
+    }
 }
 
 impl NonlinearProblem for Wrapped {
@@ -23,6 +37,7 @@ impl NonlinearProblem for Wrapped {
         self.inner.n()
     }
     fn pattern(&self) -> Arc<SymmetricPattern> {
+        self.patterns.set(self.patterns.get() + 1);
         self.inner.pattern()
     }
     fn prescribe(&self, u: &mut [f64], lambda: f64) {
@@ -95,10 +110,7 @@ pub(crate) fn compressed() -> (StructuralProblem, usize, f64) {
 fn a_wrapped_problem_follows_the_protocol_bitwise_like_the_bare_one() {
     let (bare, top, h) = compressed();
     let (inner, _, _) = compressed();
-    let mut wrapped = Wrapped {
-        inner,
-        dead: Vec::new(),
-    };
+    let mut wrapped = Wrapped::new(inner);
     // 0.5 N at the top node of this 1 mm wide half model lifts the sublaminate by ~0.1·h on
     // the way (tests/newton.rs's postbuckling test).
     let dof = 3 * top + 2;
@@ -157,10 +169,7 @@ fn a_wrapped_problem_follows_the_protocol_bitwise_like_the_bare_one() {
 fn a_perturbation_out_of_range_is_refused_by_dof() {
     let (inner, _, _) = compressed();
     let n = inner.n();
-    let mut wrapped = Wrapped {
-        inner,
-        dead: Vec::new(),
-    };
+    let mut wrapped = Wrapped::new(inner);
     let mut u = vec![0.0; n];
     let e = perturbed_step(
         &mut wrapped,
@@ -175,4 +184,103 @@ fn a_perturbation_out_of_range_is_refused_by_dof() {
     assert!(matches!(e, NewtonError::Assembly(_)), "{e}");
     assert!(e.to_string().contains(&n.to_string()), "{e}");
     assert!(u.iter().all(|&x| x == 0.0));
+}
+
+/// The protocol on a session that already served a path (the level's, holding a
+/// factorisation and a last state of the unperturbed problem) takes the steps a new solver
+/// takes, bitwise: what the session held is forgotten, only its analysis is kept.
+#[test]
+fn a_perturbed_step_on_a_used_session_is_bitwise_that_of_a_new_solver() {
+    let (mut problem, top, _) = compressed();
+    let perturbation = [(3 * top + 2, 0.5)];
+    let settings = NewtonSettings::default();
+    let stepping = Stepping {
+        initial: 0.25,
+        max: 0.25,
+        ..Stepping::default()
+    };
+    let n = problem.n();
+    let mut fresh = vec![0.0; n];
+    let a = perturbed_step(
+        &mut problem,
+        &mut fresh,
+        0.0,
+        1.0,
+        &perturbation,
+        &settings,
+        &stepping,
+    )
+    .unwrap();
+    let mut session = PathSolver::new(&problem, settings.solver).unwrap();
+    let mut used = vec![0.0; n];
+    follow_path_with(
+        &mut problem,
+        &mut used,
+        0.0,
+        &[0.5],
+        &settings,
+        &stepping,
+        &mut session,
+    )
+    .unwrap();
+    assert!(session.is_factored());
+    let mut u = vec![0.0; n];
+    let b = perturbed_step_with(
+        &mut problem,
+        &mut u,
+        (0.0, 1.0),
+        &perturbation,
+        &settings,
+        &stepping,
+        &mut session,
+    )
+    .unwrap();
+    assert_eq!(a, b);
+    assert!(
+        fresh
+            .iter()
+            .zip(&u)
+            .all(|(x, y)| x.to_bits() == y.to_bits())
+    );
+    assert!(!session.is_factored());
+    assert_eq!(session.analyses(), 1);
+}
+
+/// A level redone by the protocol (trivial path past the bifurcation, §3.2) runs on the
+/// level's session: one analysis over the level, and the pattern asked for once per stage
+/// (first pass, perturbed path, removal: 3), not again for new analyses (a new session for the
+/// redo: 4 calls; a new solver for the path and another for the removal, as before: 5).
+#[test]
+fn a_perturbed_level_makes_no_new_analysis() {
+    let (inner, top, h) = compressed();
+    let mut wrapped = Wrapped::new(inner);
+    let newton = NewtonSettings::default();
+    let stepping = Stepping {
+        initial: 0.25,
+        max: 0.25,
+        ..Stepping::default()
+    };
+    let mut session = PathSolver::new(&wrapped, newton.solver).unwrap();
+    wrapped.patterns.set(0);
+    let mut u = vec![0.0; wrapped.n()];
+    let dof = 3 * top + 2;
+    let level = solve_level(
+        &mut wrapped,
+        &mut u,
+        0.0,
+        1.0,
+        &[(dof, 0.5)],
+        &newton,
+        &stepping,
+        &mut session,
+    )
+    .unwrap();
+    assert!(level.perturbed);
+    assert!(u[dof] > 0.3 * h, "w/h = {}", u[dof] / h);
+    assert_eq!(session.analyses(), 1);
+    assert!(
+        wrapped.patterns.get() <= 3,
+        "{} calls",
+        wrapped.patterns.get()
+    );
 }
