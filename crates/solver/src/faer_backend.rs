@@ -19,12 +19,14 @@ use std::sync::Arc;
 mod choice;
 mod counts;
 use counts::{column_counts, factor_flops};
+mod directions;
 mod dispatch;
 mod mixed;
 mod options;
 mod permuted;
 mod pivots;
 mod split;
+pub use directions::FaerDirections;
 pub use mixed::{FaerPrecision, MixedStats};
 pub use options::{AUTO_WITHOUT_AMD_DOFS, FaerMode, FaerOrdering, FaerSplit, FaerStructure};
 
@@ -54,6 +56,10 @@ pub struct FaerSolver {
     pub precision: FaerPrecision,
     /// Tree-level split of the LDLᵀ ([`FaerSplit`]).
     pub split: FaerSplit,
+    /// What `solve_direction_in_place` solves with ([`FaerDirections`]).
+    pub directions: FaerDirections,
+    /// The f32 copy of the last f64 LDLᵀ factor (`FaerDirections::Single`; empty if none).
+    directions_l32: Vec<f32>,
     split_state: Option<split::Split>,
     split_fallback: Option<&'static str>,
     pattern: Option<Arc<SymmetricPattern>>,
@@ -96,6 +102,8 @@ impl FaerSolver {
             memory_budget: None,
             precision: FaerPrecision::Double,
             split: FaerSplit::Off,
+            directions: FaerDirections::Factor,
+            directions_l32: Vec::new(),
             split_state: None,
             split_fallback: None,
             pattern: None,
@@ -223,6 +231,7 @@ impl LinearSolver for FaerSolver {
         self.permuted = None;
         self.buffer = None;
         self.l_values = Vec::new();
+        self.directions_l32 = Vec::new();
         self.pattern = None;
         self.factored = false;
         self.chosen = None;
@@ -279,7 +288,14 @@ impl LinearSolver for FaerSolver {
             entries: len,
             // An f32 factor takes half; an f64 one is made only when refinement falls back,
             // after the f32 one is freed.
-            factor_bytes: if mixed { f64s(len) / 2 } else { f64s(len) },
+            // The f32 copy for directions (`FaerDirections::Single`) takes half more.
+            factor_bytes: if mixed {
+                f64s(len) / 2
+            } else if self.directions == FaerDirections::Single && self.mode == FaerMode::Ldlt {
+                f64s(len) + f64s(len) / 2
+            } else {
+                f64s(len)
+            },
             // The scratch, the permuted matrix (pattern, gather map and f64 values, kept
             // between factorisations) and the diagonal each factorisation makes, and the
             // dense kernels' per-thread packing buffer (64 MiB, allocated by faer's gemm on
@@ -340,6 +356,7 @@ impl LinearSolver for FaerSolver {
         };
         a.check_for(pattern)?;
         self.factored = false;
+        self.directions_l32.clear();
         if self.uses_mixed() {
             self.factorize_mixed(a)
         } else {
@@ -354,6 +371,10 @@ impl LinearSolver for FaerSolver {
         } else {
             self.solve_f64(b, nrhs)
         }
+    }
+
+    fn solve_direction_in_place(&mut self, b: &mut [f64], nrhs: usize) -> Result<(), SolverError> {
+        self.solve_direction(b, nrhs)
     }
 
     fn mixed_stats(&self) -> Option<MixedStats> {
@@ -421,6 +442,9 @@ impl FaerSolver {
         let negative = pivots::negative_pivots(pivots, 0, |k| perm_fwd[k], &a.diagonal(), rule)?
             .unwrap_or_else(|_| unreachable!("f64 pivots are errors, not fallbacks"));
         self.factored = true;
+        if !self.uses_mixed() {
+            self.copy_for_directions()?;
+        }
         Ok(Factorization {
             negative_pivots: negative,
             factor_entries: self.l_values.len(),
