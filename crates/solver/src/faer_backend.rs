@@ -395,7 +395,8 @@ impl FaerSolver {
         else {
             return Err(SolverError::NotReady("factorize called before analyze"));
         };
-        a.check_for(pattern)?;
+        // `a` was checked against the pattern (and for finite values) by `factorize`, the
+        // only way here (directly, through the split's fallback or mixed precision's).
         self.factored = false;
         let permuted = match &mut self.permuted {
             Some(p) => p,

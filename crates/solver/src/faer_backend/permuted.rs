@@ -117,7 +117,13 @@ impl Permuted {
             kernel_side(symbolic),
             MemStack::new(&mut buffer),
         );
-        let gather: Vec<usize> = copy.val().iter().map(|&v| v as usize).collect();
+        let len = copy.val().len();
+        drop(positions);
+        // The copy's values become the gather map in their own allocation (f64 and usize have
+        // the same layout: `collect` reuses it), so the analysis holds at most three words per
+        // entry, as each factorisation does.
+        new_values.truncate(len);
+        let gather: Vec<usize> = new_values.into_iter().map(|v| v as usize).collect();
         Ok(Self {
             pattern: SymbolicSparseColMat::new_unsorted_checked(n, n, col_ptr, None, row_idx),
             gather,
