@@ -12,6 +12,9 @@
 //! (`FaerSplit::Halves`, halves on two threads), `-- splitmixed` to add the split with f32
 //! halves refined in f64, `-- metis` to add faer with METIS's order (and the `split`,
 //! `mixed` and `splitmixed` rows on METIS's order beside ND's; `nond` leaves ND's out),
+//! `-- directions` to add faer (ND, and METIS's order with `metis`) keeping an f32 copy of each f64 factor
+//! for direction solves (`FaerDirections::Single`: its numeric time includes the copy, its
+//! solve and backward error are those of `solve_direction_in_place`),
 //! `-- auto` to add faer with `FaerOrdering::Auto` (its symbolic time is every candidate's
 //! analysis, its label the order chosen), `-- nond` to leave out faer with our nested
 //! dissection, `-- rounds=N` to run every solver of a case N times in
@@ -29,8 +32,8 @@ use nonlin3d::mesh::{
     through_width_delamination,
 };
 use nonlin3d::solver::{
-    FaerMode, FaerOrdering, FaerPrecision, FaerSolver, FaerSplit, LinearSolver, ProfileLdlt,
-    SymmetricMatrix,
+    FaerDirections, FaerMode, FaerOrdering, FaerPrecision, FaerSolver, FaerSplit, LinearSolver,
+    ProfileLdlt, SymmetricMatrix,
 };
 use std::time::Instant;
 
@@ -176,7 +179,15 @@ fn backward_error(k: &SymmetricMatrix, x: &[f64], b: &[f64]) -> f64 {
     norm(&r) / (norm(&rows) * norm(x) + norm(b))
 }
 
-fn run(case: &str, k: &SymmetricMatrix, s: &mut dyn LinearSolver, label: String) -> Option<Row> {
+/// One solver on `k`: analysis, numeric factorisation and a solve (a direction solve,
+/// `solve_direction_in_place`, if `direction`).
+fn run(
+    case: &str,
+    k: &SymmetricMatrix,
+    s: &mut dyn LinearSolver,
+    label: String,
+    direction: bool,
+) -> Option<Row> {
     let n = k.n();
     let before = current_mib();
     reset_peak();
@@ -205,7 +216,11 @@ fn run(case: &str, k: &SymmetricMatrix, s: &mut dyn LinearSolver, label: String)
         }
         let mut b = vec![1.0; n];
         let t = Instant::now();
-        s.solve_in_place(&mut b, 1).ok()?;
+        if direction {
+            s.solve_direction_in_place(&mut b, 1).ok()?;
+        } else {
+            s.solve_in_place(&mut b, 1).ok()?;
+        }
         solve = solve.min(t.elapsed().as_secs_f64());
         omega = backward_error(k, &b, &vec![1.0; n]);
     }
@@ -390,6 +405,13 @@ fn main() {
                 }
             }
         }
+        if has("directions") {
+            for &(ordering, oname) in &split_orderings {
+                let mut s = FaerSolver::new(FaerMode::Ldlt).with_ordering(ordering);
+                s.directions = FaerDirections::Single;
+                faers.push((s, format!("faer LDLᵀ {oname}, 1 thread, f32 directions")));
+            }
+        }
         // The split's shape: the two threads' work and the join's (what decides whether a
         // deeper split would balance better).
         for &(ordering, oname) in split_orderings
@@ -422,16 +444,17 @@ fn main() {
         for _ in 0..rounds {
             let mut rows = Vec::new();
             for (s, label) in &mut solvers {
-                rows.extend(run(case, &k, s.as_mut(), label.clone()));
+                rows.extend(run(case, &k, s.as_mut(), label.clone(), false));
             }
             for (s, label) in &mut autos {
-                if let Some(mut r) = run(case, &k, s, label.clone()) {
+                if let Some(mut r) = run(case, &k, s, label.clone(), false) {
                     r.solver += &format!(" (chose {:?})", s.chosen_ordering());
                     rows.push(r);
                 }
             }
             for (s, label) in &mut faers {
-                if let Some(mut r) = run(case, &k, s, label.clone()) {
+                let direction = s.directions == FaerDirections::Single;
+                if let Some(mut r) = run(case, &k, s, label.clone(), direction) {
                     if s.precision != FaerPrecision::Double {
                         let m = s.mixed_stats();
                         r.solver += &format!(

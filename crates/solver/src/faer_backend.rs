@@ -7,25 +7,26 @@ use crate::{
     Analysis, Factorization, LinearSolver, SolverError, SymmetricMatrix, SymmetricPattern,
 };
 use faer::dyn_stack::{MemBuffer, MemStack};
-use faer::linalg::cholesky::ldlt::factor::LdltRegularization;
-use faer::linalg::cholesky::llt::factor::LltRegularization;
+use faer::sparse::SymbolicSparseColMatRef;
 use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::linalg::cholesky::{
     CholeskySymbolicParams, LdltRef, LltRef, SymbolicCholesky, SymbolicCholeskyRaw,
     SymmetricOrdering, factorize_symbolic_cholesky, supernodal,
 };
-use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Conj, MatMut, Par, Side};
 use std::sync::Arc;
 
 mod choice;
 mod counts;
 use counts::{column_counts, factor_flops};
+mod directions;
 mod dispatch;
 mod mixed;
 mod options;
+mod permuted;
 mod pivots;
 mod split;
+pub use directions::FaerDirections;
 pub use mixed::{FaerPrecision, MixedStats};
 pub use options::{AUTO_WITHOUT_AMD_DOFS, FaerMode, FaerOrdering, FaerSplit, FaerStructure};
 
@@ -55,10 +56,16 @@ pub struct FaerSolver {
     pub precision: FaerPrecision,
     /// Tree-level split of the LDLᵀ ([`FaerSplit`]).
     pub split: FaerSplit,
+    /// What `solve_direction_in_place` solves with ([`FaerDirections`]).
+    pub directions: FaerDirections,
+    /// The f32 copy of the last f64 LDLᵀ factor (`FaerDirections::Single`; empty if none).
+    directions_l32: Vec<f32>,
     split_state: Option<split::Split>,
     split_fallback: Option<&'static str>,
     pattern: Option<Arc<SymmetricPattern>>,
     symbolic: Option<SymbolicCholesky<usize>>,
+    /// The unsplit factorisations' permuted matrix pattern and gather map (made at the first).
+    permuted: Option<permuted::Permuted>,
     chosen: Option<FaerOrdering>,
     l_values: Vec<f64>,
     buffer: Option<MemBuffer>,
@@ -95,10 +102,13 @@ impl FaerSolver {
             memory_budget: None,
             precision: FaerPrecision::Double,
             split: FaerSplit::Off,
+            directions: FaerDirections::Factor,
+            directions_l32: Vec::new(),
             split_state: None,
             split_fallback: None,
             pattern: None,
             symbolic: None,
+            permuted: None,
             chosen: None,
             l_values: Vec::new(),
             buffer: None,
@@ -218,8 +228,10 @@ impl LinearSolver for FaerSolver {
         };
         // Whatever an earlier analysis holds goes first: the new factor may need the room.
         self.symbolic = None;
+        self.permuted = None;
         self.buffer = None;
         self.l_values = Vec::new();
+        self.directions_l32 = Vec::new();
         self.pattern = None;
         self.factored = false;
         self.chosen = None;
@@ -262,16 +274,9 @@ impl LinearSolver for FaerSolver {
                 choice::auto_choice(&symbolic_for, &nested, &metis, n < AUTO_WITHOUT_AMD_DOFS, n)?
             }
         };
-        let req = match self.mode {
-            FaerMode::Ldlt => {
-                symbolic.factorize_numeric_ldlt_scratch::<f64>(self.par, Default::default())
-            }
-            FaerMode::Llt => {
-                symbolic.factorize_numeric_llt_scratch::<f64>(self.par, Default::default())
-            }
-        }
-        .or(symbolic.solve_in_place_scratch::<f64>(RHS_BLOCK, self.par))
-        .or(mixed::scratch(&symbolic, self.par));
+        let req = permuted::kernel_scratch::<f64>(&symbolic, self.mode == FaerMode::Ldlt, self.par)
+            .or(symbolic.solve_in_place_scratch::<f64>(RHS_BLOCK, self.par))
+            .or(mixed::scratch(&symbolic, self.par));
         let len = symbolic.len_val();
         let f64s = |k: usize| k.saturating_mul(std::mem::size_of::<f64>());
         let mixed = self.uses_mixed();
@@ -283,13 +288,22 @@ impl LinearSolver for FaerSolver {
             entries: len,
             // An f32 factor takes half; an f64 one is made only when refinement falls back,
             // after the f32 one is freed.
-            factor_bytes: if mixed { f64s(len) / 2 } else { f64s(len) },
-            // The scratch, the permutation copy and diagonal each factorisation makes, and the
+            // The f32 copy for directions (`FaerDirections::Single`) takes half more.
+            factor_bytes: if mixed {
+                f64s(len) / 2
+            } else if self.directions == FaerDirections::Single && self.mode == FaerMode::Ldlt {
+                f64s(len) + f64s(len) / 2
+            } else {
+                f64s(len)
+            },
+            // The scratch, the permuted matrix (pattern, gather map and f64 values, kept
+            // between factorisations) and the diagonal each factorisation makes, and the
             // dense kernels' per-thread packing buffer (64 MiB, allocated by faer's gemm on
             // first use, outside our budget's reach: an address-space limit it does not fit
             // aborts the process).
             workspace_bytes: req
                 .size_bytes()
+                .saturating_add(permuted::bytes(n, pattern.nnz_lower()))
                 .saturating_add(f64s(2 * n))
                 .saturating_add(GEMM_BUFFER_BYTES.saturating_mul(self.par.degree().max(1))),
             // Mixed: plus the f64 copy of the matrix kept for residuals and its f32 twin.
@@ -342,6 +356,7 @@ impl LinearSolver for FaerSolver {
         };
         a.check_for(pattern)?;
         self.factored = false;
+        self.directions_l32.clear();
         if self.uses_mixed() {
             self.factorize_mixed(a)
         } else {
@@ -356,6 +371,10 @@ impl LinearSolver for FaerSolver {
         } else {
             self.solve_f64(b, nrhs)
         }
+    }
+
+    fn solve_direction_in_place(&mut self, b: &mut [f64], nrhs: usize) -> Result<(), SolverError> {
+        self.solve_direction(b, nrhs)
     }
 
     fn mixed_stats(&self) -> Option<MixedStats> {
@@ -376,66 +395,43 @@ impl FaerSolver {
         else {
             return Err(SolverError::NotReady("factorize called before analyze"));
         };
-        a.check_for(pattern)?;
+        // `a` was checked against the pattern (and for finite values) by `factorize`, the
+        // only way here (directly, through the split's fallback or mixed precision's).
         self.factored = false;
-        let n = pattern.n();
-        let sym =
-            SymbolicSparseColMatRef::new_checked(n, n, pattern.col_ptr(), None, pattern.row_idx());
-        let mat = SparseColMatRef::new(sym, a.values());
+        let permuted = match &mut self.permuted {
+            Some(p) => p,
+            slot => slot.insert(permuted::Permuted::new(pattern, symbolic)?),
+        };
         let stack = MemStack::new(buffer);
         let simplicial = matches!(symbolic.raw(), SymbolicCholeskyRaw::Simplicial(_));
-        let perm_fwd: Vec<usize> = match symbolic.perm() {
-            Some(p) => p.arrays().0.to_vec(),
-            None => (0..n).collect(),
-        };
         match self.mode {
-            FaerMode::Ldlt => {
-                symbolic
-                    .factorize_numeric_ldlt(
-                        &mut self.l_values,
-                        mat,
-                        Side::Lower,
-                        LdltRegularization::default(),
-                        self.par,
-                        stack,
-                        Default::default(),
-                    )
-                    .map_err(|e| match e {
-                        faer::linalg::cholesky::ldlt::factor::LdltError::ZeroPivot { index } => {
-                            let index = pivot_position(simplicial, index);
-                            SolverError::ZeroPivot {
-                                equation: index,
-                                dof: perm_fwd.get(index).copied().unwrap_or(index),
-                                pivot: 0.0,
-                                diagonal: perm_fwd.get(index).map_or(0.0, |&d| a.get(d, d).abs()),
-                            }
+            FaerMode::Ldlt => permuted
+                .ldlt_f64(symbolic, a.values(), &mut self.l_values, self.par, stack)
+                .map_err(|e| match e {
+                    faer::linalg::cholesky::ldlt::factor::LdltError::ZeroPivot { index } => {
+                        let index = pivot_position(simplicial, index);
+                        let dof = permuted.forward().get(index).copied();
+                        SolverError::ZeroPivot {
+                            equation: index,
+                            dof: dof.unwrap_or(index),
+                            pivot: 0.0,
+                            diagonal: dof.map_or(0.0, |d| a.get(d, d).abs()),
                         }
-                    })?;
-            }
-            FaerMode::Llt => {
-                symbolic
-                    .factorize_numeric_llt(
-                        &mut self.l_values,
-                        mat,
-                        Side::Lower,
-                        LltRegularization::default(),
-                        self.par,
-                        stack,
-                        Default::default(),
-                    )
-                    .map_err(|e| match e {
-                        faer::linalg::cholesky::llt::factor::LltError::NonPositivePivot {
-                            index,
-                        } => {
-                            let index = pivot_position(simplicial, index);
-                            SolverError::NotPositiveDefinite {
-                                equation: index,
-                                dof: perm_fwd.get(index).copied().unwrap_or(index),
-                            }
+                    }
+                })?,
+            FaerMode::Llt => permuted
+                .llt_f64(symbolic, a.values(), &mut self.l_values, self.par, stack)
+                .map_err(|e| match e {
+                    faer::linalg::cholesky::llt::factor::LltError::NonPositivePivot { index } => {
+                        let index = pivot_position(simplicial, index);
+                        SolverError::NotPositiveDefinite {
+                            equation: index,
+                            dof: permuted.forward().get(index).copied().unwrap_or(index),
                         }
-                    })?;
-            }
+                    }
+                })?,
         }
+        let perm_fwd = permuted.forward();
         // Pivot checks and inertia from the factor's diagonal (D, or L_kk with d_k = L_kk²).
         let llt = self.mode == FaerMode::Llt;
         let pivots = factor_diagonal(symbolic, &self.l_values)
@@ -447,6 +443,9 @@ impl FaerSolver {
         let negative = pivots::negative_pivots(pivots, 0, |k| perm_fwd[k], &a.diagonal(), rule)?
             .unwrap_or_else(|_| unreachable!("f64 pivots are errors, not fallbacks"));
         self.factored = true;
+        if !self.uses_mixed() {
+            self.copy_for_directions()?;
+        }
         Ok(Factorization {
             negative_pivots: negative,
             factor_entries: self.l_values.len(),

@@ -46,8 +46,8 @@ mod solver;
 pub use budget::{MemoryBudget, set_memory_budget};
 pub use error::SolverError;
 pub use faer_backend::{
-    AUTO_WITHOUT_AMD_DOFS, FaerMode, FaerOrdering, FaerPrecision, FaerSolver, FaerSplit,
-    FaerStructure, MixedStats,
+    AUTO_WITHOUT_AMD_DOFS, FaerDirections, FaerMode, FaerOrdering, FaerPrecision, FaerSolver,
+    FaerSplit, FaerStructure, MixedStats,
 };
 pub use matrix::SymmetricMatrix;
 pub use metis::{METIS_SEED, metis_nested_dissection};

@@ -43,6 +43,14 @@ pub trait LinearSolver: Send {
     fn factorize(&mut self, a: &SymmetricMatrix) -> Result<Factorization, SolverError>;
     /// Overwrites the `nrhs` column-major right-hand sides in `b` (n·nrhs values) with A⁻¹b.
     fn solve_in_place(&mut self, b: &mut [f64], nrhs: usize) -> Result<(), SolverError>;
+    /// Overwrites `b` with an approximation of A⁻¹b, for solves whose result only has to be
+    /// close (a search direction: BFGS's H₀ = K₀⁻¹ on a kept tangent), never for an answer.
+    /// By default the exact solve; [`crate::FaerSolver`] with
+    /// [`crate::FaerDirections::Single`] uses an f32 copy of its factor (relative error about
+    /// cond(A)·6e-8).
+    fn solve_direction_in_place(&mut self, b: &mut [f64], nrhs: usize) -> Result<(), SolverError> {
+        self.solve_in_place(b, nrhs)
+    }
     /// What mixed precision did since the last `analyze` (f32 factorisations kept, f64
     /// fall-backs, refinement steps); `None` for a solver that factorises in f64 only.
     fn mixed_stats(&self) -> Option<crate::MixedStats> {

@@ -21,10 +21,8 @@ use super::pivots::{Attempt, PivotRule, negative_pivots};
 use super::{FaerSolver, factor_diagonal};
 use crate::{Factorization, SolverError, SymmetricMatrix};
 use faer::dyn_stack::{MemStack, StackReq};
-use faer::linalg::cholesky::ldlt::factor::LdltRegularization;
 use faer::sparse::linalg::cholesky::{LdltRef, SymbolicCholesky};
-use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
-use faer::{Conj, MatMut, Par, Side};
+use faer::{Conj, MatMut, Par};
 
 /// f32 pivots smaller than this fraction of their diagonal entry send the factorisation to
 /// f64 (about 800 ε₃₂: the sign of such a pivot could be rounding's).
@@ -86,7 +84,7 @@ pub struct MixedStats {
 /// The f32 factor and what refinement needs.
 #[derive(Debug, Default)]
 pub(super) struct MixedState {
-    l32: Vec<f32>,
+    pub(super) l32: Vec<f32>,
     len: usize,
     /// The last factorised matrix (f64), for residuals and the f64 fallback.
     a: Option<SymmetricMatrix>,
@@ -116,8 +114,7 @@ impl MixedState {
 
 /// Scratch of the f32 factorisation and of one f32 solve.
 pub(super) fn scratch(symbolic: &SymbolicCholesky<usize>, par: Par) -> StackReq {
-    symbolic
-        .factorize_numeric_ldlt_scratch::<f32>(par, Default::default())
+    super::permuted::kernel_scratch::<f32>(symbolic, true, par)
         .or(symbolic.solve_in_place_scratch::<f32>(1, par))
 }
 
@@ -258,30 +255,25 @@ impl FaerSolver {
         else {
             return Err(SolverError::NotReady("factorize called before analyze"));
         };
-        let n = pattern.n();
-        let values: Vec<f32> = a.values().iter().map(|&v| v as f32).collect();
-        let sym =
-            SymbolicSparseColMatRef::new_checked(n, n, pattern.col_ptr(), None, pattern.row_idx());
-        let mat = SparseColMatRef::new(sym, &values);
-        if symbolic
-            .factorize_numeric_ldlt(
+        let permuted = match &mut self.permuted {
+            Some(p) => p,
+            slot => slot.insert(super::permuted::Permuted::new(pattern, symbolic)?),
+        };
+        // A rounded to f32 through the order's gather map (rounding and copying commute: the
+        // same bits as rounding A, then permuting).
+        if permuted
+            .ldlt_f32(
+                symbolic,
+                a.values(),
                 &mut self.mixed.l32,
-                mat,
-                Side::Lower,
-                LdltRegularization::default(),
                 self.par,
                 MemStack::new(buffer),
-                Default::default(),
             )
             .is_err()
         {
             return Ok(Err("f32 elimination met a zero pivot"));
         }
-        drop(values);
-        let perm_fwd: Vec<usize> = match symbolic.perm() {
-            Some(p) => p.arrays().0.to_vec(),
-            None => (0..n).collect(),
-        };
+        let perm_fwd = permuted.forward();
         let pivots = factor_diagonal(symbolic, &self.mixed.l32);
         Ok(
             negative_pivots(pivots, 0, |k| perm_fwd[k], &a.diagonal(), rule)?.map(|negative| {
