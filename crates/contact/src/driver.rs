@@ -84,6 +84,10 @@ pub struct PassReport {
     pub refresh: bool,
     /// Newton iterations of the re-solve.
     pub iterations: usize,
+    /// Whether the re-solve was stopped after one Newton iteration to read the set again (an
+    /// inexact update, [`ContactSettings::inexact_passes`]); the iterations that then converge
+    /// the set the updates settled on are counted with the last of them.
+    pub inexact: bool,
     /// Whether the re-solve at the level failed and the level was followed again from its start
     /// with the new set.
     pub redone: bool,

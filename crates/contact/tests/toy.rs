@@ -4,7 +4,9 @@
 //! carry the whole load.
 
 use nonlin3d_assembly::{Assembler, Constraints};
-use nonlin3d_contact::{Contact, ContactLevel, ContactSettings, CrackFaces, LevelSettings, Mode};
+use nonlin3d_contact::{
+    Contact, ContactError, ContactLevel, ContactSettings, CrackFaces, LevelSettings, Mode,
+};
 use nonlin3d_element::{ElementKind, IntegrationRule, Kinematics};
 use nonlin3d_laminate::{ShearCoupling, materials};
 use nonlin3d_mesh::{BoxParams, Mesh, structured_box};
@@ -142,31 +144,41 @@ fn run_from(
         mode,
         ..ContactSettings::default()
     };
+    run_with(mesh, faces, top, weights, settings, initial).unwrap()
+}
+
+/// [`run_from`] with the loop's settings given; the loop's error if it fails.
+fn run_with(
+    mesh: &Mesh,
+    faces: CrackFaces,
+    top: &[usize],
+    weights: &[f64],
+    settings: ContactSettings,
+    initial: &[bool],
+) -> Result<Run, ContactError> {
     let mut contact = Contact::with_faces(faces, settings).unwrap();
     let mut problem = problem(mesh, &contact, top, weights, LOAD);
     let newton = NewtonSettings::default();
     let mut session = PathSolver::new(&problem, newton.solver).unwrap();
     let mut u = vec![0.0; problem.n()];
     contact.install(&mut problem, &u, initial).unwrap();
-    let level = contact
-        .solve_level(
-            &mut problem,
-            &mut session,
-            &mut u,
-            (0.0, 1.0),
-            &LevelSettings {
-                newton: &newton,
-                stepping: &Stepping::default(),
-                perturbation: &[],
-            },
-        )
-        .unwrap();
-    Run {
+    let level = contact.solve_level(
+        &mut problem,
+        &mut session,
+        &mut u,
+        (0.0, 1.0),
+        &LevelSettings {
+            newton: &newton,
+            stepping: &Stepping::default(),
+            perturbation: &[],
+        },
+    )?;
+    Ok(Run {
         level,
         u,
         problem,
         session,
-    }
+    })
 }
 
 /// The applied load, N (a quarter of 4 kN: about 160 MPa over the 5 × 5 mm quarter).
@@ -425,4 +437,101 @@ fn a_point_loaded_hex20_plate_ends_on_one_complementary_set_from_any_start() {
         sets.push(s.active.clone());
     }
     assert_eq!(sets[0], sets[1]);
+}
+
+/// The point-loaded Hex20 plate of the test above, started from the pairs within 2.5 mm of the
+/// centre closed: its loop closes and releases pairs over several passes.
+fn point_loaded_hex20(settings: ContactSettings) -> Result<Run, ContactError> {
+    let (mesh, up, lo, top) = toy_of(ElementKind::Hex20);
+    let centre: Vec<f64> = top
+        .iter()
+        .map(|&v| (mesh.nodes[v][0] == 0.0 && mesh.nodes[v][1] == 0.0) as u8 as f64)
+        .collect();
+    let faces = CrackFaces::from_sets(&mesh, &up, &lo).unwrap();
+    let near: Vec<bool> = up
+        .iter()
+        .map(|&v| mesh.nodes[v][0].hypot(mesh.nodes[v][1]) <= 2.5e-3 + 1e-12)
+        .collect();
+    run_with(&mesh, faces, &top, &centre, settings, &near)
+}
+
+/// Inexact updates (issues 20 and 25): the re-solves go one Newton iteration at a time and
+/// the set is read at each iterate, so the passes cost fewer Newton iterations than the exact
+/// loop's (`inexact_passes = 0`: every re-solve converged), and the loop ends on the same set
+/// and the same state: both are converged states (‖r‖∞ ≤ ε_r·F, ε_r = 1e-8) of the same set,
+/// so their displacements differ by about ε_r times the displacement (1e-6 of the largest
+/// allows a hundredfold amplification by the conditioning of the plate on its ties).
+#[test]
+fn inexact_updates_reach_the_same_set_in_fewer_iterations() {
+    let exact = point_loaded_hex20(ContactSettings {
+        inexact_passes: 0,
+        ..ContactSettings::default()
+    })
+    .unwrap();
+    let inexact = point_loaded_hex20(ContactSettings::default()).unwrap();
+    let log = |r: &Run| {
+        r.level
+            .passes
+            .iter()
+            .map(|p| format!("{}/{}:{}", p.closed.len(), p.opened.len(), p.iterations))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    println!(
+        "exact: {} iterations, passes {}; inexact: {} iterations, passes {}",
+        exact.level.newton_iterations(),
+        log(&exact),
+        inexact.level.newton_iterations(),
+        log(&inexact)
+    );
+    assert!(exact.level.passes.iter().all(|p| !p.inexact));
+    assert!(inexact.level.passes.iter().any(|p| p.inexact));
+    assert!(inexact.level.newton_iterations() < exact.level.newton_iterations());
+    assert_eq!(inexact.level.state.active, exact.level.state.active);
+    let scale = exact.u.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    let diff = exact
+        .u
+        .iter()
+        .zip(&inexact.u)
+        .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+    assert!(diff <= 1e-6 * scale, "|Δu| {diff:e} m of {scale:e} m");
+}
+
+/// The pass limit counts the inexact updates too: a level (one step: `max_step` 1, the limit
+/// applies per sub-level) that needs more passes than allowed fails with
+/// [`ContactError::Passes`] naming the level and the passes made, also when the passes are
+/// inexact updates.
+#[test]
+fn the_pass_limit_counts_inexact_updates() {
+    let whole = ContactSettings {
+        max_step: 1.0,
+        ..ContactSettings::default()
+    };
+    let level = point_loaded_hex20(whole.clone()).unwrap().level;
+    let needed = level.passes.len();
+    println!(
+        "one step: passes {:?}",
+        level
+            .passes
+            .iter()
+            .map(|p| (p.closed.len(), p.opened.len(), p.iterations, p.inexact))
+            .collect::<Vec<_>>()
+    );
+    assert!(needed >= 3, "{needed} passes");
+    assert!(level.passes[1..needed - 1].iter().all(|p| p.inexact));
+    let limited = point_loaded_hex20(ContactSettings {
+        max_passes: needed - 1,
+        ..whole
+    });
+    match limited {
+        Err(ContactError::Passes { lambda, passes, .. }) => {
+            assert_eq!((lambda, passes), (1.0, needed - 1));
+        }
+        Err(e) => panic!("{e}"),
+        Ok(r) => panic!(
+            "{} passes within a limit of {}",
+            r.level.passes.len(),
+            needed - 1
+        ),
+    }
 }

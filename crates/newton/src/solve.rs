@@ -390,8 +390,10 @@ fn iterations(
             }
         };
         problem.expand(&mut du);
-        // The next iteration refactors by count: evaluate the tangent with the residual.
-        let need_k = cache.age >= settings.refactor_every;
+        // The next iteration refactors by count: evaluate the tangent with the residual
+        // (not after the last iteration allowed: no next iteration uses it).
+        let last = report.iterations.len() + 1 >= settings.max_iterations;
+        let need_k = cache.age >= settings.refactor_every && !last;
         let trial = (trial_u.as_mut_slice(), trial_r.as_mut_slice());
         let (alpha, trial_scale) = line_search(
             problem,

@@ -27,6 +27,13 @@ pub struct ContactSettings {
     pub force_tolerance: f64,
     /// Most passes (re-solves) at one level. Default 50.
     pub max_passes: usize,
+    /// Most inexact updates at one level (a primal–dual active-set, or semismooth Newton,
+    /// step): the re-solve of a pass stops after one Newton iteration and the set is read
+    /// again from that iterate, while it keeps changing; only the set that stops changing is
+    /// converged, and the loop still ends only on a converged state whose set does not change
+    /// (cycles are judged on converged states). After this many, the passes converge each
+    /// re-solve (the exact loop of Fig. 2.7.2). 0 = the exact loop only. Default 10.
+    pub inexact_passes: usize,
     /// Two-body or the thesis's external force.
     pub mode: Mode,
     /// The tie group of the contact ties. Default `TieGroup(0xC0)`.
@@ -87,6 +94,7 @@ impl Default for ContactSettings {
             gap_tolerance: 1e-9,
             force_tolerance: 0.0,
             max_passes: 50,
+            inexact_passes: 10,
             mode: Mode::TwoBody,
             group: TieGroup(0xC0),
             max_step: 0.25,
