@@ -8,7 +8,7 @@ use crate::active::{Change, Tolerances, update};
 use crate::{ContactError, Pair};
 use nonlin3d_newton::{
     LevelReport, NewtonSettings, PathSolver, Stepping, StructuralProblem, Termination,
-    follow_path_with, perturbed_redo,
+    follow_path_with, perturbed_redo_with,
 };
 use std::time::Instant;
 
@@ -442,7 +442,7 @@ impl Contact {
 
     /// The re-solve of a pass at λ = `solve.to`: Newton from `u` with the session's solver; if it
     /// does not converge, path following from the level's start (`fallback`; by the §3.2
-    /// protocol when it carries a perturbation), or None without a fallback (`u` is then the
+    /// protocol when it carries a perturbation, on the session's analysis), or None without a fallback (`u` is then the
     /// last iterate).
     /// Returns the Newton iterations and whether the level was followed again.
     fn resolve(
@@ -474,7 +474,15 @@ impl Contact {
         let attempts = if f.perturbation.is_empty() {
             follow_path_with(problem, u, f.from, &[to], newton, f.stepping, session)?.attempts
         } else {
-            perturbed_redo(problem, u, (f.from, to), f.perturbation, newton, f.stepping)?
+            perturbed_redo_with(
+                problem,
+                u,
+                (f.from, to),
+                f.perturbation,
+                newton,
+                f.stepping,
+                session,
+            )?
         };
         iterations += attempts.iter().map(|a| a.iterations.len()).sum::<usize>();
         Ok(Some((iterations, true)))
