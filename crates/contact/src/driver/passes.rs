@@ -440,10 +440,10 @@ impl Contact {
         Ok(())
     }
 
-    /// The re-solve of a pass at λ = `solve.to`: Newton from `u` with the session's solver; if it
-    /// does not converge, path following from the level's start (`fallback`; by the §3.2
-    /// protocol when it carries a perturbation, on the session's analysis), or None without a fallback (`u` is then the
-    /// last iterate).
+    /// The re-solve of a pass at λ = `solve.to`: Newton from `u` with the session's solver; if
+    /// it does not converge, path following from the level's start (`fallback`; by the §3.2
+    /// protocol when it carries a perturbation, on the session's analysis), or None without a
+    /// fallback (`u` is then the last iterate).
     /// Returns the Newton iterations and whether the level was followed again.
     fn resolve(
         &mut self,
