@@ -196,6 +196,10 @@ impl ContactStage {
                 ContactModeName::TwoBody => Mode::TwoBody,
                 ContactModeName::Thesis => Mode::External,
             },
+            inexact_passes: self
+                .options
+                .inexact_passes
+                .unwrap_or(ContactSettings::default().inexact_passes),
             ..ContactSettings::default()
         }
     }
@@ -249,6 +253,7 @@ fn summary(level: &ContactLevel) -> ContactSummary {
                 closed: p.closed.len(),
                 opened: p.opened.len(),
                 refresh: p.refresh,
+                inexact: p.inexact,
                 iterations: p.iterations,
                 seconds: p.seconds,
             })

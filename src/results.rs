@@ -560,6 +560,9 @@ pub struct ContactPass {
     pub opened: usize,
     /// Same set held again with the current normals (the held gaps overlapped along them).
     pub refresh: bool,
+    /// The set was changed at a Newton iterate near equilibrium, not at a converged state
+    /// (`[contact] inexact_passes`).
+    pub inexact: bool,
     /// Newton iterations of the re-solve.
     pub iterations: usize,
     /// Wall time, s.

@@ -53,6 +53,11 @@ pub struct ContactOptions {
     /// `two_body` (default) or `thesis`.
     #[serde(default)]
     pub mode: ContactModeName,
+    /// Changes of the set read at Newton iterates near equilibrium per level before the
+    /// loop's re-solves are converged each time (`nonlin3d_contact::ContactSettings::
+    /// inexact_passes`); 0: the exact loop of thesis Fig. 2.7.2. Default 10.
+    #[serde(default)]
+    pub inexact_passes: Option<usize>,
 }
 
 /// The default overlap tolerance, mm: 1e-6 mm = 1 nm, far above the round-off of nodal
