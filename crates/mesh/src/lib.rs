@@ -11,6 +11,7 @@
 //! | [`AccuracyRow`], [`ACCURACY_TABLE`] | a target accuracy of G → front-resolving knobs (measured on the reference circle, scaled by h and the front length); `coarsened()` on the parameters gives the error estimate's companion mesh |
 //! | [`Front`], [`FrontPoint`] | delamination-front descriptor for VCCT (§2.8, Fig. 2.8.1): c, a/a′, b/b′, d, cells, Δa, θ, S |
 //! | [`quality`], [`CellQuality`] | minimum scaled Jacobian and aspect ratio per cell |
+//! | [`Transfer`] | nodal fields carried from one mesh onto another's nodes (isoparametric interpolation, crack faces kept apart): a coarse state as a fine mesh's start |
 //! | [`inp`], [`read_inp`] | Abaqus/CalculiX `.inp` deck writer, and reader of a documented subset |
 //! | [`vtu`] | VTU (VTK XML unstructured grid) and PVD series output |
 //!
@@ -34,6 +35,7 @@ mod io;
 mod model;
 pub mod names;
 mod quality;
+mod transfer;
 
 pub use error::MeshError;
 pub use front::{Front, FrontPoint};
@@ -52,3 +54,4 @@ pub use io::inp_read::{
 pub use io::{inp, vtu};
 pub use model::{Cell, Imperfection, Mesh};
 pub use quality::{CellQuality, quality};
+pub use transfer::Transfer;
