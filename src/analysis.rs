@@ -21,7 +21,9 @@ use std::time::Instant;
 pub(crate) mod estimate;
 #[path = "analysis_level.rs"]
 mod level;
-use level::{Solved, Strategy, engage_contact, record_level, solve_arc, solve_in_steps};
+#[path = "analysis_seed.rs"]
+pub(crate) mod seed;
+use level::{Strategy, follow_level, record_level};
 
 /// G along the front at state `u`.
 pub fn front_table(
@@ -133,13 +135,37 @@ pub fn run(
     // the same either way (tests/concurrent_estimate.rs).
     let beside = estimate::wanted(scene) && asked != 1 && rayon::current_num_threads() >= 2;
     let mut companion = None;
-    let mut sweep = if beside {
-        rayon::in_place_scope(|s| {
-            s.spawn(|_| companion = Some(estimate::run_companion(scene)));
-            sweep(scene, &model, &mut problem, sub.as_mut(), progress)
-        })
+    // Nested iteration (src/analysis_seed.rs): the companion sends its levels as they converge
+    // and the sweep starts its levels from them, the companion first on one thread.
+    let (to, from) = std::sync::mpsc::channel();
+    let mut seeds = if seed::wanted(scene, &model, sub.is_some()) {
+        seeds(scene, &model, from)
     } else {
-        sweep(scene, &model, &mut problem, sub.as_mut(), progress)
+        None
+    };
+    let sending = seeds.is_some();
+    let mut sweep = match (beside, seeds.as_mut()) {
+        (true, seeds) => rayon::in_place_scope(|s| {
+            s.spawn(|_| {
+                companion = Some(match sending {
+                    true => estimate::run_companion_sending(scene, to),
+                    false => estimate::run_companion(scene),
+                })
+            });
+            sweep(scene, &model, &mut problem, sub.as_mut(), progress, seeds)
+        }),
+        (false, Some(seeds)) => {
+            companion = Some(estimate::run_companion_sending(scene, to));
+            sweep(
+                scene,
+                &model,
+                &mut problem,
+                sub.as_mut(),
+                progress,
+                Some(seeds),
+            )
+        }
+        (false, None) => sweep(scene, &model, &mut problem, sub.as_mut(), progress, None),
     }?;
     let critical = criterion(scene, model.kind, &mut sweep.levels)?;
     let mut results = Results {
@@ -189,6 +215,22 @@ pub fn run(
     Ok(results)
 }
 
+/// The companion's levels carried onto `model` (the companion's mesh rebuilt here: the
+/// generators are deterministic); None, with the reason in the log, when they cannot be (the
+/// levels are then followed on this mesh).
+fn seeds(
+    scene: &Scene,
+    model: &Model,
+    from: std::sync::mpsc::Receiver<seed::SeedLevel>,
+) -> Option<seed::Seeds> {
+    let built = estimate::companion_scene(scene)
+        .and_then(|c| build_model(&c))
+        .and_then(|coarse| seed::Seeds::new(scene, &coarse, model, from));
+    built
+        .inspect_err(|e| tracing::debug!(%e, "no nested iteration: the levels are followed"))
+        .ok()
+}
+
 /// Below this many DOF a run asked for all cores (`threads = 0`, `--threads` not given)
 /// factorises on one thread (the error estimate's companion still runs beside it on the other
 /// core): on the 2-vCPU machine two threads took 1.16× the wall time of one at 6 789 DOF and
@@ -218,6 +260,7 @@ fn sweep(
     problem: &mut StructuralProblem,
     mut sub: Option<&mut Substructured>,
     progress: &mut dyn FnMut(Progress) -> Result<(), Error>,
+    mut seeds: Option<&mut seed::Seeds>,
 ) -> Result<Sweep, Error> {
     let plate = model.kind == ModelKind::Plate;
     let (factors, reference) = load_factors(scene);
@@ -291,62 +334,50 @@ fn sweep(
                 }
                 .is_ok_and(|peak| peak < -0.01 * model.h)
         };
-        let mut start = u.clone();
-        // The step of the level solved last without contact (the whole level unless `auto`
-        // solves it in the contact loop's steps).
-        let mut step = (from, lambda);
-        let mut solved = Solved::default();
-        if !stage.active() {
-            solved = match &arc {
-                Some(arc) => solve_arc(
+        let seeded = match seeds.as_deref_mut() {
+            Some(seeds) => seed::solve_seeded(
+                seeds,
+                k,
+                (scene, model),
+                problem,
+                &mut session,
+                &mut stage,
+                &mut u,
+                lambda,
+                (newton, &stepping),
+            )
+            .map_err(level_error)?,
+            None => None,
+        };
+        // A seeded level: the companion's perturbation, and its crossing if this mesh has not
+        // crossed one itself (it may bifurcate a level earlier than its companion).
+        let (solved, contact, companion) = match seeded {
+            Some(s) => {
+                let crossing = s.bifurcation.filter(|_| out.perturbed_at.is_none());
+                (s.solved, s.contact, Some((s.perturbed, crossing)))
+            }
+            None => {
+                let (solved, contact) = follow_level(
+                    &mut stage,
+                    (scene, model),
+                    &mut inward,
                     problem,
                     &mut u,
                     (from, lambda),
                     pert,
-                    (newton, arc, &stepping),
-                    &mut session,
+                    (newton, &stepping, arc.as_ref()),
+                    (&mut session, before, t),
                 )
-                .map_err(level_error)?,
-                // `auto`: in the contact loop's steps, up to the first that overlaps
-                // (src/contact.rs).
-                None => {
-                    let (all, last_start, last) = solve_in_steps(
-                        &stage,
-                        model,
-                        &mut inward,
-                        problem,
-                        &mut u,
-                        (from, lambda),
-                        pert,
-                        (newton, &stepping),
-                        &mut session,
-                        before,
-                    )
-                    .map_err(level_error)?;
-                    (start, step) = (last_start, last);
-                    all
-                }
-            };
-        }
-        // (Contact and substructuring together are refused by the scene checks: the contact
-        // stage works on the full model's DOFs.)
-        let contact = engage_contact(
-            &mut stage,
-            scene,
-            model,
-            &mut u,
-            (&start, step, lambda),
-            pert,
-            (newton, &stepping),
-            (&mut solved, t),
-        )
-        .map_err(level_error)?;
-        if solved.perturbed {
+                .map_err(level_error)?;
+                (solved, contact, None)
+            }
+        };
+        if solved.perturbed || companion.is_some_and(|c| c.0) && out.perturbed_at.is_none() {
             out.perturbed_at = Some(value);
         }
         before = solved.pivots.unwrap_or(before);
         out.solve_s += t.elapsed().as_secs_f64();
-        let (level, vcct_s) = record_level(
+        let (mut level, vcct_s) = record_level(
             scene,
             model,
             problem,
@@ -357,16 +388,31 @@ fn sweep(
             solved,
             contact,
         )?;
-        out.vcct_s += vcct_s;
-        progress(Progress::Level {
-            index: k,
-            value,
-            result: &level,
-        })?;
-        out.levels.push(level);
+        if let Some((_, crossing)) = companion {
+            level.convergence.seeded = true;
+            level.convergence.bifurcation = crossing;
+        }
+        push_level(&mut out, progress, (k, value, vcct_s), level)?;
         from = lambda;
     }
     Ok(out)
+}
+
+/// Level `k` of value `value` recorded (its VCCT seconds `vcct_s`) and reported.
+fn push_level(
+    out: &mut Sweep,
+    progress: &mut dyn FnMut(Progress) -> Result<(), Error>,
+    (k, value, vcct_s): (usize, f64, f64),
+    level: LevelResult,
+) -> Result<(), Error> {
+    out.vcct_s += vcct_s;
+    progress(Progress::Level {
+        index: k,
+        value,
+        result: &level,
+    })?;
+    out.levels.push(level);
+    Ok(())
 }
 
 /// The arc-length control of a scene with `path = "arc-length"` (None for `load`): the first

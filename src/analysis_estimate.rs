@@ -266,6 +266,26 @@ pub(crate) fn run_companion(scene: &Scene) -> CompanionRun {
     (run, t.elapsed().as_secs_f64())
 }
 
+/// [`run_companion`], each converged level sent on `to` as it comes (nested iteration:
+/// src/analysis_seed.rs); `to` is dropped when the run ends, so a listener waiting for a
+/// level the run never reaches is told.
+pub(crate) fn run_companion_sending(
+    scene: &Scene,
+    to: std::sync::mpsc::Sender<super::seed::SeedLevel>,
+) -> CompanionRun {
+    let t = Instant::now();
+    let run = companion_scene(scene).and_then(|c| {
+        super::run(&c, &mut |p| {
+            if let super::Progress::Level { index, result, .. } = p {
+                super::seed::SeedLevel::send(index, result, &to);
+            }
+            Ok(())
+        })
+    });
+    drop(to);
+    (run, t.elapsed().as_secs_f64())
+}
+
 /// Fills the per-point errors and the levels' summaries from the companion's run
 /// (`companion`: run beside the main one; None: run here, after it, when the scene asks for
 /// an estimate), and reports them with the target's choice in `results.accuracy`; a warning

@@ -209,6 +209,73 @@ pub(super) fn solve_in_steps(
     Ok((all, start, step))
 }
 
+/// A level followed on this mesh from the state `u` at `from` to `lambda`: without contact
+/// (by arc length with `arc`, else in the contact loop's steps up to the first that overlaps:
+/// [`solve_in_steps`]), then the contact stage if it is active or the state overlaps
+/// ([`engage_contact`]). `before`: the negative pivots at the level's start; `t`: when the
+/// level started.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn follow_level(
+    stage: &mut ContactStage,
+    (scene, model): (&Scene, &Model),
+    inward: &mut dyn FnMut(&[f64]) -> bool,
+    problem: &mut StructuralProblem,
+    u: &mut Vec<f64>,
+    (from, lambda): (f64, f64),
+    pert: &[(usize, f64)],
+    (newton, stepping, arc): (&NewtonSettings, &Stepping, Option<&ArcLength>),
+    (session, before, t): (&mut PathSolver, usize, Instant),
+) -> Result<(Solved, Option<ContactSummary>), Error> {
+    let mut start = u.clone();
+    // The step of the level solved last without contact (the whole level unless `auto`
+    // solves it in the contact loop's steps).
+    let mut step = (from, lambda);
+    let mut solved = Solved::default();
+    if !stage.active() {
+        solved = match arc {
+            Some(arc) => solve_arc(
+                problem,
+                u,
+                (from, lambda),
+                pert,
+                (newton, arc, stepping),
+                session,
+            )?,
+            // `auto`: in the contact loop's steps, up to the first that overlaps
+            // (src/contact.rs).
+            None => {
+                let (all, last_start, last) = solve_in_steps(
+                    stage,
+                    model,
+                    inward,
+                    problem,
+                    u,
+                    (from, lambda),
+                    pert,
+                    (newton, stepping),
+                    session,
+                    before,
+                )?;
+                (start, step) = (last_start, last);
+                all
+            }
+        };
+    }
+    // (Contact and substructuring together are refused by the scene checks: the contact
+    // stage works on the full model's DOFs.)
+    let contact = engage_contact(
+        stage,
+        scene,
+        model,
+        u,
+        (&start, step, lambda),
+        pert,
+        (newton, stepping),
+        (&mut solved, t),
+    )?;
+    Ok((solved, contact))
+}
+
 /// The contact stage of a level (src/contact.rs) when it is active or the state solved without
 /// contact overlaps: `(start, step, lambda)` the state at the start of the last step solved
 /// without contact, that step and the level's end; its attempts, perturbation and pivots are
@@ -297,6 +364,7 @@ pub(super) fn record_level(
     level.contact = contact;
     level.set_negative_pivots(solved.pivots);
     level.convergence.full_newton_fallback = solved.fallback;
+    level.convergence.perturbed = solved.perturbed;
     level.convergence.bifurcation = solved.attempts.iter().find_map(|a| {
         a.bifurcation.map(|b| Crossing {
             from: b.from * reference,

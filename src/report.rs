@@ -311,17 +311,44 @@ pub fn table(results: &Results) -> String {
         );
     }
     let what = head;
+    let companion = |seeded: bool| if seeded { " on the companion mesh" } else { "" };
     for l in &results.levels {
         if let Some(b) = l.convergence.bifurcation {
             let _ = writeln!(
                 s,
-                "bifurcation crossed between {what} {:.6} and {:.6} (negative pivots {} → {})",
-                b.from, b.to, b.negative_pivots_before, b.negative_pivots_after
+                "bifurcation crossed between {what} {:.6} and {:.6} (negative pivots {} → {}){}",
+                b.from,
+                b.to,
+                b.negative_pivots_before,
+                b.negative_pivots_after,
+                companion(l.convergence.seeded)
             );
         }
     }
     if let Some(at) = results.model.perturbed_at {
-        let _ = writeln!(s, "perturbation applied at {what} {at} (§3.2 protocol)");
+        let seeded = results
+            .levels
+            .iter()
+            .any(|l| l.value == at && l.convergence.seeded);
+        let _ = writeln!(
+            s,
+            "perturbation applied at {what} {at}{} (§3.2 protocol)",
+            companion(seeded)
+        );
+    }
+    let seeded: Vec<String> = results
+        .levels
+        .iter()
+        .filter(|l| l.convergence.seeded)
+        .map(|l| format!("{}", l.value))
+        .collect();
+    if !seeded.is_empty() {
+        let _ = writeln!(
+            s,
+            "levels started from the companion mesh's converged states (nested iteration, \
+             [analysis] start): {what} {}",
+            seeded.join(", ")
+        );
     }
     for w in &results.warnings {
         let _ = writeln!(s, "warning: {w}");

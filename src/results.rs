@@ -222,6 +222,12 @@ pub struct Convergence {
     /// Converged increments refused by the inertia guard (a stable state gaining negative
     /// pivots over a large step) and redone with smaller steps.
     pub refused_increments: usize,
+    /// The §3.2 perturbation was applied and removed at this level on this mesh.
+    pub perturbed: bool,
+    /// The level started from the error estimate's companion mesh's converged state at the
+    /// same level (nested iteration, `[analysis] start = "companion"`): its iterations are
+    /// this mesh's from that start, and its `bifurcation` is the one the companion crossed.
+    pub seeded: bool,
 }
 
 /// Where the path crossed a bifurcation: between `from` and `to` (strain, or load N) the
@@ -298,6 +304,8 @@ impl LevelResult {
                     .iter()
                     .filter(|a| matches!(a.termination, Termination::InertiaChanged { .. }))
                     .count(),
+                perturbed: false,
+                seeded: false,
             },
             front: front.iter().map(FrontRow::new).collect(),
             contact: None,

@@ -11,7 +11,9 @@ use nonlin3d_vcct::MixedMode;
 use serde::{Deserialize, Serialize};
 
 mod analysis;
-pub use analysis::{AnalysisOptions, ForceKinematics, NewtonName, PathName, RuleName, SolverName};
+pub use analysis::{
+    AnalysisOptions, ForceKinematics, NewtonName, PathName, RuleName, SolverName, StartName,
+};
 mod contact;
 pub(crate) use contact::check as check_contact;
 pub use contact::{ContactModeName, ContactOptions, CrackFacesName, DEFAULT_TOLERANCE_MM};

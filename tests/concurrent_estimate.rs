@@ -5,6 +5,8 @@
 //! displacements and the accuracy report. No tolerance: any difference is a defect (a shared
 //! state between the two runs, or a result that depends on the thread that computed it).
 
+mod common;
+
 use nonlin3d::results::Results;
 use nonlin3d::{Analysis, Scene};
 
@@ -12,16 +14,7 @@ use nonlin3d::{Analysis, Scene};
 /// 2 slices), two levels: below the bifurcation and past it (the §3.2 protocol and contact
 /// `auto`), error estimate on (the scene's default).
 fn scene() -> Scene {
-    let text = nonlin3d::scene::DEFAULT_SCENE
-        .replace(
-            "slices = 8",
-            "slices = 4\ninside = 2\noutside = 3\nsub_layers = 1\nbase_layers = 2",
-        )
-        .replace(
-            "strains = [-0.001, -0.002, -0.003, -0.004, -0.005]",
-            "strains = [-0.001, -0.004]",
-        );
-    Scene::from_toml(&text).unwrap()
+    Scene::from_toml(&common::tiny_scene_text("[-0.001, -0.004]")).unwrap()
 }
 
 /// The scene run inside a pool of `threads` threads (all cores asked: `threads = 0`).

@@ -72,6 +72,22 @@ pub enum ForceKinematics {
     Linear,
 }
 
+/// Where a level past the buckling level starts (docs/SCENES.md, "analysis").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum StartName {
+    /// From the error estimate's companion mesh's converged state at the same level, carried
+    /// onto this mesh with its contact set (nested iteration): the companion follows the path
+    /// (bifurcation, §3.2 perturbation, contact passes), this mesh solves each level from its
+    /// state; a level whose start does not converge is followed as with `path`. The default;
+    /// it acts where the companion runs (`[mesh] error_estimate = "companion"`, the default) on
+    /// load-controlled embedded, edge and through-width models without substructures.
+    #[default]
+    Companion,
+    /// Every level followed on this mesh from the previous level (the thesis's way).
+    Path,
+}
+
 /// Solution options.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -109,6 +125,9 @@ pub struct AnalysisOptions {
     /// Linear solver.
     #[serde(default)]
     pub solver: SolverName,
+    /// Where a level past the buckling level starts: `companion` (default) or `path`.
+    #[serde(default)]
+    pub start: StartName,
     /// Threads for the factorisation with `solver = "faer"` (0, the default: all cores, or
     /// `--threads N`; 1: sequential). Results are bitwise identical for any count.
     #[serde(default = "default_threads")]
@@ -154,6 +173,7 @@ impl Default for AnalysisOptions {
             max_increment: default_max_increment(),
             max_attempts: default_max_attempts(),
             solver: SolverName::Faer,
+            start: StartName::Companion,
             threads: default_threads(),
         }
     }

@@ -219,6 +219,13 @@ impl Contact {
         &self.settings
     }
 
+    /// Sets the most passes at one level ([`ContactSettings::max_passes`]) and returns the
+    /// previous limit: a caller that starts a level from a predicted set (nested iteration)
+    /// bounds what a wrong prediction may cost, then puts the limit back.
+    pub fn set_max_passes(&mut self, passes: usize) -> usize {
+        std::mem::replace(&mut self.settings.max_passes, passes)
+    }
+
     /// Whether each pair is closed.
     pub fn active(&self) -> Vec<bool> {
         self.held.iter().map(Option::is_some).collect()

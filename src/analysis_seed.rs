@@ -1,0 +1,380 @@
+//! Nested iteration (`[analysis] start = "companion"`): the levels past the buckling level start
+//! from the error estimate's companion mesh's converged states.
+//!
+//! The companion follows the path (the bifurcation, the §3.2 perturbation, the contact passes)
+//! on its coarser mesh and sends each converged level here ([`SeedLevel`], through a channel:
+//! it runs first on one thread and beside the sweep on two or more, staying ahead since it is
+//! smaller). The sweep solves each of this mesh's levels, from the first the companion
+//! perturbed at on, from the companion's state carried onto this mesh's nodes
+//! ([`nonlin3d_mesh::Transfer`]) with the companion's contact set mapped onto this mesh's pairs:
+//! one Newton solve at the level's λ, then the contact loop's passes, which end only on a
+//! converged state whose set does not change. Newton converges to the equilibrium nearest the
+//! start: the same one the path reaches (docs/PERFORMANCE.md, "Nested iteration from the
+//! companion": ten scenes, the same closed pairs and pivots at every level, G within 3.1e-5 of
+//! G_T max). A start is dropped and the level followed on this mesh as without seeding when its
+//! contact set would change at more than a quarter of the pairs at the first read or needs more
+//! than 10 passes (src/contact.rs), when it needs contact where the companion did not, when it
+//! does not converge, or when it converges on another branch than the companion's (a centre
+//! deflection of the other sign, or unstable where the companion is stable). After a seeded
+//! level, the next is seeded only if this one's start was close ([`KEEP_SEEDING`]).
+
+use super::deflections;
+use super::level::{Solved, engage_contact};
+use crate::Error;
+use crate::contact::ContactStage;
+use crate::model::{Model, ModelKind};
+use crate::results::{ContactSummary, Crossing, LevelResult};
+use crate::scene::{ContactModeName, PathName, Scene, StartName};
+use nonlin3d_contact::CrackFaces;
+use nonlin3d_mesh::Transfer;
+use nonlin3d_newton::{NewtonSettings, PathSolver, Stepping, StructuralProblem};
+use std::sync::mpsc::{Receiver, Sender, TryRecvError};
+use std::time::Instant;
+
+/// After a seeded level, the next one is seeded only if this one's carried start u⁰ was within
+/// this fraction of its step: ‖u − u⁰‖∞ ≤ 0.15 ‖u − u_prev‖∞ (u the converged state, u_prev
+/// the previous level's). A start that close beat the level's own path on the measured scenes,
+/// a farther one did not (a coarse companion's contact set costs more passes than this mesh's
+/// own): over nine committed scenes 291 of this mesh's iterations against 326 seeding every
+/// level, 305 seeding the buckling level only and 502 following the path (docs/PERFORMANCE.md,
+/// "Nested iteration from the companion"). Speed only: every choice reaches the same states.
+const KEEP_SEEDING: f64 = 0.15;
+
+/// One converged level of the companion, as the sweep needs it.
+#[derive(Debug, Clone)]
+pub(crate) struct SeedLevel {
+    /// Level index (0-based).
+    index: usize,
+    /// The companion's displacements (node-major, m).
+    displacements: Vec<f64>,
+    /// Centre deflection, m.
+    centre: f64,
+    /// Whether the contact stage acted at the level.
+    contact: bool,
+    /// Whether the companion applied the §3.2 perturbation at the level.
+    perturbed: bool,
+    /// The bifurcation the companion crossed in the level.
+    bifurcation: Option<Crossing>,
+    /// Negative pivots of the companion's tangent at the level.
+    pivots: Option<usize>,
+}
+
+impl SeedLevel {
+    /// The record of the companion's level `index`.
+    pub(crate) fn of(index: usize, level: &LevelResult) -> Self {
+        Self {
+            index,
+            displacements: level.displacements.clone(),
+            centre: level.centre_deflection_mm * 1e-3,
+            contact: level.contact.is_some(),
+            perturbed: level.convergence.perturbed,
+            bifurcation: level.convergence.bifurcation,
+            pivots: level.convergence.negative_pivots,
+        }
+    }
+
+    /// Sends it (a sweep that stopped listening is not an error of the companion's run).
+    pub(crate) fn send(index: usize, level: &LevelResult, to: &Sender<SeedLevel>) {
+        let _ = to.send(Self::of(index, level));
+    }
+}
+
+/// Whether a scene's levels start from the companion: `start = "companion"`, the companion
+/// runs (the error estimate), load control, no substructure, an embedded, edge or
+/// through-width model (the models whose companion mesh covers the same body).
+pub(crate) fn wanted(scene: &Scene, model: &Model, substructured: bool) -> bool {
+    scene.analysis.start == StartName::Companion
+        && super::estimate::wanted(scene)
+        && scene.analysis.path == PathName::Load
+        && !substructured
+        && matches!(
+            model.kind,
+            ModelKind::Embedded | ModelKind::Edge | ModelKind::ThroughWidth
+        )
+}
+
+/// The companion's levels as they arrive, carried onto this mesh.
+pub(crate) struct Seeds {
+    transfer: Transfer,
+    /// For each of this mesh's crack pairs, the companion's nearest pair (in the crack plane).
+    nearest: Vec<usize>,
+    /// The companion's crack faces (None: no crack pairs).
+    faces: Option<CrackFaces>,
+    /// The companion's levels received so far, in order.
+    received: Vec<SeedLevel>,
+    from: Receiver<SeedLevel>,
+    /// Weighted gaps (two-body) or gaps (thesis mode).
+    weighted: bool,
+    /// Whether the next level is seeded ([`KEEP_SEEDING`]; true until a level is seeded).
+    pays: bool,
+}
+
+impl Seeds {
+    /// From the companion's model `coarse` onto `model`, its levels arriving on `from`.
+    pub(crate) fn new(
+        scene: &Scene,
+        coarse: &Model,
+        model: &Model,
+        from: Receiver<SeedLevel>,
+    ) -> Result<Self, Error> {
+        let transfer = Transfer::between(&coarse.mesh, &model.mesh)?;
+        let faces = crack_faces(coarse)?;
+        let nearest = match (&faces, crack_faces(model)?) {
+            (Some(c), Some(f)) => nearest_pairs(c, &coarse.mesh.nodes, &f, &model.mesh.nodes),
+            _ => Vec::new(),
+        };
+        Ok(Self {
+            transfer,
+            nearest,
+            faces,
+            received: Vec::new(),
+            from,
+            weighted: scene.contact.mode == ContactModeName::TwoBody,
+            pays: true,
+        })
+    }
+
+    /// The companion's level `k`, waiting for it; None if the companion stopped before it.
+    fn level(&mut self, k: usize) -> Option<&SeedLevel> {
+        while self.received.len() <= k {
+            let next = wait(&self.from)?;
+            debug_assert_eq!(next.index, self.received.len());
+            self.received.push(next);
+        }
+        self.received.get(k)
+    }
+
+    /// This mesh's contact set from the companion's state: a pair is closed where its
+    /// nearest companion pair's (weighted) gap is within `tolerance` (m).
+    fn set(&self, level: &SeedLevel, tolerance: f64) -> Result<Vec<bool>, Error> {
+        let Some(faces) = &self.faces else {
+            return Ok(Vec::new());
+        };
+        let u = &level.displacements;
+        let gaps = faces.gaps(u, &faces.normals(u)?);
+        let gaps = if self.weighted {
+            faces.weighted_gaps(&gaps)
+        } else {
+            gaps
+        };
+        Ok(self.nearest.iter().map(|&c| gaps[c] <= tolerance).collect())
+    }
+}
+
+/// The next level from the companion; None when it has stopped. A rayon worker waiting here
+/// runs pending jobs meanwhile (`rayon::yield_now`): blocked, it could hold the only thread
+/// that would run the companion — two study cases on two workers, each waiting for its
+/// companion queued behind the other, wait for ever. Elsewhere it sleeps between looks.
+fn wait(from: &Receiver<SeedLevel>) -> Option<SeedLevel> {
+    loop {
+        match from.try_recv() {
+            Ok(level) => return Some(level),
+            Err(TryRecvError::Disconnected) => return None,
+            Err(TryRecvError::Empty) => {
+                if rayon::yield_now() != Some(rayon::Yield::Executed) {
+                    std::thread::sleep(std::time::Duration::from_micros(200));
+                }
+            }
+        }
+    }
+}
+
+fn crack_faces(model: &Model) -> Result<Option<CrackFaces>, Error> {
+    let sets = &model.mesh.node_sets;
+    let paired = [
+        nonlin3d_mesh::names::CRACK_UPPER,
+        nonlin3d_mesh::names::CRACK_LOWER,
+    ]
+    .iter()
+    .all(|s| sets.get(*s).is_some_and(|v| !v.is_empty()));
+    Ok(if paired {
+        Some(CrackFaces::from_mesh(&model.mesh)?)
+    } else {
+        None
+    })
+}
+
+/// For each pair of `fine`, the index of the pair of `coarse` whose lower node is nearest in
+/// (x, y) (the first on ties).
+fn nearest_pairs(
+    coarse: &CrackFaces,
+    coarse_nodes: &[[f64; 3]],
+    fine: &CrackFaces,
+    fine_nodes: &[[f64; 3]],
+) -> Vec<usize> {
+    let at: Vec<[f64; 2]> = coarse
+        .pairs()
+        .iter()
+        .map(|p| [coarse_nodes[p.lower][0], coarse_nodes[p.lower][1]])
+        .collect();
+    fine.pairs()
+        .iter()
+        .map(|p| {
+            let x = fine_nodes[p.lower];
+            let d = |c: &[f64; 2]| (c[0] - x[0]).powi(2) + (c[1] - x[1]).powi(2);
+            (0..at.len())
+                .min_by(|&a, &b| d(&at[a]).total_cmp(&d(&at[b])))
+                .unwrap_or(0)
+        })
+        .collect()
+}
+
+/// A level solved from the companion's state.
+pub(super) struct Seeded {
+    /// What was solved (the first solve's attempt, the pivots).
+    pub(super) solved: Solved,
+    /// The contact stage's record, if it acted.
+    pub(super) contact: Option<ContactSummary>,
+    /// Whether the companion applied the §3.2 perturbation at this level.
+    pub(super) perturbed: bool,
+    /// The bifurcation the companion crossed in the level.
+    pub(super) bifurcation: Option<Crossing>,
+}
+
+/// Level `k` at load factor `lambda` from the companion's state, if the companion has reached
+/// its perturbed level by then and the last seeded level's start was close ([`KEEP_SEEDING`]);
+/// `u` (this mesh's previous converged state) becomes the level's state. None: not seeded
+/// (before the companion's perturbation, the last start too far, the companion stopped, or the
+/// start did not converge or landed on another branch: `u` and the contact stage are as they
+/// were, and the caller follows the level).
+#[allow(clippy::too_many_arguments)]
+pub(super) fn solve_seeded(
+    seeds: &mut Seeds,
+    k: usize,
+    (scene, model): (&Scene, &Model),
+    problem: &mut StructuralProblem,
+    session: &mut PathSolver,
+    stage: &mut ContactStage,
+    u: &mut Vec<f64>,
+    lambda: f64,
+    (newton, stepping): (&NewtonSettings, &Stepping),
+) -> Result<Option<Seeded>, Error> {
+    let t = Instant::now();
+    // From a carried start Newton takes 3–5 iterations: full Newton (a kept tangent, modified
+    // Newton's or BFGS's, may fail to converge from it, and the contact loop runs full Newton).
+    let full = NewtonSettings {
+        solver: newton.solver,
+        force_tolerance: newton.force_tolerance,
+        relative_tolerance: newton.relative_tolerance,
+        ..NewtonSettings::default()
+    };
+    let newton = &full;
+    let Some(level) = seeds.level(k).cloned() else {
+        return Ok(None);
+    };
+    if !seeds.received.iter().any(|l| l.perturbed) || !seeds.pays {
+        return Ok(None);
+    }
+    let mut start = seeds.transfer.apply(&level.displacements, 3)?;
+    let carried = start.clone();
+    let mark = stage.mark();
+    let mut solved = Solved::default();
+    let attempt = if level.contact {
+        seeds
+            .set(&level, scene.contact.tolerance() * 1e-3)
+            .and_then(|set| stage.seed(scene, model, &mut start, &set, lambda, newton))
+            .map(|(l, summary)| {
+                solved.attempts.extend(l.first.attempts);
+                solved.pivots = l.first.negative_pivots;
+                Some(summary)
+            })
+    } else {
+        plain(
+            problem, session, stage, scene, model, &mut start, lambda, newton, stepping,
+        )
+        .map(|(s, c)| {
+            solved = s;
+            c
+        })
+    };
+    // The companion's branch: the centre deflection of its sign (where it is more than h/100:
+    // not the branch buckled the other way), and stable where it is stable (not the unbuckled
+    // state past the bifurcation). Its size is not compared: a coarse companion's may be half
+    // this mesh's (513 against 1 773 DOF, tests/nested.rs).
+    let landed = |state: &[f64], pivots: Option<usize>| {
+        let (centre, _) = deflections(model, state);
+        let sign = level.centre.abs() <= 0.01 * model.h || centre * level.centre > 0.0;
+        let stable = level.pivots != Some(0) || pivots == Some(0);
+        sign && stable
+    };
+    match attempt {
+        Ok(contact) if landed(&start, solved.pivots) => {
+            let off = |from: &[f64]| {
+                start
+                    .iter()
+                    .zip(from)
+                    .fold(0.0_f64, |m, (a, b)| m.max((a - b).abs()))
+            };
+            seeds.pays = off(&carried) <= KEEP_SEEDING * off(u);
+            *u = start;
+            tracing::debug!(level = k + 1, seconds = t.elapsed().as_secs_f64(), "seeded");
+            Ok(Some(Seeded {
+                solved,
+                contact,
+                perturbed: level.perturbed,
+                bifurcation: level.bifurcation,
+            }))
+        }
+        outcome => {
+            let why = match outcome {
+                Err(e) => e.to_string(),
+                Ok(_) => "it landed on another branch than the companion's (centre deflection \
+                          of the other sign, or unstable where the companion is stable)"
+                    .into(),
+            };
+            tracing::debug!(level = k + 1, %why, "seed dropped: the level is followed");
+            session.invalidate();
+            stage.reset(mark, u)?;
+            Ok(None)
+        }
+    }
+}
+
+/// A seeded level the companion solved without contact: Newton at λ from `u`, then the
+/// contact stage if this mesh's state overlaps (`auto`).
+#[allow(clippy::too_many_arguments)]
+fn plain(
+    problem: &mut StructuralProblem,
+    session: &mut PathSolver,
+    stage: &mut ContactStage,
+    scene: &Scene,
+    model: &Model,
+    u: &mut Vec<f64>,
+    lambda: f64,
+    newton: &NewtonSettings,
+    stepping: &Stepping,
+) -> Result<(Solved, Option<ContactSummary>), Error> {
+    let t = Instant::now();
+    let first = session.solve_at(problem, u, lambda, newton)?;
+    if !first.converged() {
+        return Err(Error::Scene(format!(
+            "the start carried from the companion mesh did not converge at λ = {lambda}"
+        )));
+    }
+    // The companion's state did not need contact here; one of this mesh's that does is
+    // another state (measured: model 6's companion mesh seeded from its own companion ground
+    // through contact passes at 21 negative pivots before failing): follow the level instead.
+    if !stage.active() && stage.overlaps(model, u) {
+        return Err(Error::Scene(format!(
+            "the state carried from the companion mesh overlaps at λ = {lambda} where the \
+             companion's did not"
+        )));
+    }
+    let mut solved = Solved {
+        pivots: first.negative_pivots(),
+        attempts: vec![first],
+        ..Solved::default()
+    };
+    let start = u.clone();
+    let contact = engage_contact(
+        stage,
+        scene,
+        model,
+        u,
+        (&start, (lambda, lambda), lambda),
+        &[],
+        (newton, stepping),
+        (&mut solved, t),
+    )?;
+    Ok((solved, contact))
+}

@@ -1,0 +1,200 @@
+//! Nested iteration (`[analysis] start = "companion"`, the default; src/analysis_seed.rs): the
+//! levels from the companion's perturbed level on start from the companion mesh's converged
+//! states. They must reach the equilibria the path reaches (`start = "path"`): the same closed
+//! contact pairs and negative pivots at every level, the same G and deflections to the
+//! accuracy the contact loop defines them — a closed pair is held along the normal frozen at
+//! its last refresh, so two runs reaching the same set along other passes agree to about 1e-5
+//! of G_T max (3.4e-5 measured on the 30 × 60 mm ellipse, docs/PERFORMANCE.md), not to the
+//! Newton tolerance — in fewer of this mesh's iterations; and a start that cannot be used (its
+//! contact set far off, its Newton solve not converging, another branch) must be dropped for
+//! the path, not reported.
+
+mod common;
+
+use nonlin3d::results::Results;
+use nonlin3d::scene::StartName;
+use nonlin3d::{Analysis, Scene};
+
+/// Bound on |ΔG| / G_T max between the two ways (see the module docs).
+const G_AGREEMENT: f64 = 1e-4;
+
+/// The reference circle on the tiny mesh (1 773 DOF, companion 513), three levels: below the
+/// bifurcation, past it (the §3.2 protocol, contact `auto`) and one more with contact; the
+/// error estimate on (the scene's default).
+fn tiny() -> String {
+    common::tiny_scene_text("[-0.001, -0.003, -0.004]")
+}
+
+/// `text` (a scene) run both ways on one thread: along the path, then nested.
+fn both(text: &str) -> (Results, Results) {
+    let run = |start| {
+        let mut s = Scene::from_toml(text).unwrap();
+        s.analysis.start = start;
+        s.analysis.threads = 1;
+        Analysis::new(s).unwrap().run().unwrap()
+    };
+    (run(StartName::Path), run(StartName::Companion))
+}
+
+/// A committed scene's text.
+fn committed(name: &str) -> String {
+    std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("examples/scenes")
+            .join(name),
+    )
+    .unwrap()
+}
+
+/// This mesh's Newton iterations: each attempt's and each contact pass's (one factorisation
+/// each; the first contact solve is among the attempts).
+fn iterations(r: &Results) -> usize {
+    r.levels
+        .iter()
+        .map(|l| {
+            l.convergence.iterations
+                + l.contact
+                    .as_ref()
+                    .map_or(0, |c| c.pass_log.iter().map(|p| p.iterations).sum())
+        })
+        .sum()
+}
+
+/// The two runs reach the same states: closed pairs, pivots, G to [`G_AGREEMENT`] of the
+/// level's G_T max, centre deflection to 1e-4 of itself.
+fn assert_same_states(path: &Results, nested: &Results) {
+    assert_eq!(path.levels.len(), nested.levels.len());
+    for (a, b) in path.levels.iter().zip(&nested.levels) {
+        let closed =
+            |l: &nonlin3d::results::LevelResult| l.contact.as_ref().map(|c| c.pairs_closed);
+        assert_eq!(
+            closed(a).unwrap_or(0),
+            closed(b).unwrap_or(0),
+            "level {}",
+            a.value
+        );
+        assert_eq!(a.convergence.negative_pivots, b.convergence.negative_pivots);
+        let g_max = a.front.iter().fold(0.0_f64, |m, r| m.max(r.g_t));
+        for (x, y) in a.front.iter().zip(&b.front) {
+            for (p, q) in [(x.g_i, y.g_i), (x.g_ii, y.g_ii), (x.g_iii, y.g_iii)] {
+                assert!(
+                    (p - q).abs() <= G_AGREEMENT * g_max + 1e-12,
+                    "level {}, S = {} mm: {p} against {q} (G_T max {g_max})",
+                    a.value,
+                    x.s_mm
+                );
+            }
+        }
+        let w = a.centre_deflection_mm;
+        assert!((w - b.centre_deflection_mm).abs() <= 1e-4 * w.abs() + 1e-9);
+    }
+}
+
+/// The thesis's 15 mm semicircular edge delamination (6 789 DOF, companion 1 773), its three
+/// levels past the bifurcation: each seeded (the carried starts are within
+/// `KEEP_SEEDING` = 0.15 of each level's step), contact closing 1 and 3 pairs on the way.
+#[test]
+fn every_level_of_the_edge_delamination_is_seeded_and_lands_on_the_path() {
+    let (path, nested) = both(&committed("fig_5_5_1_edge_semicircle_15mm.toml"));
+    assert_same_states(&path, &nested);
+    assert!(nested.levels.iter().all(|l| l.convergence.seeded));
+    let closed: Vec<usize> = nested
+        .levels
+        .iter()
+        .map(|l| l.contact.as_ref().map_or(0, |c| c.pairs_closed))
+        .collect();
+    assert_eq!(closed, [0, 1, 3]);
+    let (a, b) = (iterations(&path), iterations(&nested));
+    assert!(2 * b < a, "nested {b} iterations against the path's {a}");
+}
+
+/// On the tiny mesh the buckling level is seeded; its carried start is farther than
+/// `KEEP_SEEDING` of the level's step (a 513-DOF companion), so the next level is followed.
+#[test]
+fn seeded_levels_reach_the_paths_states_in_fewer_iterations() {
+    let (path, nested) = both(&tiny());
+    assert_same_states(&path, &nested);
+    // Below the bifurcation the level is followed; the perturbed level seeded; the next
+    // followed.
+    let seeded: Vec<bool> = nested.levels.iter().map(|l| l.convergence.seeded).collect();
+    assert_eq!(seeded, [false, true, false]);
+    assert!(path.levels.iter().all(|l| !l.convergence.seeded));
+    // The path perturbs at −0.003 on this mesh; the nested run reports the companion's
+    // perturbation and bifurcation there, and does not perturb itself.
+    assert!(path.levels[1].convergence.perturbed);
+    assert!(!nested.levels[1].convergence.perturbed);
+    assert_eq!(nested.model.perturbed_at, Some(-0.003));
+    assert!(nested.levels[1].convergence.bifurcation.is_some());
+    let (a, b) = (iterations(&path), iterations(&nested));
+    assert!(b < a, "nested {b} iterations against the path's {a}");
+    // The error estimate is the same companion's either way.
+    for (x, y) in path.levels.iter().zip(&nested.levels) {
+        let e = |l: &nonlin3d::results::LevelResult| l.error_estimate.as_ref().map(|e| e.max_j_m2);
+        let (p, q) = (e(x).unwrap(), e(y).unwrap());
+        assert!((p - q).abs() <= 1e-3 * p.abs().max(1e-9), "{p} against {q}");
+    }
+}
+
+/// Model 6's companion mesh (3 951 DOF) as a scene: its own companion (1 365 DOF) is too coarse
+/// for the buckling level — the contact set carried from it would change at 95 of 96 pairs
+/// (src/contact.rs, `SEEDED_CHANGE`) — so that level is followed on this mesh (the §3.2
+/// protocol on this mesh), and the next, seeded, agrees with the path.
+#[test]
+fn a_start_the_companion_cannot_give_is_dropped_for_the_path() {
+    let text = committed("table_2_model_6_size.toml")
+        .replace("slices = 8", "slices = 4")
+        .replace("inside = 10", "inside = 5")
+        .replace("outside = 11", "outside = 6")
+        .replace("base_layers = 4", "base_layers = 2")
+        .replace(
+            "strains = [-0.001, -0.002, -0.003, -0.004, -0.005]",
+            "strains = [-0.001, -0.002, -0.003]",
+        );
+    let (path, nested) = both(&text);
+    assert_eq!(path.model.dofs, 3951);
+    let seeded: Vec<bool> = nested.levels.iter().map(|l| l.convergence.seeded).collect();
+    assert_eq!(seeded, [false, false, true]);
+    assert!(nested.levels[1].convergence.perturbed);
+    assert_eq!(nested.model.perturbed_at, Some(-0.002));
+    assert_same_states(&path, &nested);
+}
+
+/// What the terminal says: the companion's bifurcation and perturbation labelled as the
+/// companion's, and the seeded levels listed; `start = "path"` says neither.
+#[test]
+fn the_terminal_names_the_companions_crossing_and_the_seeded_levels() {
+    let dir = std::env::temp_dir().join(format!("nonlin3d-nested-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let summary = |start: &str| {
+        // The key as a user writes it in the scene's [analysis] table.
+        let text = tiny().replace(
+            "integration = \"gauss2\"",
+            &format!("integration = \"gauss2\"\nstart = \"{start}\""),
+        );
+        assert!(text.contains(&format!("start = \"{start}\"")));
+        let file = dir.join(format!("{start}.toml"));
+        std::fs::write(&file, text).unwrap();
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_nonlin3d"))
+            .args(["run", file.to_str().unwrap(), "--out"])
+            .arg(dir.join(start))
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        String::from_utf8(out.stdout).unwrap()
+    };
+    let nested = summary("companion");
+    assert!(
+        nested.contains("(negative pivots 0 → 1) on the companion mesh"),
+        "{nested}"
+    );
+    assert!(nested.contains("perturbation applied at strain -0.003 on the companion mesh"));
+    assert!(nested.contains("nested iteration, [analysis] start): strain -0.003\n"));
+    let path = summary("path");
+    assert!(!path.contains("on the companion mesh") && !path.contains("nested iteration"));
+    assert!(path.contains("perturbation applied at strain -0.003 (§3.2 protocol)"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
