@@ -372,7 +372,7 @@ fn sweep(
                 (solved, contact, None)
             }
         };
-        if solved.perturbed || companion.is_some_and(|c| c.0) && out.perturbed_at.is_none() {
+        if solved.perturbed || (companion.is_some_and(|c| c.0) && out.perturbed_at.is_none()) {
             out.perturbed_at = Some(value);
         }
         before = solved.pivots.unwrap_or(before);

@@ -261,6 +261,7 @@ pub(crate) fn wanted(scene: &Scene) -> bool {
 /// independent run, so it may go on beside the main one (`super::run` does so with two or
 /// more threads); its results do not depend on when or on which thread it runs.
 pub(crate) fn run_companion(scene: &Scene) -> CompanionRun {
+    let _span = tracing::info_span!(crate::log::COMPANION_SPAN).entered();
     let t = Instant::now();
     let run = companion_scene(scene).and_then(|c| super::run(&c, &mut |_| Ok(())));
     (run, t.elapsed().as_secs_f64())
@@ -273,6 +274,7 @@ pub(crate) fn run_companion_sending(
     scene: &Scene,
     to: std::sync::mpsc::Sender<super::seed::SeedLevel>,
 ) -> CompanionRun {
+    let _span = tracing::info_span!(crate::log::COMPANION_SPAN).entered();
     let t = Instant::now();
     let run = companion_scene(scene).and_then(|c| {
         super::run(&c, &mut |p| {

@@ -148,13 +148,24 @@ impl<F: Fn(NewtonEvent) + Send + Sync + 'static> NewtonLayer<F> {
     }
 }
 
+/// The span a run of the error estimate's companion mesh goes in (src/analysis_estimate.rs):
+/// its Newton events are its own, not the run's, and [`NewtonLayer`] leaves them out (they
+/// were numbered as the run's levels in `status.sta`, `convergence.cvg` and the `-v` lines).
+pub const COMPANION_SPAN: &str = "companion";
+
 impl<S, F> tracing_subscriber::Layer<S> for NewtonLayer<F>
 where
-    S: tracing::Subscriber,
+    S: tracing::Subscriber + for<'a> tracing_subscriber::registry::LookupSpan<'a>,
     F: Fn(NewtonEvent) + Send + Sync + 'static,
 {
-    fn on_event(&self, event: &tracing::Event<'_>, _: tracing_subscriber::layer::Context<'_, S>) {
+    fn on_event(&self, event: &tracing::Event<'_>, ctx: tracing_subscriber::layer::Context<'_, S>) {
         if event.metadata().target() != TRACE_TARGET {
+            return;
+        }
+        if ctx
+            .event_scope(event)
+            .is_some_and(|mut scope| scope.any(|span| span.name() == COMPANION_SPAN))
+        {
             return;
         }
         let mut fields = Fields::default();

@@ -187,6 +187,11 @@ fn the_terminal_names_the_companions_crossing_and_the_seeded_levels() {
         String::from_utf8(out.stdout).unwrap()
     };
     let nested = summary("companion");
+    // status.sta holds this mesh's attempts only: the companion's (run first on one thread,
+    // or beside) were numbered as this run's first level before they were left out.
+    let sta = std::fs::read_to_string(dir.join("companion").join("status.sta")).unwrap();
+    let first_level = sta.lines().filter(|l| l.starts_with("1,")).count();
+    assert_eq!(first_level, 1, "{sta}");
     assert!(
         nested.contains("(negative pivots 0 → 1) on the companion mesh"),
         "{nested}"

@@ -249,6 +249,8 @@ fn solve3(a: [[f64; 3]; 3], b: [f64; 3]) -> Option<[f64; 3]> {
 /// The source cells binned on a uniform grid by their node boxes (grown by a tenth, for
 /// curved edges), to find the cells that may hold a point.
 struct Bins {
+    /// Each cell's node box, grown by a tenth.
+    boxes: Vec<([f64; 3], [f64; 3])>,
     lo: [f64; 3],
     size: [f64; 3],
     count: [usize; 3],
@@ -288,6 +290,7 @@ impl Bins {
         let size: [f64; 3] =
             std::array::from_fn(|k| ((hi[k] - lo[k]) / count[k] as f64).max(f64::MIN_POSITIVE));
         let mut bins = Self {
+            boxes: Vec::new(),
             lo,
             size,
             count,
@@ -311,6 +314,7 @@ impl Bins {
             bins.cells.extend(l);
             bins.start.push(bins.cells.len());
         }
+        bins.boxes = boxes;
         bins
     }
 
@@ -327,9 +331,21 @@ impl Bins {
     }
 
     /// The source cell that holds point `p` best (the smallest max(|ξ|∞ − 1, 0), the first
-    /// such cell on ties), among the cells of its bin, then of the bins around it; None if no
-    /// cell's map could be inverted at `p`.
+    /// such cell on ties), among the cells of its bin whose grown box holds it, then of the
+    /// bins around it, then (no box holding it) among all those cells; None if no cell's map
+    /// could be inverted at `p`.
     fn locate(&self, mesh: &Mesh, p: [f64; 3]) -> Option<(usize, f64)> {
+        self.search(mesh, p, true)
+            .or_else(|| self.search(mesh, p, false))
+    }
+
+    /// [`locate`](Self::locate), the cells' boxes checked first if `boxed` (the inverse map,
+    /// Newton on 20 shape functions, is what costs).
+    fn search(&self, mesh: &Mesh, p: [f64; 3], boxed: bool) -> Option<(usize, f64)> {
+        let holds = |c: usize| {
+            let (a, b) = &self.boxes[c];
+            (0..3).all(|k| a[k] <= p[k] && p[k] <= b[k])
+        };
         let centre = self.index(p);
         let mut best: Option<(usize, f64)> = None;
         for reach in 0..=2usize {
@@ -341,6 +357,9 @@ impl Bins {
                     for z in range(2) {
                         let b = self.flat([x, y, z]);
                         for &c in &self.cells[self.start[b]..self.start[b + 1]] {
+                            if boxed && !holds(c) {
+                                continue;
+                            }
                             let coords = coordinates(mesh, c);
                             let Some(xi) = inverse_map(mesh.cells[c].kind, &coords, p) else {
                                 continue;
