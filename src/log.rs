@@ -136,20 +136,36 @@ impl Visit for Fields {
     }
 }
 
-/// A `tracing` layer that hands every event of Newton's to `sink` as a [`NewtonEvent`].
+/// What receives the companion's events ([`NewtonLayer::with_companion`]).
+type CompanionSink = Box<dyn Fn(NewtonEvent) + Send + Sync>;
+
+/// A `tracing` layer that hands every event of Newton's to `sink` as a [`NewtonEvent`]; those
+/// of the error estimate's companion run ([`COMPANION_SPAN`]) go to the companion's sink, if
+/// one is given, and nowhere else.
 pub struct NewtonLayer<F> {
     sink: F,
+    companion: Option<CompanionSink>,
 }
 
 impl<F: Fn(NewtonEvent) + Send + Sync + 'static> NewtonLayer<F> {
-    /// A layer calling `sink` once per Newton event, on the thread that solves.
+    /// A layer calling `sink` once per Newton event of the run, on the thread that solves.
     pub fn new(sink: F) -> Self {
-        Self { sink }
+        Self {
+            sink,
+            companion: None,
+        }
+    }
+
+    /// The companion run's events to `sink` (the progress bar shows them; the status files
+    /// do not hold them).
+    pub fn with_companion(mut self, sink: impl Fn(NewtonEvent) + Send + Sync + 'static) -> Self {
+        self.companion = Some(Box::new(sink));
+        self
     }
 }
 
 /// The span a run of the error estimate's companion mesh goes in (src/analysis_estimate.rs):
-/// its Newton events are its own, not the run's, and [`NewtonLayer`] leaves them out (they
+/// its Newton events are its own, not the run's, and [`NewtonLayer`] keeps them apart (they
 /// were numbered as the run's levels in `status.sta`, `convergence.cvg` and the `-v` lines).
 pub const COMPANION_SPAN: &str = "companion";
 
@@ -162,16 +178,19 @@ where
         if event.metadata().target() != TRACE_TARGET {
             return;
         }
-        if ctx
+        let companion = ctx
             .event_scope(event)
-            .is_some_and(|mut scope| scope.any(|span| span.name() == COMPANION_SPAN))
-        {
-            return;
-        }
+            .is_some_and(|mut scope| scope.any(|span| span.name() == COMPANION_SPAN));
         let mut fields = Fields::default();
         event.record(&mut fields);
-        if let Some(e) = fields.event() {
-            (self.sink)(e);
+        match (fields.event(), companion) {
+            (Some(e), false) => (self.sink)(e),
+            (Some(e), true) => {
+                if let Some(sink) = &self.companion {
+                    sink(e);
+                }
+            }
+            (None, _) => {}
         }
     }
 }

@@ -152,6 +152,40 @@ impl Monitor {
         }
     }
 
+    /// One of the error estimate's companion's Newton events (its own run, first or beside
+    /// this one): on the bar and, with `-v`, printed, but neither numbered as this run's nor
+    /// written to the status files.
+    pub fn companion(&self, event: &NewtonEvent) {
+        let line = match event {
+            NewtonEvent::Iteration {
+                lambda,
+                iteration,
+                residual,
+                ..
+            } => {
+                self.bar.set_message(format!(
+                    "companion mesh: iteration {iteration} ‖r‖ {residual:.2e} N (λ {lambda:.4})"
+                ));
+                format!("companion mesh: λ {lambda:.6} iteration {iteration}: ‖r‖ {residual:.3e} N")
+            }
+            NewtonEvent::Attempt {
+                lambda,
+                iterations,
+                termination,
+                ..
+            } => {
+                format!("companion mesh: λ {lambda:.6} {termination} after {iterations} iterations")
+            }
+            NewtonEvent::Refused {
+                lambda,
+                termination,
+            } => format!("companion mesh: λ {lambda:.6} {termination}"),
+        };
+        if self.verbosity == Verbosity::Verbose {
+            self.bar.suspend(|| eprintln!("{line}"));
+        }
+    }
+
     /// The `-v` line of a record.
     fn line(&self, r: &Record) -> String {
         let head = format!(
@@ -198,10 +232,15 @@ impl Monitor {
 pub fn layer(
     monitor: &Shared,
 ) -> nonlin3d::log::NewtonLayer<impl Fn(NewtonEvent) + Send + Sync + 'static> {
-    let monitor = monitor.clone();
+    let (run, companion) = (monitor.clone(), monitor.clone());
     nonlin3d::log::NewtonLayer::new(move |e| {
-        if let Ok(mut m) = monitor.lock() {
+        if let Ok(mut m) = run.lock() {
             m.newton(e);
+        }
+    })
+    .with_companion(move |e| {
+        if let Ok(m) = companion.lock() {
+            m.companion(&e);
         }
     })
 }
