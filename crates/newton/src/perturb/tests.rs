@@ -112,7 +112,7 @@ fn a_wrapped_problem_follows_the_protocol_bitwise_like_the_bare_one() {
     let (inner, _, _) = compressed();
     let mut wrapped = Wrapped::new(inner);
     // 0.5 N at the top node of this 1 mm wide half model lifts the sublaminate by ~0.1·h on
-    // the way (tests/newton.rs's postbuckling test).
+    // the way (tests/newton_bifurcation.rs's postbuckling test).
     let dof = 3 * top + 2;
     let perturbation = [(dof, 0.5)];
     let settings = NewtonSettings::default();
