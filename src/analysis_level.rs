@@ -34,12 +34,7 @@ impl Strategy {
     /// The scene's strategy and its stepping ([`settings`]).
     pub(super) fn of(scene: &Scene) -> (Self, Stepping) {
         let (newton, stepping) = settings(scene);
-        let full = (scene.analysis.newton == NewtonName::Modified).then(|| NewtonSettings {
-            solver: newton.solver,
-            force_tolerance: newton.force_tolerance,
-            relative_tolerance: newton.relative_tolerance,
-            ..NewtonSettings::default()
-        });
+        let full = (scene.analysis.newton == NewtonName::Modified).then(|| newton.full_newton());
         (
             Self {
                 scene: newton,

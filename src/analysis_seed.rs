@@ -252,12 +252,7 @@ pub(super) fn solve_seeded(
     let t = Instant::now();
     // From a carried start Newton takes 3–5 iterations: full Newton (a kept tangent, modified
     // Newton's or BFGS's, may fail to converge from it, and the contact loop runs full Newton).
-    let full = NewtonSettings {
-        solver: newton.solver,
-        force_tolerance: newton.force_tolerance,
-        relative_tolerance: newton.relative_tolerance,
-        ..NewtonSettings::default()
-    };
+    let full = newton.full_newton();
     let newton = &full;
     let Some(level) = seeds.level(k).cloned() else {
         return Ok(None);

@@ -103,12 +103,7 @@ impl ContactStage {
         // converge on the 30 mm circle at −0.003, slices = 4).
         let full;
         let newton = if newton.keep_tangent {
-            full = NewtonSettings {
-                solver: newton.solver,
-                force_tolerance: newton.force_tolerance,
-                relative_tolerance: newton.relative_tolerance,
-                ..NewtonSettings::default()
-            };
+            full = newton.full_newton();
             &full
         } else {
             newton

@@ -82,6 +82,7 @@ mod perturb;
 mod predict;
 mod problem;
 mod session;
+mod settings;
 mod solve;
 
 pub use arclength::{
@@ -99,7 +100,8 @@ pub use perturb::{
 pub use predict::{Guess, predicted_increment};
 pub use problem::{NonlinearProblem, StructuralProblem};
 pub use session::PathSolver;
+pub use settings::NewtonSettings;
 pub use solve::{
-    Bifurcation, IncrementReport, IterationRecord, NewtonSettings, REACHABLE, Termination,
-    negative_pivots_at, residual_tolerance, solve_increment, solve_increment_with,
+    Bifurcation, IncrementReport, IterationRecord, REACHABLE, Termination, negative_pivots_at,
+    residual_tolerance, solve_increment, solve_increment_with,
 };

@@ -2,76 +2,8 @@
 //! modified (a tangent kept for several iterations or increments) and quasi-Newton (BFGS
 //! updates of a kept tangent, Matthies & Strang 1979).
 
-use crate::{NewtonError, NonlinearProblem, TangentCache};
+use crate::{NewtonError, NewtonSettings, NonlinearProblem, TangentCache};
 use nonlin3d_solver::{LinearSolver, SolverKind, SymmetricMatrix};
-
-/// Settings of the Newton iteration.
-#[derive(Debug, Clone, PartialEq)]
-pub struct NewtonSettings {
-    /// Iterations per attempt.
-    pub max_iterations: usize,
-    /// Absolute residual tolerance in force units (N), 0 = none (the default): only when the
-    /// user asks for one (the thesis used 1e-4 N, §4.4). Honoured as given: the criterion is
-    /// ‖r‖∞ ≤ max(force_tolerance, relative_tolerance·F); a tolerance below what double
-    /// precision reaches (1e-14·F, [`REACHABLE`]) is refused with [`NewtonError::Setting`].
-    pub force_tolerance: f64,
-    /// Relative residual tolerance ε_r against the force scale F of the state (largest external
-    /// or reaction force, [`NonlinearProblem::evaluate`]): converged when ‖r‖∞ ≤ ε_r·F (CalculiX
-    /// and Abaqus: r_max ≤ R_n·q̄, R_n = 0.005). Default 1e-8, tight enough for energy release
-    /// rates (differences of forces) to ~1e-6 relative. Invariant to the units of force.
-    pub relative_tolerance: f64,
-    /// Backtracking line search on the residual norm.
-    pub line_search: bool,
-    /// Refactor the tangent every this many iterations: 1 = full Newton, more = modified Newton
-    /// (the thesis's §2.1 option). With `keep_tangent` the count runs on across increments.
-    pub refactor_every: usize,
-    /// Keep the factorised tangent from one increment to the next (modified Newton "for several
-    /// increments"): an increment then starts with a residual evaluation only. Only with
-    /// [`solve_increment_with`] and one [`TangentCache`] over the increments (as
-    /// [`follow_path`](crate::follow_path) does).
-    pub keep_tangent: bool,
-    /// With a tangent older than the current iteration: factor a new one when an iteration
-    /// reduced ‖r‖∞ by less than this ratio (‖r_new‖ > ratio·‖r_old‖). 1 or more = never.
-    pub refactor_ratio: f64,
-    /// Quasi-Newton: at most this many BFGS pairs (s = Δu, y = Δr) update the inverse of the
-    /// kept tangent, H = (I − ρ s yᵀ) H (I − ρ y sᵀ) + ρ s sᵀ, ρ = 1/(yᵀs), applied by the
-    /// two-loop recursion around the factorised tangent. 0 = plain (modified) Newton. Pairs
-    /// are dropped when the tangent is refactored; pairs with yᵀs ≤ 1e-10·‖y‖‖s‖ are skipped.
-    pub quasi_newton: usize,
-    /// Linear solver.
-    pub solver: SolverKind,
-    /// Also require the correction ‖Δu‖∞ of the last iteration ≤ displacement_tolerance·‖u‖∞
-    /// (0 = residual only, the default).
-    pub displacement_tolerance: f64,
-    /// CalculiX's I_0: from this iteration on (1-based), an attempt whose residual after the
-    /// last two iterations stayed above the one before them (r_{i−1} > r_{i−2} and r_i > r_{i−2},
-    /// r_i above the tolerance) stops as [`Termination::Diverging`]. 0 = never (the default).
-    pub divergence_check_from: usize,
-    /// CalculiX's I_R: from this iteration on, the iterations an attempt still needs are
-    /// estimated by logarithmic convergence, i + ln(tol/r_i)/ln(r_i/r_{i−1}) (while the
-    /// residual falls); an estimate above `max_iterations` stops it as
-    /// [`Termination::TooSlow`]. 0 = never (the default).
-    pub slow_check_from: usize,
-}
-
-impl Default for NewtonSettings {
-    fn default() -> Self {
-        Self {
-            max_iterations: 25,
-            force_tolerance: 0.0,
-            relative_tolerance: 1e-8,
-            line_search: true,
-            refactor_every: 1,
-            keep_tangent: false,
-            refactor_ratio: 0.5,
-            quasi_newton: 0,
-            solver: SolverKind::FaerLdlt,
-            displacement_tolerance: 0.0,
-            divergence_check_from: 0,
-            slow_check_from: 0,
-        }
-    }
-}
 
 /// One iteration.
 #[derive(Debug, Clone, PartialEq)]
