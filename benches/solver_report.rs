@@ -102,10 +102,25 @@ fn dense_matmul_gflops(threads: usize) -> f64 {
     2.0 * (n as f64).powi(3) / best / 1e9
 }
 
+/// faer LDLᵀ unsplit on `ordering`, its own kernels on `threads` at every size (the rows say
+/// what they measure: the defaults would split from `SPLIT_FROM_DOFS` and keep faer's kernels
+/// on one thread below `KERNEL_THREADS_FROM_DOFS`).
+fn whole(ordering: FaerOrdering, threads: usize) -> FaerSolver {
+    let mut s = FaerSolver::new(FaerMode::Ldlt)
+        .with_ordering(ordering)
+        .with_threads(threads);
+    s.split = FaerSplit::Off;
+    s.kernel_threads_from = 0;
+    s
+}
+
 /// Where a case's matrix comes from.
 enum Source {
     /// `common::clamped_box_stiffness` with these cells and sizes.
     Box([usize; 3], [f64; 3]),
+    /// `common::anchor_box_stiffness`: the box as `factor_anchor.py` builds it for PARDISO and
+    /// CHOLMOD (z = 0 clamped, the clamped DOFs out of the pattern).
+    Anchor([usize; 3], [f64; 3]),
     /// The embedded-delamination plate (steel, symmetry planes x0, y0, z0 fixed), tangent at
     /// zero displacement.
     Plate(EmbeddedParams),
@@ -117,6 +132,7 @@ impl Source {
     fn matrix(&self) -> SymmetricMatrix {
         let (mesh, fixes): (Mesh, &[(&str, usize)]) = match self {
             Self::Box(n, h) => return common::clamped_box_stiffness(*n, *h),
+            Self::Anchor(n, h) => return common::anchor_box_stiffness(*n, *h),
             Self::Plate(p) => (
                 embedded_delamination(p).unwrap_or_else(|e| panic!("{e}")),
                 &[(names::X0, 0), (names::Y0, 1), (names::Z0, 2)],
@@ -286,6 +302,12 @@ fn main() {
         .into_iter()
         .map(|(name, n, h)| (name.to_owned(), Source::Box(n, h)))
         .collect();
+    // The cube as the PARDISO/CHOLMOD anchor script builds it (its fill figures are of this
+    // pattern, not of the x = 0-clamped box above).
+    cases.push((
+        "cube 20×20×8, anchor's matrix (z = 0 clamped, decoupled)".into(),
+        Source::Anchor([20, 20, 8], [2e-3, 2e-3, 1e-3]),
+    ));
     // The scene meshes: the embedded-delamination plate at the thesis's reference size and at
     // the 89 k-DOF size of `benches/newton_report.rs`, and a through-width model 24 cells across.
     cases.push((
@@ -339,11 +361,7 @@ fn main() {
             }
             for threads in [1, 2] {
                 solvers.push((
-                    Box::new(
-                        FaerSolver::new(FaerMode::Ldlt)
-                            .with_ordering(ordering)
-                            .with_threads(threads),
-                    ),
+                    Box::new(whole(ordering, threads)),
                     format!(
                         "faer LDLᵀ {name}, {threads} thread{}",
                         if threads > 1 { "s" } else { "" }
@@ -390,9 +408,7 @@ fn main() {
             }
             for &(ordering, oname) in &split_orderings {
                 for threads in [1, 2] {
-                    let mut s = FaerSolver::new(FaerMode::Ldlt)
-                        .with_ordering(ordering)
-                        .with_threads(threads);
+                    let mut s = whole(ordering, threads);
                     s.precision = precision;
                     s.split = split;
                     faers.push((
@@ -407,7 +423,7 @@ fn main() {
         }
         if has("directions") {
             for &(ordering, oname) in &split_orderings {
-                let mut s = FaerSolver::new(FaerMode::Ldlt).with_ordering(ordering);
+                let mut s = whole(ordering, 1);
                 s.directions = FaerDirections::Single;
                 faers.push((s, format!("faer LDLᵀ {oname}, 1 thread, f32 directions")));
             }
@@ -438,7 +454,7 @@ fn main() {
         if has("auto") {
             autos.push((
                 FaerSolver::new(FaerMode::Ldlt).with_threads(2),
-                "faer LDLᵀ Auto, 2 threads".into(),
+                "faer LDLᵀ Auto, the default (split from 5 k DOF), 2 threads".into(),
             ));
         }
         for _ in 0..rounds {

@@ -9,7 +9,7 @@ mod common;
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use nonlin3d::solver::{
-    FaerMode, FaerOrdering, FaerSolver, LinearSolver, ProfileLdlt, SymmetricMatrix,
+    FaerMode, FaerOrdering, FaerSolver, FaerSplit, LinearSolver, ProfileLdlt, SymmetricMatrix,
 };
 use std::hint::black_box;
 use std::time::Duration;
@@ -27,14 +27,14 @@ fn bench_phases(c: &mut Criterion, name: &str, k: &SymmetricMatrix, profile: boo
         (FaerOrdering::NestedDissection, "nd"),
     ] {
         for threads in [1, 2] {
-            solvers.push((
-                format!("faer_ldlt_{name}_{threads}thread"),
-                Box::new(
-                    FaerSolver::new(FaerMode::Ldlt)
-                        .with_ordering(ordering)
-                        .with_threads(threads),
-                ),
-            ));
+            // Unsplit, faer's kernels on the threads named at every size (the defaults would
+            // split from 5 k DOF and keep the kernels on one thread below 20 k).
+            let mut s = FaerSolver::new(FaerMode::Ldlt)
+                .with_ordering(ordering)
+                .with_threads(threads);
+            s.split = FaerSplit::Off;
+            s.kernel_threads_from = 0;
+            solvers.push((format!("faer_ldlt_{name}_{threads}thread"), Box::new(s)));
         }
     }
     if profile {

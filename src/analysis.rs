@@ -104,17 +104,12 @@ pub fn run(
     progress: &mut dyn FnMut(Progress) -> Result<(), Error>,
 ) -> Result<Results, Error> {
     // `[mesh] accuracy` turned into knobs before anything is sized.
-    let (mut resolved, choice) = estimate::resolve_accuracy(scene)?;
+    let (resolved, choice) = estimate::resolve_accuracy(scene)?;
     // The whole run (tangent and factor too) estimated before meshing.
     crate::budget::check_scene(&resolved, &crate::budget::limit())?;
     let t0 = Instant::now();
     let model = build_model(&resolved)?;
     let asked = resolved.analysis.threads;
-    // All cores (threads = 0) on a small model: one thread factorises (the bits do not
-    // depend on it).
-    if resolved.analysis.threads == 0 && 3 * model.mesh.nodes.len() < ONE_THREAD_BELOW_DOFS {
-        resolved.analysis.threads = 1;
-    }
     let scene = &resolved;
     let t_mesh = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
@@ -230,13 +225,6 @@ fn seeds(
         .inspect_err(|e| tracing::debug!(%e, "no nested iteration: the levels are followed"))
         .ok()
 }
-
-/// Below this many DOF a run asked for all cores (`threads = 0`, `--threads` not given)
-/// factorises on one thread (the error estimate's companion still runs beside it on the other
-/// core): on the 2-vCPU machine two threads took 1.16× the wall time of one at 6 789 DOF and
-/// 1.20× at 9 849 under load 10, and at 18 393 DOF (thesis model 6) at load 2.5 1.27× the wall
-/// time and 1.28× the CPU of one (docs/PERFORMANCE.md, "The scene's time"); they pay at 45 k.
-pub const ONE_THREAD_BELOW_DOFS: usize = 20_000;
 
 /// What the sweep over the levels gives [`run`].
 struct Sweep {

@@ -31,7 +31,7 @@ use nonlin3d_element::{IntegrationRule, Kinematics};
 use nonlin3d_laminate::ShearCoupling;
 use nonlin3d_mesh::InpModel;
 use nonlin3d_newton::{IncrementReport, NewtonSettings, StructuralProblem};
-use nonlin3d_solver::{MixedStats, SolverKind};
+use nonlin3d_solver::MixedStats;
 use serde::Serialize;
 use std::collections::BTreeMap;
 
@@ -356,7 +356,6 @@ pub fn solve_deck_with(
         rule,
     } = check::prepare(model, options)?;
     let n = 3 * mesh.nodes.len();
-    let options = &one_thread_below(options, n);
     let mut contact = contact::DeckContact::new(model, &mesh)?;
     let mut u = vec![0.0; n];
     let mut history = loads::History::new(model);
@@ -479,61 +478,7 @@ pub fn solve_deck_with(
     Ok(results)
 }
 
-/// `options` with the factorisation on one thread when the deck has fewer than
-/// [`ONE_THREAD_BELOW_DOFS`](crate::analysis::ONE_THREAD_BELOW_DOFS) DOFs, as `run` does:
-/// on the clamped-plate deck of 9 117 DOF two threads took 1.14–1.18× the wall time of one
-/// and 1.2× the CPU (docs/PERFORMANCE.md, "Clamped-plate decks against CalculiX"). The bits
-/// do not depend on the thread count, so only the time changes; `--threads` stays the most a
-/// solve uses (the assembly keeps the pool's threads).
-fn one_thread_below(options: &StepOptions, dofs: usize) -> StepOptions {
-    let mut options = options.clone();
-    if dofs < crate::analysis::ONE_THREAD_BELOW_DOFS {
-        options.newton.solver = match options.newton.solver {
-            // The kinds that take the pool's threads; an explicit count stays.
-            SolverKind::FaerLdlt => SolverKind::FaerLdltThreads(1),
-            SolverKind::FaerLdltMixed(0) => SolverKind::FaerLdltMixed(1),
-            other => other,
-        };
-    }
-    options
-}
-
 /// Displacements by node.
 fn nodal(u: &[f64]) -> Vec<[f64; 3]> {
     u.chunks(3).map(|c| [c[0], c[1], c[2]]).collect()
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// Below the threshold the kinds that follow the pool factorise on one thread; at it, and
-    /// for an explicit count or another solver, nothing changes.
-    #[test]
-    fn small_decks_factorise_on_one_thread() {
-        let with = |solver| StepOptions {
-            newton: NewtonSettings {
-                solver,
-                ..NewtonSettings::default()
-            },
-            ..StepOptions::default()
-        };
-        let below = crate::analysis::ONE_THREAD_BELOW_DOFS - 1;
-        let at = crate::analysis::ONE_THREAD_BELOW_DOFS;
-        let kind = |s, n| one_thread_below(&with(s), n).newton.solver;
-        assert_eq!(
-            kind(SolverKind::FaerLdlt, below),
-            SolverKind::FaerLdltThreads(1)
-        );
-        assert_eq!(
-            kind(SolverKind::FaerLdltMixed(0), below),
-            SolverKind::FaerLdltMixed(1)
-        );
-        assert_eq!(kind(SolverKind::FaerLdlt, at), SolverKind::FaerLdlt);
-        assert_eq!(
-            kind(SolverKind::FaerLdltThreads(2), below),
-            SolverKind::FaerLdltThreads(2)
-        );
-        assert_eq!(kind(SolverKind::Profile, below), SolverKind::Profile);
-    }
 }

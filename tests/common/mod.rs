@@ -39,26 +39,59 @@ impl BoxMesh {
         rule: IntegrationRule,
         fixed: &[usize],
     ) -> SymmetricMatrix {
+        self.stiffness_with(material, rule, fixed, false)
+    }
+
+    /// [`Self::stiffness`], with the DOFs in `fixed` also taken out of the pattern when
+    /// `decouple` (each a lone unit diagonal, as a matrix assembled and then masked by a
+    /// sparse product that drops zeros has them).
+    pub fn stiffness_with(
+        &self,
+        material: &Stiffness,
+        rule: IntegrationRule,
+        fixed: &[usize],
+        decouple: bool,
+    ) -> SymmetricMatrix {
         let table = ShapeTable::new(self.kind, rule).unwrap();
-        let lists = self.cell_dofs();
-        let pattern = Arc::new(SymmetricPattern::from_dof_lists(self.dofs(), &lists).unwrap());
-        let mut a = SymmetricMatrix::zeros(pattern);
         let mut is_fixed = vec![false; self.dofs()];
         for &d in fixed {
             is_fixed[d] = true;
         }
+        let lists = self.cell_dofs();
+        let pattern = if decouple {
+            let mut kept: Vec<Vec<usize>> = lists
+                .iter()
+                .map(|l| l.iter().copied().filter(|&d| !is_fixed[d]).collect())
+                .collect();
+            kept.extend(fixed.iter().map(|&d| vec![d]));
+            SymmetricPattern::from_dof_lists(self.dofs(), &kept)
+        } else {
+            SymmetricPattern::from_dof_lists(self.dofs(), &lists)
+        };
+        let mut a = SymmetricMatrix::zeros(Arc::new(pattern.unwrap()));
         for (cell, dofs) in self.cells.iter().zip(&lists) {
             let x: Vec<[f64; 3]> = cell.iter().map(|&n| self.coords[n]).collect();
             let mut k = linear_stiffness(&table, &x, material).unwrap();
             let ne = dofs.len();
-            for a_ in 0..ne {
-                for b in 0..ne {
-                    if is_fixed[dofs[a_]] || is_fixed[dofs[b]] {
-                        k[a_ * ne + b] = 0.0;
+            for (r, &i) in dofs.iter().enumerate() {
+                for (c, &j) in dofs.iter().enumerate() {
+                    if is_fixed[i] || is_fixed[j] {
+                        k[r * ne + c] = 0.0;
                     }
                 }
             }
-            a.scatter_add(dofs, &k).unwrap();
+            if decouple {
+                // Only the free DOFs are in the pattern: their entries one by one.
+                for (r, &i) in dofs.iter().enumerate() {
+                    for (c, &j) in dofs.iter().enumerate() {
+                        if i >= j && !is_fixed[i] && !is_fixed[j] {
+                            a.add(i, j, k[r * ne + c]).unwrap();
+                        }
+                    }
+                }
+            } else {
+                a.scatter_add(dofs, &k).unwrap();
+            }
         }
         for &d in fixed {
             a.add(d, d, 1.0).unwrap();
@@ -83,6 +116,21 @@ pub fn clamped_box_stiffness(n: [usize; 3], h: [f64; 3]) -> SymmetricMatrix {
         .flat_map(|&v| [3 * v, 3 * v + 1, 3 * v + 2])
         .collect();
     mesh.stiffness(&material, IntegrationRule::Gauss2, &fixed)
+}
+
+/// The cube of `../shared/tools/factor_anchor.py`'s matrix, as its PARDISO and CHOLMOD see it:
+/// the same Hex20 box clamped on z = 0 (its largest face) instead of x = 0, the clamped DOFs
+/// lone unit rows (the script masks with a sparse product, which drops the zeros). Values
+/// differ (the script's steel), the pattern, and so every ordering's fill, is the same.
+pub fn anchor_box_stiffness(n: [usize; 3], h: [f64; 3]) -> SymmetricMatrix {
+    let material = nonlin3d::laminate::materials::steel().stiffness().unwrap();
+    let mesh = BoxMesh::new(ElementKind::Hex20, n, h);
+    let fixed: Vec<usize> = mesh
+        .nodes_at_zero(2)
+        .iter()
+        .flat_map(|&v| [3 * v, 3 * v + 1, 3 * v + 2])
+        .collect();
+    mesh.stiffness_with(&material, IntegrationRule::Gauss2, &fixed, true)
 }
 
 /// A structural problem on `mesh` (one material for every cell, no ply rotation), nonlinear

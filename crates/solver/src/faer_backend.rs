@@ -28,7 +28,10 @@ mod pivots;
 mod split;
 pub use directions::FaerDirections;
 pub use mixed::{FaerPrecision, MixedStats};
-pub use options::{AUTO_WITHOUT_AMD_DOFS, FaerMode, FaerOrdering, FaerSplit, FaerStructure};
+pub use options::{
+    AUTO_WITHOUT_AMD_DOFS, FaerMode, FaerOrdering, FaerSplit, FaerStructure,
+    KERNEL_THREADS_FROM_DOFS, SPLIT_FROM_DOFS,
+};
 
 /// faer's sparse Cholesky behind [`LinearSolver`].
 pub struct FaerSolver {
@@ -49,6 +52,10 @@ pub struct FaerSolver {
     /// (128, recursion at 64) does not depend on it either. Tested on 1, 2 and 3 threads
     /// (tests/threads.rs); re-check it when faer is upgraded.
     pub par: Par,
+    /// faer's own kernels take `par`'s threads only for matrices of at least this many DOFs
+    /// (one thread below; [`KERNEL_THREADS_FROM_DOFS`] by default, 0: always `par`). The split's
+    /// two halves run side by side whenever `par` has two threads or more.
+    pub kernel_threads_from: usize,
     /// Bytes the factor, its workspace and the matrix may take; `None`: the process-wide
     /// budget ([`crate::set_memory_budget`]), if any.
     pub memory_budget: Option<MemoryBudget>,
@@ -99,9 +106,10 @@ impl FaerSolver {
             ordering: FaerOrdering::default(),
             tolerance: crate::profile::DEFAULT_PIVOT_TOLERANCE,
             par: Par::Seq,
+            kernel_threads_from: KERNEL_THREADS_FROM_DOFS,
             memory_budget: None,
             precision: FaerPrecision::Double,
-            split: FaerSplit::Off,
+            split: FaerSplit::Auto,
             directions: FaerDirections::Factor,
             directions_l32: Vec::new(),
             split_state: None,
@@ -126,6 +134,16 @@ impl FaerSolver {
             Par::rayon(threads)
         };
         self
+    }
+
+    /// The threads faer's own kernels take on an `n`-DOF matrix: `par`'s from
+    /// [`Self::kernel_threads_from`] DOFs on, one below.
+    pub fn kernel_par(&self, n: usize) -> Par {
+        if n < self.kernel_threads_from {
+            Par::Seq
+        } else {
+            self.par
+        }
     }
 
     /// The same solver with a forced factor structure.
@@ -240,7 +258,13 @@ impl LinearSolver for FaerSolver {
         self.split_fallback = None;
         // The orders the split may need: our nested dissection's with its top sides, METIS's
         // alone (its top sides are found from the order after the choice, `split/top.rs`).
-        let wants_split = self.split == FaerSplit::Halves && self.mode == FaerMode::Ldlt;
+        let wants_split = self.mode == FaerMode::Ldlt
+            && match self.split {
+                FaerSplit::Off => false,
+                FaerSplit::Halves => true,
+                FaerSplit::Auto => n >= SPLIT_FROM_DOFS,
+            };
+        let kernel = self.kernel_par(n);
         let top = std::cell::Cell::new(None);
         let metis_order = std::cell::Cell::new(None);
         let symbolic_for = |ordering: SymmetricOrdering<'_, usize>| {
@@ -274,9 +298,9 @@ impl LinearSolver for FaerSolver {
                 choice::auto_choice(&symbolic_for, &nested, &metis, n < AUTO_WITHOUT_AMD_DOFS, n)?
             }
         };
-        let req = permuted::kernel_scratch::<f64>(&symbolic, self.mode == FaerMode::Ldlt, self.par)
-            .or(symbolic.solve_in_place_scratch::<f64>(RHS_BLOCK, self.par))
-            .or(mixed::scratch(&symbolic, self.par));
+        let req = permuted::kernel_scratch::<f64>(&symbolic, self.mode == FaerMode::Ldlt, kernel)
+            .or(symbolic.solve_in_place_scratch::<f64>(RHS_BLOCK, kernel))
+            .or(mixed::scratch(&symbolic, kernel));
         let len = symbolic.len_val();
         let f64s = |k: usize| k.saturating_mul(std::mem::size_of::<f64>());
         let mixed = self.uses_mixed();
@@ -390,6 +414,7 @@ impl FaerSolver {
             let len = self.symbolic.as_ref().map_or(0, |s| s.len_val());
             self.l_values = try_zeros(len, "the faer factor")?;
         }
+        let par = self.kernel_par(a.n());
         let (Some(pattern), Some(symbolic), Some(buffer)) =
             (&self.pattern, &self.symbolic, &mut self.buffer)
         else {
@@ -406,7 +431,7 @@ impl FaerSolver {
         let simplicial = matches!(symbolic.raw(), SymbolicCholeskyRaw::Simplicial(_));
         match self.mode {
             FaerMode::Ldlt => permuted
-                .ldlt_f64(symbolic, a.values(), &mut self.l_values, self.par, stack)
+                .ldlt_f64(symbolic, a.values(), &mut self.l_values, par, stack)
                 .map_err(|e| match e {
                     faer::linalg::cholesky::ldlt::factor::LdltError::ZeroPivot { index } => {
                         let index = pivot_position(simplicial, index);
@@ -420,7 +445,7 @@ impl FaerSolver {
                     }
                 })?,
             FaerMode::Llt => permuted
-                .llt_f64(symbolic, a.values(), &mut self.l_values, self.par, stack)
+                .llt_f64(symbolic, a.values(), &mut self.l_values, par, stack)
                 .map_err(|e| match e {
                     faer::linalg::cholesky::llt::factor::LltError::NonPositivePivot { index } => {
                         let index = pivot_position(simplicial, index);

@@ -19,7 +19,8 @@ mod common;
 
 use common::box_matrix;
 use nonlin3d_solver::{
-    FaerMode, FaerOrdering, FaerPrecision, FaerSolver, FaerSplit, LinearSolver, SymmetricMatrix,
+    FaerMode, FaerOrdering, FaerPrecision, FaerSolver, FaerSplit, LinearSolver, SPLIT_FROM_DOFS,
+    SymmetricMatrix,
 };
 use nonlin3d_testkit::Lcg;
 
@@ -141,6 +142,41 @@ fn split_matches_the_unsplit_factor() {
         assert!(
             relative <= 10.0 * kappa * (omega + omega_split),
             "{case}: ‖x − x̂‖/‖x‖ = {relative:.1e}, κ {kappa:.1e}, ω {omega:.1e} + {omega_split:.1e}"
+        );
+    }
+}
+
+/// The default, `FaerSplit::Auto`: a box below `SPLIT_FROM_DOFS` is factored whole; one at or
+/// above it is split, with the same bits as `Halves` on one thread and on two (the split is
+/// decided by the size, never by the thread count).
+#[test]
+fn auto_splits_from_its_threshold_whatever_the_threads() {
+    assert_eq!(FaerSolver::new(FaerMode::Ldlt).split, FaerSplit::Auto);
+    let small = box_matrix([6, 6, 4], 0.0);
+    assert!(small.n() < SPLIT_FROM_DOFS);
+    let mut s = FaerSolver::new(FaerMode::Ldlt);
+    s.analyze(small.pattern()).unwrap();
+    assert_eq!(s.split_sizes(), None);
+    let large = box_matrix([8, 8, 5], 0.0);
+    assert!(large.n() >= SPLIT_FROM_DOFS, "{} DOF", large.n());
+    let mut rng = Lcg::new(11);
+    let b: Vec<f64> = (0..large.n()).map(|_| rng.uniform(-1.0, 1.0)).collect();
+    let solve = |split: FaerSplit, threads: usize| {
+        let mut s = FaerSolver::new(FaerMode::Ldlt).with_threads(threads);
+        s.split = split;
+        s.analyze(large.pattern()).unwrap();
+        s.factorize(&large).unwrap();
+        let mut x = b.clone();
+        s.solve_in_place(&mut x, 1).unwrap();
+        (s.split_sizes(), x)
+    };
+    let (sizes, x) = solve(FaerSplit::Auto, 1);
+    assert!(sizes.is_some(), "{} DOF not split", large.n());
+    for (split, threads) in [(FaerSplit::Auto, 2), (FaerSplit::Halves, 1)] {
+        let (_, y) = solve(split, threads);
+        assert!(
+            x.iter().zip(&y).all(|(p, q)| p.to_bits() == q.to_bits()),
+            "{split:?} on {threads} threads"
         );
     }
 }

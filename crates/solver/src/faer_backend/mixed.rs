@@ -217,8 +217,9 @@ impl FaerSolver {
                 FaerPrecision::Double => 0.0,
             },
         };
+        let kernel = self.kernel_par(a.n());
         let done = match self.split_state.as_mut() {
-            Some(split) => split.factorize::<f32>(a, self.par, rule, self.flops)?,
+            Some(split) => split.factorize::<f32>(a, self.par, kernel, rule, self.flops)?,
             None => self.factorize_single_unsplit(a, rule)?,
         };
         let f = match done {
@@ -250,6 +251,7 @@ impl FaerSolver {
         if self.mixed.l32.len() != self.mixed.len {
             self.mixed.l32 = try_zeros_f32(self.mixed.len)?;
         }
+        let kernel = self.kernel_par(a.n());
         let (Some(pattern), Some(symbolic), Some(buffer)) =
             (&self.pattern, &self.symbolic, &mut self.buffer)
         else {
@@ -266,7 +268,7 @@ impl FaerSolver {
                 symbolic,
                 a.values(),
                 &mut self.mixed.l32,
-                self.par,
+                kernel,
                 MemStack::new(buffer),
             )
             .is_err()

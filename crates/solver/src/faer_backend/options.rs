@@ -51,10 +51,13 @@ pub const AUTO_WITHOUT_AMD_DOFS: usize = 200_000;
 
 /// Whether [`super::FaerSolver`]'s LDLᵀ splits the matrix at the nested-dissection order's top
 /// separator and factors the two halves on two threads (tree-level parallelism, `split.rs`).
+///
+/// The split is a property of the matrix, not of the thread count: a split factor gives the
+/// same bits on one thread (the halves one after the other) as on two, so `Auto` decides by
+/// size alone and the results stay bitwise identical for any `--threads`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum FaerSplit {
-    /// One faer factorisation (the default).
-    #[default]
+    /// One faer factorisation.
     Off,
     /// Split whenever the chosen ordering is nested dissection (ours or METIS's) and its top
     /// level was dissected into halves of at least a fifth of the interior each (LDLᵀ only:
@@ -63,4 +66,23 @@ pub enum FaerSplit {
     /// [`FaerPrecision::Mixed`](super::FaerPrecision::Mixed) the halves are f32, the split solve is refined in f64, and
     /// every fallback of mixed precision goes to the f64 split (then to the unsplit factor).
     Halves,
+    /// `Halves` from [`SPLIT_FROM_DOFS`] DOFs on, `Off` below (the default). Measured on two
+    /// cores (docs/PERFORMANCE.md, "The split by default"): the factorisation's wall time
+    /// 0.56× the unsplit one's at 10.7 k DOF, whole runs 0.71–0.92× at 6.8–24 k DOF (scenes
+    /// and decks); on one thread the split costs its separator again (each half factors it,
+    /// S′ᵢ is rebuilt and S factored), +4–10 % of a run's CPU time.
+    #[default]
+    Auto,
 }
+
+/// From this many DOFs on, [`FaerSplit::Auto`] splits. Below it the runs measured gained
+/// nothing from the split (3.4 k DOF: the same wall time on two cores) and the companion
+/// meshes of the error estimate (1.8–6.4 k DOF) run beside a main model on the other core.
+pub const SPLIT_FROM_DOFS: usize = 5_000;
+
+/// Below this many DOFs faer's own dense kernels run on one thread whatever
+/// [`super::FaerSolver::par`] says (the split's halves still take two): two threads inside
+/// faer's kernels cost 1.16× the wall time of one at 6 789 DOF, 1.27× at 18 393 DOF and
+/// 1.8× at 10 737 DOF (docs/PERFORMANCE.md, "The scene's time" and "The split by default");
+/// they pay from about 45 k DOF on. [`super::FaerSolver::kernel_threads_from`] overrides it.
+pub const KERNEL_THREADS_FROM_DOFS: usize = 20_000;

@@ -263,13 +263,14 @@ impl Split {
     }
 
     /// Factors `a`: the halves in precision `T` on `par`'s threads (one each), S in f64 on
-    /// `par`, pivots judged by `rule`. `Ok(Err(reason))` when a half's trailing block (which
+    /// `kernel`'s, pivots judged by `rule`. `Ok(Err(reason))` when a half's trailing block (which
     /// the unsplit factor never forms) meets a pivot too small to trust, or an f32 pivot is in
     /// doubt: the caller takes another path.
     pub(super) fn factorize<T: Real>(
         &mut self,
         a: &SymmetricMatrix,
         par: Par,
+        kernel: Par,
         rule: PivotRule,
         flops: f64,
     ) -> Attempt<Factorization> {
@@ -303,7 +304,7 @@ impl Split {
         let info = faer::linalg::cholesky::ldlt::factor::cholesky_in_place(
             self.s.as_mut(),
             LdltRegularization::default(),
-            par,
+            kernel,
             MemStack::new(&mut self.s_buffer),
             Default::default(),
         );
@@ -407,13 +408,14 @@ impl super::FaerSolver {
         &mut self,
         a: &SymmetricMatrix,
     ) -> Result<Factorization, SolverError> {
+        let kernel = self.kernel_par(a.n());
         let Some(split) = self.split_state.as_mut() else {
             return self.factorize_double(a);
         };
         let rule = PivotRule::Double {
             tolerance: self.tolerance,
         };
-        match split.factorize::<f64>(a, self.par, rule, self.flops)? {
+        match split.factorize::<f64>(a, self.par, kernel, rule, self.flops)? {
             Ok(f) => {
                 // The unsplit factor, if a fallback made one, is not needed now.
                 self.l_values = Vec::new();

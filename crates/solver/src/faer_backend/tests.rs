@@ -199,3 +199,17 @@ fn the_gather_map_gives_faers_own_factor_bit_for_bit() {
     // 2 shifts × 2 structures × 3 orders × 2 thread counts × (2 + 1 modes... ) × 2 matrices.
     assert_eq!(cases, 2 * 3 * 2 * 2 * (2 + 1));
 }
+
+/// faer's own kernels take the solver's threads only from `kernel_threads_from` DOFs on
+/// (0: always); below, one thread.
+#[test]
+fn kernel_threads_start_at_their_threshold() {
+    let mut s = FaerSolver::new(FaerMode::Ldlt).with_threads(2);
+    assert_eq!(s.kernel_threads_from, KERNEL_THREADS_FROM_DOFS);
+    assert_eq!(s.kernel_par(KERNEL_THREADS_FROM_DOFS - 1).degree(), 1);
+    assert_eq!(s.kernel_par(KERNEL_THREADS_FROM_DOFS).degree(), 2);
+    s.kernel_threads_from = 0;
+    assert_eq!(s.kernel_par(10).degree(), 2);
+    let one = FaerSolver::new(FaerMode::Ldlt);
+    assert_eq!(one.kernel_par(KERNEL_THREADS_FROM_DOFS).degree(), 1);
+}
