@@ -106,6 +106,10 @@ pub struct ContactLevel {
     pub first_seconds: f64,
     /// The passes that changed the set, in order.
     pub passes: Vec<PassReport>,
+    /// Newton iterations of the first solve made by the passes' loop before any pass: a level
+    /// settled from an iterate ([`Contact::settle_iterate`]) whose set stayed there and was
+    /// converged first (0 otherwise).
+    pub first_iterations: usize,
     /// Contact results at the converged state.
     pub state: ContactState,
 }
@@ -118,6 +122,7 @@ impl ContactLevel {
             .iter()
             .map(|a| a.iterations.len())
             .sum::<usize>()
+            + self.first_iterations
             + self.passes.iter().map(|p| p.iterations).sum::<usize>()
     }
 
@@ -129,6 +134,7 @@ impl ContactLevel {
         self.first.perturbed |= later.first.perturbed;
         self.first.negative_pivots = later.first.negative_pivots;
         self.first_seconds += later.first_seconds;
+        self.first_iterations += later.first_iterations;
         self.passes.extend(later.passes);
         self.lambda = later.lambda;
         self.state = later.state;
@@ -472,13 +478,14 @@ impl Contact {
                 stepping: settings.stepping,
                 perturbation: again,
             }),
+            None,
         )
     }
 }
 
 mod holding;
 mod passes;
-pub use passes::Resumed;
+pub use passes::{Iterate, Resumed};
 
 #[cfg(test)]
 mod tests;

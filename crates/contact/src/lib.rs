@@ -68,7 +68,8 @@ mod tie;
 
 pub use active::{Change, Tolerances, update};
 pub use driver::{
-    Contact, ContactLevel, ContactSettings, ContactState, LevelSettings, Mode, PassReport, Resumed,
+    Contact, ContactLevel, ContactSettings, ContactState, Iterate, LevelSettings, Mode, PassReport,
+    Resumed,
 };
 pub use error::ContactError;
 pub use pairs::{CrackFaces, Pair};

@@ -96,6 +96,20 @@ pub struct Resumed<'a> {
     pub first_seconds: f64,
 }
 
+/// A state that is not yet converged: `u` after `steps` Newton iterations at the level's load
+/// with the current set, at ‖r‖∞ = `residual`; `tolerance` is the force tolerance of the
+/// contact state read there ([`ContactState::force_tolerance`]). See
+/// [`Contact::settle_iterate`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Iterate {
+    /// Newton iterations made at the set (they count against Newton's limit).
+    pub steps: usize,
+    /// ‖r‖∞ at `u`, N.
+    pub residual: f64,
+    /// The force tolerance of the contact state at `u`, N.
+    pub tolerance: f64,
+}
+
 impl Contact {
     /// The passes of a level whose first solve was made elsewhere, then the rest of the level:
     /// `u` is a converged state at `first.to` with the current set (typically a solve without
@@ -133,6 +147,7 @@ impl Contact {
                 stepping: settings.stepping,
                 perturbation: again,
             }),
+            None,
         )?;
         if end == first.to {
             return Ok(level);
@@ -168,11 +183,56 @@ impl Contact {
             perturbed: false,
             negative_pivots: None,
         };
-        self.passes(problem, u, lambda, (first, 0.0), newton, session, None)
+        self.passes(
+            problem,
+            u,
+            lambda,
+            (first, 0.0),
+            newton,
+            session,
+            None,
+            None,
+        )
+    }
+
+    /// [`settle`](Self::settle) from an iterate of the level's first solve instead of its
+    /// converged state (a start carried from another mesh: its first Newton iterations at the
+    /// carried set leave it near equilibrium, where the set is read as at the iterates of an
+    /// inexact re-solve, [`ContactSettings::inexact_passes`](super::ContactSettings)): the
+    /// set changes one iteration earlier than after converging it first. The iterate is read
+    /// only near equilibrium (‖r‖∞ ≤ `NEAR` × `iterate.tolerance`); otherwise Newton goes on
+    /// at the set, as after any inexact change. Ends as `settle` does, on a converged state
+    /// whose set stays.
+    pub fn settle_iterate(
+        &mut self,
+        problem: &mut StructuralProblem,
+        u: &mut Vec<f64>,
+        lambda: f64,
+        newton: &NewtonSettings,
+        session: &mut PathSolver,
+        iterate: Iterate,
+    ) -> Result<ContactLevel, ContactError> {
+        let first = LevelReport {
+            attempts: Vec::new(),
+            perturbed: false,
+            negative_pivots: None,
+        };
+        self.passes(
+            problem,
+            u,
+            lambda,
+            (first, 0.0),
+            newton,
+            session,
+            None,
+            Some(iterate),
+        )
     }
 
     /// The loop of passes after the first solve (module docs); `fallback`: how to follow the
-    /// level again when a re-solve fails (None: the failure is [`ContactError::Resolve`]).
+    /// level again when a re-solve fails (None: the failure is [`ContactError::Resolve`]);
+    /// `pending`: `u` is an iterate of the first solve, not its converged state
+    /// ([`settle_iterate`](Self::settle_iterate)).
     ///
     /// With inexact updates ([`ContactSettings::inexact_passes`](super::ContactSettings)) the
     /// re-solve after a change of the set goes one Newton iteration at a time, and the set is
@@ -198,16 +258,28 @@ impl Contact {
         newton: &NewtonSettings,
         session: &mut PathSolver,
         fallback: Option<Fallback>,
+        pending: Option<Iterate>,
     ) -> Result<ContactLevel, ContactError> {
         let mut passes: Vec<PassReport> = Vec::new();
-        // The sets of the converged states read so far.
-        let mut seen = vec![self.active()];
+        // The sets of the converged states read so far (none yet from an iterate).
+        let mut seen = match pending {
+            Some(_) => Vec::new(),
+            None => vec![self.active()],
+        };
         // The overlap at each pass of the current run of refresh passes.
         let mut refreshes: Vec<f64> = Vec::new();
         let mut inexact = Inexact {
             left: self.settings.inexact_passes,
             ..Inexact::default()
         };
+        let mut first_iterations = 0;
+        if let Some(it) = pending {
+            inexact.pending = true;
+            inexact.tried = vec![self.active()];
+            inexact.steps = it.steps;
+            inexact.residual = it.residual;
+            inexact.tolerance = it.tolerance;
+        }
         let mut solve = Resolve {
             to,
             spent: 0,
@@ -266,10 +338,14 @@ impl Contact {
                 let Some((iterations, redone)) = more else {
                     return Err(solve.failed(passes.len(), &Change::default()));
                 };
-                if let Some(last) = passes.last_mut() {
-                    last.iterations += iterations;
-                    last.redone |= redone;
-                    last.seconds += t.elapsed().as_secs_f64();
+                match passes.last_mut() {
+                    Some(last) => {
+                        last.iterations += iterations;
+                        last.redone |= redone;
+                        last.seconds += t.elapsed().as_secs_f64();
+                    }
+                    // Still the first solve (a start from an iterate).
+                    None => first_iterations += iterations,
                 }
                 if !inexact.pending {
                     let set = self.active();
@@ -293,6 +369,7 @@ impl Contact {
                     first,
                     first_seconds,
                     passes,
+                    first_iterations,
                     state,
                 });
             }
