@@ -186,7 +186,10 @@ impl Split {
             dofs.extend_from_slice(&sep);
             Half::new(pattern, dofs, interior, range.start)
         };
-        let halves = [half(0..n0)?, half(n0..n0 + n1)?];
+        // The two halves' patterns and symbolic factors are independent: side by side when
+        // the pool has a free thread (the same structures either way).
+        let (h0, h1) = rayon::join(|| half(0..n0), || half(n0..n0 + n1));
+        let halves = [h0?, h1?];
         let mut local = vec![usize::MAX; n];
         for (k, &d) in sep.iter().enumerate() {
             local[d] = k;
