@@ -284,6 +284,50 @@ mod tests {
         }
     }
 
+    /// From `SPLIT_FROM_DOFS` on the default factor is the split one, larger than the unsplit
+    /// factor by the separator's blocks: the budget counts that factor (and the split's
+    /// per-factorisation copies), so a budget of exactly the bytes named lets the analysis and
+    /// a factorisation through, one byte less is refused.
+    #[test]
+    fn a_split_factor_is_budgeted_as_made() {
+        let a = grid(17);
+        assert!(a.n() >= crate::SPLIT_FROM_DOFS);
+        let mut whole = FaerSolver::new(FaerMode::Ldlt);
+        whole.split = crate::FaerSplit::Off;
+        let unsplit = whole.analyze(a.pattern()).unwrap().factor_entries;
+        let mut probe = FaerSolver::new(FaerMode::Ldlt);
+        probe.memory_budget = Some(MemoryBudget::new(1, "a 1-byte test budget"));
+        let Err(SolverError::OverBudget {
+            entries,
+            factor_bytes,
+            workspace_bytes,
+            matrix_bytes,
+            ..
+        }) = probe.analyze(a.pattern())
+        else {
+            panic!("not refused");
+        };
+        let mut free = FaerSolver::new(FaerMode::Ldlt);
+        let made = free.analyze(a.pattern()).unwrap().factor_entries;
+        assert!(free.split_sizes().is_some(), "{} DOF not split", a.n());
+        assert_eq!(entries, made);
+        assert!(
+            made > unsplit,
+            "split {made} against unsplit {unsplit} entries"
+        );
+        let total = factor_bytes + workspace_bytes + matrix_bytes;
+        let mut s = FaerSolver::new(FaerMode::Ldlt);
+        s.memory_budget = Some(MemoryBudget::new(total - 1, "test"));
+        assert!(matches!(
+            s.analyze(a.pattern()),
+            Err(SolverError::OverBudget { .. })
+        ));
+        s.memory_budget = Some(MemoryBudget::new(total, "test"));
+        s.analyze(a.pattern()).unwrap();
+        s.factorize(&a).unwrap();
+        assert!(s.split_sizes().is_some());
+    }
+
     thread_local! {
         static ON: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
     }

@@ -301,45 +301,6 @@ impl LinearSolver for FaerSolver {
         let req = permuted::kernel_scratch::<f64>(&symbolic, self.mode == FaerMode::Ldlt, kernel)
             .or(symbolic.solve_in_place_scratch::<f64>(RHS_BLOCK, kernel))
             .or(mixed::scratch(&symbolic, kernel));
-        let len = symbolic.len_val();
-        let f64s = |k: usize| k.saturating_mul(std::mem::size_of::<f64>());
-        let mixed = self.uses_mixed();
-        Need {
-            what: match self.mode {
-                FaerMode::Ldlt => "faer LDLᵀ factor",
-                FaerMode::Llt => "faer LLᵀ factor",
-            },
-            entries: len,
-            // An f32 factor takes half; an f64 one is made only when refinement falls back,
-            // after the f32 one is freed.
-            // The f32 copy for directions (`FaerDirections::Single`) takes half more.
-            factor_bytes: if mixed {
-                f64s(len) / 2
-            } else if self.directions == FaerDirections::Single && self.mode == FaerMode::Ldlt {
-                f64s(len) + f64s(len) / 2
-            } else {
-                f64s(len)
-            },
-            // The scratch, the permuted matrix (pattern, gather map and f64 values, kept
-            // between factorisations) and the diagonal each factorisation makes, and the
-            // dense kernels' per-thread packing buffer (64 MiB, allocated by faer's gemm on
-            // first use, outside our budget's reach: an address-space limit it does not fit
-            // aborts the process).
-            workspace_bytes: req
-                .size_bytes()
-                .saturating_add(permuted::bytes(n, pattern.nnz_lower()))
-                .saturating_add(f64s(2 * n))
-                .saturating_add(GEMM_BUFFER_BYTES.saturating_mul(self.par.degree().max(1))),
-            // Mixed: plus the f64 copy of the matrix kept for residuals and its f32 twin.
-            matrix_bytes: f64s(pattern.nnz_lower()).saturating_mul(if mixed { 5 } else { 2 }) / 2,
-        }
-        .check(current_budget(self.memory_budget.as_ref()))?;
-        let buffer = MemBuffer::try_new(req).map_err(|_| SolverError::OutOfMemory {
-            what: "faer's workspace",
-            bytes: req.size_bytes(),
-        })?;
-        let flops = factor_flops(&symbolic);
-        let lower_nonzeros = column_counts(&symbolic).iter().sum();
         let sides = match chosen {
             FaerOrdering::NestedDissection => top.take(),
             FaerOrdering::Metis => metis_order
@@ -351,6 +312,57 @@ impl LinearSolver for FaerSolver {
             // The unsplit factor is allocated only if a fallback needs it.
             self.split_state = split::Split::analyze(pattern, &forward, sides)?;
         }
+        let len = symbolic.len_val();
+        // The factor the first factorisation makes: the split's halves and S (their
+        // separator blocks make it larger than the unsplit one: +15 % on the 45 k cube), or
+        // the unsplit factor.
+        let entries = self
+            .split_state
+            .as_ref()
+            .map_or(len, |s| s.factor_entries());
+        let f64s = |k: usize| k.saturating_mul(std::mem::size_of::<f64>());
+        let mixed = self.uses_mixed();
+        Need {
+            what: match self.mode {
+                FaerMode::Ldlt => "faer LDLᵀ factor",
+                FaerMode::Llt => "faer LLᵀ factor",
+            },
+            entries,
+            // An f32 factor takes half; an f64 one is made only when refinement falls back,
+            // after the f32 one is freed.
+            // The f32 copy for directions (`FaerDirections::Single`) takes half more.
+            factor_bytes: if mixed {
+                f64s(entries) / 2
+            } else if self.directions == FaerDirections::Single && self.mode == FaerMode::Ldlt {
+                f64s(entries) + f64s(entries) / 2
+            } else {
+                f64s(entries)
+            },
+            // The scratch, the permuted matrix (pattern, gather map and f64 values, kept
+            // between factorisations) and the diagonal each factorisation makes, and the
+            // dense kernels' per-thread packing buffer (64 MiB, allocated by faer's gemm on
+            // first use, outside our budget's reach: an address-space limit it does not fit
+            // aborts the process).
+            workspace_bytes: req
+                .size_bytes()
+                .saturating_add(permuted::bytes(n, pattern.nnz_lower()))
+                .saturating_add(f64s(2 * n))
+                .saturating_add(GEMM_BUFFER_BYTES.saturating_mul(self.par.degree().max(1)))
+                // The split's per-factorisation copies: each half's values, each half's S′ᵢ.
+                .saturating_add(self.split_state.as_ref().map_or(0, |s| {
+                    f64s(pattern.nnz_lower()).saturating_add(f64s(2 * s.sizes().2.pow(2)))
+                })),
+            // Mixed: plus the f64 copy of the matrix kept for residuals and its f32 twin.
+            matrix_bytes: f64s(pattern.nnz_lower()).saturating_mul(if mixed { 5 } else { 2 }) / 2,
+        }
+        .check(current_budget(self.memory_budget.as_ref()))
+        .inspect_err(|_| self.split_state = None)?;
+        let buffer = MemBuffer::try_new(req).map_err(|_| SolverError::OutOfMemory {
+            what: "faer's workspace",
+            bytes: req.size_bytes(),
+        })?;
+        let flops = factor_flops(&symbolic);
+        let lower_nonzeros = column_counts(&symbolic).iter().sum();
         if mixed {
             self.mixed.reset(len, self.split_state.is_none())?;
         } else if self.split_state.is_none() {
@@ -363,10 +375,7 @@ impl LinearSolver for FaerSolver {
         self.factored = false;
         self.flops = flops;
         Ok(Analysis {
-            factor_entries: self
-                .split_state
-                .as_ref()
-                .map_or(len, |s| s.factor_entries()),
+            factor_entries: entries,
             lower_nonzeros,
             flops,
             bandwidth: None,
