@@ -44,13 +44,20 @@ pub fn peak_memory_bytes() -> Option<u64> {
 /// The solver's name and its ordering, in words.
 pub fn solver_names(kind: SolverKind) -> (String, String) {
     const AUTO: &str = "AMD, nested dissection or METIS, whichever needs the fewest flops";
+    // `FaerSplit::Auto`, the solver's default (nonlin3d_solver::SPLIT_FROM_DOFS).
+    let split = format!(
+        "split at the top separator from {} DOF, the two halves side by side",
+        nonlin3d_solver::SPLIT_FROM_DOFS
+    );
     match kind {
         SolverKind::Profile => ("profile LDLᵀ".into(), "reverse Cuthill–McKee".into()),
-        SolverKind::FaerLdlt => ("faer LDLᵀ".into(), AUTO.into()),
+        SolverKind::FaerLdlt => (format!("faer LDLᵀ ({split})"), AUTO.into()),
         SolverKind::FaerLlt => ("faer LLᵀ".into(), AUTO.into()),
-        SolverKind::FaerLdltThreads(n) => (format!("faer LDLᵀ on {n} threads"), AUTO.into()),
+        SolverKind::FaerLdltThreads(n) => {
+            (format!("faer LDLᵀ on {n} threads ({split})"), AUTO.into())
+        }
         SolverKind::FaerLdltMixed(n) => (
-            format!("faer LDLᵀ, f32 factor refined in f64, on {n} threads (0: all cores)"),
+            format!("faer LDLᵀ, f32 factor refined in f64, on {n} threads (0: all cores; {split})"),
             AUTO.into(),
         ),
     }
