@@ -39,15 +39,16 @@ pub enum FaerOrdering {
     /// the fewest kept (ties: AMD, then nested dissection, then METIS). The default. Below
     /// [`AUTO_WITHOUT_AMD_DOFS`] DOFs the candidates are AMD, nested dissection and METIS; at
     /// and above it nested dissection and METIS (AMD needed 1.6–6× the best one's flops on
-    /// every model measured from 10 k DOF up, and its large symbolic factor is the costliest
-    /// analysis there; neither nested dissection nor METIS was always the better:
+    /// every model measured from 10 k DOF up — cubes, laminates, the scene plates, the
+    /// through-width model — so its analysis was time spent for nothing, 0.1 s of each
+    /// 18 k-DOF analysis; neither nested dissection nor METIS was always the better:
     /// docs/PERFORMANCE.md). A METIS failure only removes it from the comparison.
     #[default]
     Auto,
 }
 
 /// From this many DOFs on, [`FaerOrdering::Auto`] leaves AMD out of its comparison.
-pub const AUTO_WITHOUT_AMD_DOFS: usize = 200_000;
+pub const AUTO_WITHOUT_AMD_DOFS: usize = 10_000;
 
 /// Whether [`super::FaerSolver`]'s LDLᵀ splits the matrix at the nested-dissection order's top
 /// separator and factors the two halves on two threads (tree-level parallelism, `split.rs`).
