@@ -7,7 +7,7 @@
 //! | [`SymmetricMatrix`] | values on a shared pattern: zero, scatter-add, matvec |
 //! | [`reverse_cuthill_mckee`], [`approximate_minimum_degree`], [`nested_dissection`], [`metis_nested_dissection`], [`envelope_stats`] | orderings and their bandwidth/profile |
 //! | [`ProfileLdlt`] | envelope LDLᵀ, RCM ordered, SIMD inner products |
-//! | [`FaerSolver`], [`FaerOrdering`], [`FaerSplit`] | faer LDLᵀ / LLᵀ, AMD or nested-dissection ordered, supernodal or simplicial; optionally split at the top separator, halves on two threads |
+//! | [`FaerSolver`], [`FaerOrdering`], [`FaerSplit`] | faer LDLᵀ / LLᵀ, AMD, nested-dissection or METIS ordered, supernodal or simplicial; LDLᵀ split at the top separator from 5 000 DOF (the halves side by side; the same bits on any thread count) |
 //! | [`LinearSolver`], [`SolverKind`] | the common interface; [`Factorization::negative_pivots`] is the inertia |
 //! | [`MemoryBudget`], [`set_memory_budget`] | the bytes a factorisation may take, checked by `analyze` before allocating |
 //!

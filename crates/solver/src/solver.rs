@@ -74,8 +74,10 @@ pub enum SolverKind {
     /// matrices only.
     FaerLlt,
     /// [`crate::FaerSolver`] LDLᵀ (ordering as `FaerLdlt`), numeric phase on this many rayon
-    /// threads (1: sequential). Faster from about 10 k DOF on two cores. The same bits for any
-    /// thread count: threads split the output tiles of each dense block, never a sum
+    /// threads (1: sequential): the split's two halves side by side from
+    /// [`crate::SPLIT_FROM_DOFS`], faer's own kernels threaded from
+    /// [`crate::KERNEL_THREADS_FROM_DOFS`]. The same bits for any thread count: threads split
+    /// the output tiles of each dense block, never a sum, and the split is decided by size
     /// (tests/threads.rs, [`crate::FaerSolver::par`]).
     FaerLdltThreads(usize),
     /// [`crate::FaerSolver`] LDLᵀ (ordering as `FaerLdlt`) with an f32 factor refined in f64
