@@ -13,113 +13,12 @@
 
 use approx::assert_relative_eq;
 use nonlin3d_newton::{
-    ArcConstraint, ArcIncrement, ArcLength, ArcReport, ArcStop, NewtonError, NewtonSettings,
-    NonlinearProblem, SignRule, Stepping, follow_arc_length, follow_path_from,
+    ArcConstraint, ArcLength, ArcStop, NewtonSettings, NonlinearProblem, SignRule, Stepping,
+    follow_arc_length, follow_path_from,
 };
-use nonlin3d_solver::{SymmetricMatrix, SymmetricPattern};
-use std::sync::Arc;
 
-const EA: f64 = 1.0;
-const L: f64 = 1.0;
-const H: f64 = 0.1;
-
-fn l0() -> f64 {
-    (L * L + H * H).sqrt()
-}
-fn force(w: f64) -> f64 {
-    EA * w * (H - w) * (2.0 * H - w) / l0().powi(3)
-}
-fn stiffness(w: f64) -> f64 {
-    EA * (2.0 * H * H - 6.0 * H * w + 3.0 * w * w) / l0().powi(3)
-}
-fn p_max() -> f64 {
-    2.0 * EA * H.powi(3) / (3.0 * 3f64.sqrt() * l0().powi(3))
-}
-
-/// The truss with the reference load P_max (so λ = 1 at the limit point): DOF 0 = w; with a
-/// spring, DOF 1 = v, the load point.
-struct Truss {
-    spring: Option<f64>,
-}
-
-impl NonlinearProblem for Truss {
-    fn n(&self) -> usize {
-        if self.spring.is_some() { 2 } else { 1 }
-    }
-    fn pattern(&self) -> Arc<SymmetricPattern> {
-        let all: Vec<usize> = (0..self.n()).collect();
-        Arc::new(SymmetricPattern::from_dof_lists(self.n(), &[all]).unwrap())
-    }
-    fn prescribe(&self, _u: &mut [f64], _lambda: f64) {}
-    fn evaluate(
-        &mut self,
-        u: &[f64],
-        lambda: f64,
-        r: &mut [f64],
-        tangent: Option<&mut SymmetricMatrix>,
-    ) -> Result<f64, NewtonError> {
-        let load = lambda * p_max();
-        let w = u[0];
-        match self.spring {
-            None => r[0] = force(w) - load,
-            Some(k) => {
-                r[0] = force(w) - k * (u[1] - w);
-                r[1] = k * (u[1] - w) - load;
-            }
-        }
-        if let Some(t) = tangent {
-            t.set_zero();
-            t.add(0, 0, stiffness(w)).unwrap();
-            if let Some(k) = self.spring {
-                t.add(0, 0, k).unwrap();
-                t.add(0, 1, -k).unwrap();
-                t.add(1, 1, k).unwrap();
-            }
-        }
-        Ok(load.abs().max(force(w).abs()).max(p_max() * 1e-3))
-    }
-}
-
-/// The converged (λ, u) of every increment.
-type States = Vec<(f64, Vec<f64>)>;
-
-/// Runs the arc length from rest; the converged (λ, u) of every increment, and the report.
-fn run(spring: Option<f64>, arc: &ArcLength) -> (States, Vec<ArcIncrement>, ArcReport) {
-    let mut problem = Truss { spring };
-    let mut u = vec![0.0; problem.n()];
-    let mut states = Vec::new();
-    let report = follow_arc_length(
-        &mut problem,
-        &mut u,
-        0.0,
-        &NewtonSettings::default(),
-        arc,
-        &mut |inc, u, _| {
-            states.push((inc.lambda, u.to_vec()));
-            false
-        },
-    )
-    .unwrap();
-    let increments = report.increments.clone();
-    (states, increments, report)
-}
-
-/// The arc to past the second limit point: stop when w crosses 2.5h.
-fn to_far_side(sign: SignRule) -> ArcLength {
-    ArcLength {
-        initial: 0.1,
-        max: 0.2,
-        sign,
-        monitor: Some((0, 2.5 * H)),
-        max_increments: 400,
-        ..ArcLength::default()
-    }
-}
-
-/// The residual test (1e-8·F, F ≤ 1.1·P_max here since |P(w)| ≤ P_max on [0, 2.5h]… and the
-/// load) bounds |λ − P(w)/P_max| by 1e-8·F/P_max ≤ 1e-8·max(1, |λ|, |P(w)|/P_max); 1e-7 leaves
-/// a factor of 5 for P(2.5h)/P_max ≈ 1.9.
-const ON_CURVE: f64 = 1e-7;
+mod common;
+use common::*;
 
 /// Snap-through: every converged point lies on the closed form, the path climbs to the first
 /// limit point, falls through λ = −1 (the second, by the antisymmetry P(h + x) = −P(h − x)),
@@ -305,13 +204,6 @@ fn the_spherical_constraint_follows_the_same_curve() {
     }
 }
 
-/// The soft spring of the snap-back case: the constraint couples w and v, so increments take
-/// 2–3 corrector iterations (the spring-less truss's cylindrical constraint fixes w and
-/// converges in one).
-fn soft() -> Option<f64> {
-    Some(EA * H * H / (2.0 * l0().powi(3)))
-}
-
 /// The arc length adapts to the iterations: after an increment of I iterations,
 /// s ← s·min(√(I_d/max(I, 1)), growth), within [min, max]; a failed attempt (here: more than
 /// 2 iterations needed) is cut back and counted; the maximum load factor stops the path.
@@ -476,12 +368,6 @@ fn arc_length_follows_prescribed_displacements_as_load_control_does() {
     }
 }
 
-impl nonlin3d_newton::DeadLoads for Truss {
-    fn set_dead_load(&mut self, _dof: usize, _value: f64) -> Result<(), NewtonError> {
-        Ok(())
-    }
-}
-
 /// A level above the limit load (λ = 1.05 > 1) by arc length: the path climbs to the limit
 /// point, turns, comes back through the unstable branch and the far stable one up to λ = 1.05,
 /// and Newton lands there: on the closed form (|1.05 − P(w)/P_max| ≤ [`ON_CURVE`]), on the far
@@ -515,124 +401,4 @@ fn a_level_past_the_limit_point_is_reached_through_it() {
     let lambdas: Vec<f64> = level.attempts.iter().map(|a| a.lambda).collect();
     assert!(lambdas.windows(2).any(|w| w[1] < w[0]), "{lambdas:?}");
     assert!(lambdas.iter().any(|&l| l < -0.9));
-}
-
-/// A symmetric bifurcation on two DOFs: Π = ½u₁² + ½u₂² − ½u₁u₂² + ¼u₂⁴ − λu₁, so
-/// r = (u₁ − ½u₂² − λ, u₂ − u₁u₂ + u₂³) and K_T = [[1, −u₂], [−u₂, 1 − u₁ + 3u₂²]]. The trivial
-/// path u = (λ, 0) loses stability at λ = 1 (K₂₂ = 1 − λ), where the branch u₂² = u₁ − 1
-/// bifurcates; the reference load q = (1, 0) is orthogonal to the mode (0, 1), so δu_t = (1, 0)
-/// is continuous through it and λ goes on rising along the trivial path.
-struct Fork;
-
-impl NonlinearProblem for Fork {
-    fn n(&self) -> usize {
-        2
-    }
-    fn pattern(&self) -> Arc<SymmetricPattern> {
-        Arc::new(SymmetricPattern::from_dof_lists(2, &[vec![0, 1]]).unwrap())
-    }
-    fn prescribe(&self, _u: &mut [f64], _lambda: f64) {}
-    fn evaluate(
-        &mut self,
-        u: &[f64],
-        lambda: f64,
-        r: &mut [f64],
-        tangent: Option<&mut SymmetricMatrix>,
-    ) -> Result<f64, NewtonError> {
-        r[0] = u[0] - 0.5 * u[1] * u[1] - lambda;
-        r[1] = u[1] - u[0] * u[1] + u[1].powi(3);
-        if let Some(t) = tangent {
-            t.set_zero();
-            t.add(0, 0, 1.0).unwrap();
-            t.add(0, 1, -u[1]).unwrap();
-            t.add(1, 1, 1.0 - u[0] + 3.0 * u[1] * u[1]).unwrap();
-        }
-        Ok(lambda.abs().max(1.0))
-    }
-}
-
-/// Across the bifurcation of [`Fork`] (arcs 0.15 to 0.3, stop at λ = 2): det K_T's rule
-/// turns back at the first increment past λ = 1 (one negative pivot, λ still rising) and
-/// oscillates about the bifurcation until the increments run out; the direction rule and
-/// the combined rule go on along the trivial path to λ = 2 in a few increments (7 at most
-/// 0.3 each from 0.15, doubling), every point on it (u₁ = λ, u₂ = 0 to the residual test).
-#[test]
-fn the_sign_rule_goes_on_through_a_bifurcation() {
-    let run = |sign| {
-        let arc = ArcLength {
-            initial: 0.15,
-            max: 0.3,
-            max_lpf: Some(2.0),
-            max_increments: 60,
-            sign,
-            ..ArcLength::default()
-        };
-        let mut u = vec![0.0; 2];
-        let mut states = Vec::new();
-        let report = follow_arc_length(
-            &mut Fork,
-            &mut u,
-            0.0,
-            &NewtonSettings::default(),
-            &arc,
-            &mut |i, u, _| {
-                states.push((i.lambda, u.to_vec()));
-                false
-            },
-        )
-        .unwrap();
-        (report, states)
-    };
-    let (inertia, states) = run(SignRule::Inertia);
-    assert_eq!(inertia.stop, ArcStop::Increments);
-    let top = states.iter().map(|s| s.0).fold(f64::MIN, f64::max);
-    assert!(top < 1.5, "det K_T's rule reached λ = {top}");
-    for sign in [SignRule::Direction, SignRule::Combined] {
-        let (report, states) = run(sign);
-        assert_eq!(report.stop, ArcStop::MaxLpf, "{sign:?}");
-        assert!(
-            report.increments.len() <= 10,
-            "{sign:?}: {}",
-            report.increments.len()
-        );
-        assert!(report.increments.iter().any(|i| i.negative_pivots == 1));
-        for (lambda, u) in &states {
-            // ‖r‖∞ ≤ 1e-8·max(|λ|, 1) and u₂ stays 0 by symmetry.
-            assert!(
-                (u[0] - lambda).abs() <= 1e-8 * lambda.max(1.0),
-                "{lambda} {u:?}"
-            );
-            assert_eq!(u[1], 0.0);
-        }
-    }
-}
-
-/// A sharper snap-back, k = EA·h²/(10ℓ₀³) (dv/dw from 1 + P′(0)/k = 21 down to −9), with
-/// arcs up to 0.5: one increment past the first limit point converges far back along the path,
-/// with Δλ against its predictor (λ −0.82 → −0.79, w from 1.36h to −0.13h: the cylinder meets
-/// the path again there). The direction rule takes that increment's orientation and descends
-/// the w < 0 branch for good (λ → −∞, the monitor never reached); det K_T's rule, whose
-/// orientation sign(det K_T)·sign(dλ/ds) does not depend on one increment, and the combined
-/// rule (which keeps it over an increment whose Δλ turned against its predictor) come back up
-/// and reach w = 2.5h, every point on the closed form.
-#[test]
-fn the_sign_rule_survives_an_increment_converged_backwards() {
-    let spring = Some(EA * H * H / (10.0 * l0().powi(3)));
-    let arc = |sign| ArcLength {
-        max: 0.5,
-        ..to_far_side(sign)
-    };
-    let (_, _, direction) = run(spring, &arc(SignRule::Direction));
-    assert_eq!(direction.stop, ArcStop::Increments);
-    for sign in [SignRule::Inertia, SignRule::Combined] {
-        let (states, increments, report) = run(spring, &arc(sign));
-        assert_eq!(report.stop, ArcStop::Displacement, "{sign:?}");
-        assert!(increments.len() < 100, "{sign:?}: {}", increments.len());
-        for (lambda, u) in &states {
-            assert!(
-                (lambda - force(u[0]) / p_max()).abs() <= ON_CURVE,
-                "{sign:?}"
-            );
-        }
-    }
 }
