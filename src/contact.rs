@@ -29,13 +29,13 @@ pub use crate::results::{ContactPass, ContactSummary};
 pub use crate::scene::{ContactModeName, ContactOptions, CrackFacesName, DEFAULT_TOLERANCE_MM};
 use crate::{Error, Scene};
 use nonlin3d_contact::{
-    Contact, ContactLevel, ContactSettings, CrackFaces, Iterate, LevelSettings, Mode, Resumed,
-    Tolerances, update,
+    Contact, ContactLevel, ContactSettings, ContactState, CrackFaces, Iterate, LevelSettings, Mode,
+    Resumed, Tolerances, update,
 };
 use nonlin3d_mesh::names::{CRACK_LOWER, CRACK_UPPER};
 use nonlin3d_newton::{
-    IncrementReport, LevelReport, NewtonSettings, NonlinearProblem, PathSolver, Stepping,
-    StructuralProblem, Termination,
+    IncrementReport, LevelReport, NewtonSettings, PathSolver, Stepping, StructuralProblem,
+    Termination,
 };
 
 /// The contact system, built on first use.
@@ -380,7 +380,7 @@ fn seeded_level(
         // The first solve stopped at its iterate; the level converged in the passes. Its
         // record ends with that converged state's check (no iteration): ‖r‖∞ there, so that
         // results.json's residual is the level's, not the iterate's.
-        attempts.push(converged_here(&mut e.problem, u, lambda, &attempts[0])?);
+        attempts.push(converged_here(&level.state, lambda, &attempts[0]));
     }
     level.first = LevelReport {
         attempts,
@@ -397,23 +397,17 @@ fn seeded_level(
 }
 
 /// The record of a converged state reached outside Newton's own iterations (the contact
-/// passes after a first solve stopped at its iterate): no iteration, ‖r‖∞ at `u`, converged.
-fn converged_here(
-    problem: &mut StructuralProblem,
-    u: &[f64],
-    lambda: f64,
-    first: &IncrementReport,
-) -> Result<IncrementReport, Error> {
-    let mut r = vec![0.0; problem.n()];
-    problem.evaluate(u, lambda, &mut r, None)?;
-    Ok(IncrementReport {
+/// passes after a first solve stopped at its iterate): no iteration, ‖r‖∞ as the passes read
+/// it at that state, converged.
+fn converged_here(state: &ContactState, lambda: f64, first: &IncrementReport) -> IncrementReport {
+    IncrementReport {
         lambda,
-        initial_residual: r.iter().fold(0.0, |m: f64, v| m.max(v.abs())),
+        initial_residual: state.residual,
         tolerance: first.tolerance,
         iterations: Vec::new(),
         termination: Termination::Converged,
         bifurcation: None,
-    })
+    }
 }
 
 /// A carried start whose first solve did not converge (the level is then followed).

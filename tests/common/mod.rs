@@ -118,7 +118,8 @@ pub fn clamped_box_stiffness(n: [usize; 3], h: [f64; 3]) -> SymmetricMatrix {
     mesh.stiffness(&material, IntegrationRule::Gauss2, &fixed)
 }
 
-/// The cube of `../shared/tools/factor_anchor.py`'s matrix, as its PARDISO and CHOLMOD see it:
+/// The cube as the PARDISO/CHOLMOD anchor script (`factor_anchor.py`, outside this repository)
+/// builds it for those solvers:
 /// the same Hex20 box clamped on z = 0 (its largest face) instead of x = 0, the clamped DOFs
 /// lone unit rows (the script masks with a sparse product, which drops the zeros). Values
 /// differ (the script's steel), the pattern, and so every ordering's fill, is the same.

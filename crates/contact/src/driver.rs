@@ -48,6 +48,8 @@ pub struct ContactState {
     pub active: Vec<bool>,
     /// The force tolerance used (N).
     pub force_tolerance: f64,
+    /// ‖r‖∞ of the constrained residual at the state, N.
+    pub residual: f64,
     /// Σ p·n over the ties' forces, each along the normal it acts on (the normal its tie was
     /// installed with), N.
     total: [f64; 3],
@@ -386,6 +388,7 @@ impl Contact {
                 .settings
                 .force_tolerance
                 .max(newton.relative_tolerance * scale),
+            residual: r.iter().fold(0.0, |m: f64, v| m.max(v.abs())),
         })
     }
 

@@ -61,6 +61,7 @@ mod tests {
             pressures: vec![0.0; n],
             active,
             force_tolerance: 1e-6,
+            residual: 0.0,
             total: [0.0; 3],
         }
     }

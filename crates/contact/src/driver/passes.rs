@@ -178,21 +178,7 @@ impl Contact {
         newton: &NewtonSettings,
         session: &mut PathSolver,
     ) -> Result<ContactLevel, ContactError> {
-        let first = LevelReport {
-            attempts: Vec::new(),
-            perturbed: false,
-            negative_pivots: None,
-        };
-        self.passes(
-            problem,
-            u,
-            lambda,
-            (first, 0.0),
-            newton,
-            session,
-            None,
-            None,
-        )
+        self.settle_from(problem, u, lambda, newton, session, None)
     }
 
     /// [`settle`](Self::settle) from an iterate of the level's first solve instead of its
@@ -212,21 +198,27 @@ impl Contact {
         session: &mut PathSolver,
         iterate: Iterate,
     ) -> Result<ContactLevel, ContactError> {
+        self.settle_from(problem, u, lambda, newton, session, Some(iterate))
+    }
+
+    /// [`settle`](Self::settle) (`pending` None) or [`settle_iterate`](Self::settle_iterate):
+    /// the passes with no fallback, the first solve reported as an empty level report.
+    fn settle_from(
+        &mut self,
+        problem: &mut StructuralProblem,
+        u: &mut Vec<f64>,
+        lambda: f64,
+        newton: &NewtonSettings,
+        session: &mut PathSolver,
+        pending: Option<Iterate>,
+    ) -> Result<ContactLevel, ContactError> {
         let first = LevelReport {
             attempts: Vec::new(),
             perturbed: false,
             negative_pivots: None,
         };
-        self.passes(
-            problem,
-            u,
-            lambda,
-            (first, 0.0),
-            newton,
-            session,
-            None,
-            Some(iterate),
-        )
+        let first = (first, 0.0);
+        self.passes(problem, u, lambda, first, newton, session, None, pending)
     }
 
     /// The loop of passes after the first solve (module docs); `fallback`: how to follow the
