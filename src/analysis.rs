@@ -194,6 +194,7 @@ pub fn run(
                 0 => rayon::current_num_threads(),
                 n => n,
             },
+            mixed_precision: sweep.mixed.take(),
         },
         model_data: Some(model),
         accuracy: None,
@@ -237,6 +238,8 @@ struct Sweep {
     /// Seconds in the solves and in VCCT.
     solve_s: f64,
     vcct_s: f64,
+    /// What mixed precision did (None with an f64 solver).
+    mixed: Option<MixedSummary>,
 }
 
 /// The levels solved in order from the unloaded state, each from the previous converged
@@ -279,6 +282,7 @@ fn sweep(
         perturbed_at: None,
         solve_s: 0.0,
         vcct_s: 0.0,
+        mixed: None,
     };
     let mut stage = ContactStage::new(scene);
     let arc = arc_length(scene);
@@ -383,6 +387,7 @@ fn sweep(
         push_level(&mut out, progress, (k, value, vcct_s), level)?;
         from = lambda;
     }
+    out.mixed = MixedSummary::of([session.mixed_stats(), stage.mixed_stats()]);
     Ok(out)
 }
 

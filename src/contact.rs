@@ -264,6 +264,11 @@ impl ContactStage {
             .collect()
     }
 
+    /// What mixed precision did in the contact system's solver (None: not engaged, or f64).
+    pub(crate) fn mixed_stats(&self) -> Option<nonlin3d_solver::MixedStats> {
+        self.engaged.as_ref().and_then(|e| e.session.mixed_stats())
+    }
+
     /// The closed pairs' upper nodes (empty when contact never engaged).
     pub(crate) fn closed_upper(&self, model: &Model) -> std::collections::HashSet<usize> {
         let Some(e) = &self.engaged else {

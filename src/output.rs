@@ -245,6 +245,7 @@ impl RunOutput {
                 vcct_s: 0.0,
                 output_s: 0.0,
                 threads: rayon::current_num_threads(),
+                mixed_precision: None,
             },
             model_data: None,
             warnings: Vec::new(),

@@ -108,6 +108,9 @@ pub fn settings(scene: &Scene) -> (NewtonSettings, Stepping) {
         },
         solver: match (a.solver, a.threads) {
             (SolverName::Profile, _) => SolverKind::Profile,
+            (SolverName::Auto, n) if a.newton == NewtonName::Full => SolverKind::FaerLdltAuto(n),
+            (SolverName::Auto, 0) => SolverKind::FaerLdlt,
+            (SolverName::Auto, n) => SolverKind::FaerLdltThreads(n),
             // 0: the rayon pool's threads (`--threads N`); the bits do not depend on it.
             (SolverName::Faer, 0) => SolverKind::FaerLdlt,
             (SolverName::Faer, n) => SolverKind::FaerLdltThreads(n),
@@ -122,4 +125,39 @@ pub fn settings(scene: &Scene) -> (NewtonSettings, Stepping) {
         ..Stepping::default()
     };
     (newton, stepping)
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)]
+mod tests {
+    use super::*;
+
+    fn solver_of(analysis: &str) -> SolverKind {
+        let text = std::fs::read_to_string(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/examples/scenes/fig_5_1_3_circle_30mm.toml"
+        ))
+        .unwrap();
+        let text = text.replace("[analysis]", &format!("[analysis]\n{analysis}"));
+        settings(&Scene::from_toml(&text).unwrap()).0.solver
+    }
+
+    /// `solver = "auto"` (the default): the size rule of mixed precision with full Newton, f64
+    /// with BFGS and modified Newton (a factorisation serves many solves there); named solvers
+    /// as named.
+    #[test]
+    fn the_default_solver_is_mixed_from_its_threshold_with_full_newton_only() {
+        assert_eq!(solver_of(""), SolverKind::FaerLdltAuto(0));
+        assert_eq!(solver_of("threads = 1"), SolverKind::FaerLdltAuto(1));
+        assert_eq!(solver_of("newton = \"bfgs\""), SolverKind::FaerLdlt);
+        assert_eq!(
+            solver_of("newton = \"modified\"\nthreads = 2"),
+            SolverKind::FaerLdltThreads(2)
+        );
+        assert_eq!(solver_of("solver = \"faer\""), SolverKind::FaerLdlt);
+        assert_eq!(
+            solver_of("solver = \"faer-mixed\""),
+            SolverKind::FaerLdltMixed(0)
+        );
+    }
 }

@@ -60,6 +60,14 @@ pub fn solver_names(kind: SolverKind) -> (String, String) {
             format!("faer LDLᵀ, f32 factor refined in f64, on {n} threads (0: all cores; {split})"),
             AUTO.into(),
         ),
+        SolverKind::FaerLdltAuto(n) => (
+            format!(
+                "faer LDLᵀ, f32 factor refined in f64 from {} DOF (f64 below), on {n} threads \
+                 (0: all cores; {split})",
+                nonlin3d_solver::MIXED_FROM_DOFS
+            ),
+            AUTO.into(),
+        ),
     }
 }
 

@@ -5,7 +5,10 @@ use nonlin3d_newton::{IncrementReport, Termination};
 use nonlin3d_vcct::FrontRelease;
 use serde::Serialize;
 
+mod mixed;
 mod overlap;
+
+pub use mixed::MixedSummary;
 
 /// The state of the crack faces one element behind a front point.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -383,6 +386,10 @@ pub struct Timings {
     /// Threads of the factorisation (`analysis.threads`, 0 resolved to the rayon pool's,
     /// which assembly uses); the results do not depend on it.
     pub threads: usize,
+    /// What mixed precision did (`solver = "faer-mixed"`, or `auto` with full Newton); absent
+    /// with an f64 solver.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mixed_precision: Option<MixedSummary>,
 }
 
 /// Onset of growth by the scene's criterion.

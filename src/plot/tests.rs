@@ -79,6 +79,7 @@ fn results() -> Results {
             vcct_s: 0.0,
             output_s: 0.0,
             threads: 1,
+            mixed_precision: None,
         },
         model_data: None,
         provenance: None,

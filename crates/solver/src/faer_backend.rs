@@ -30,7 +30,7 @@ pub use directions::FaerDirections;
 pub use mixed::{FaerPrecision, MixedStats};
 pub use options::{
     AUTO_WITHOUT_AMD_DOFS, FaerMode, FaerOrdering, FaerSplit, FaerStructure,
-    KERNEL_THREADS_FROM_DOFS, SPLIT_FROM_DOFS,
+    KERNEL_THREADS_FROM_DOFS, MIXED_FROM_DOFS, SPLIT_FROM_DOFS,
 };
 
 /// faer's sparse Cholesky behind [`LinearSolver`].
@@ -61,6 +61,11 @@ pub struct FaerSolver {
     pub memory_budget: Option<MemoryBudget>,
     /// f64 throughout, or an f32 factor refined in f64 (LDLᵀ only; [`FaerPrecision`]).
     pub precision: FaerPrecision,
+    /// With [`FaerPrecision::Mixed`]: f64 for matrices of fewer DOFs than this (0, the
+    /// default: mixed at any size; [`MIXED_FROM_DOFS`] for [`crate::SolverKind::FaerLdltAuto`]).
+    pub mixed_from_dofs: usize,
+    /// The analysed matrix is below `mixed_from_dofs`: f64 whatever `precision` says.
+    below_mixed: bool,
     /// Tree-level split of the LDLᵀ ([`FaerSplit`]).
     pub split: FaerSplit,
     /// What `solve_direction_in_place` solves with ([`FaerDirections`]).
@@ -113,6 +118,8 @@ impl FaerSolver {
             directions: FaerDirections::Factor,
             directions_l32: Vec::new(),
             split_state: None,
+            mixed_from_dofs: 0,
+            below_mixed: false,
             split_fallback: None,
             pattern: None,
             symbolic: None,
@@ -233,6 +240,7 @@ impl LinearSolver for FaerSolver {
 
     fn analyze(&mut self, pattern: &Arc<SymmetricPattern>) -> Result<Analysis, SolverError> {
         let n = pattern.n();
+        self.below_mixed = n < self.mixed_from_dofs;
         let a =
             SymbolicSparseColMatRef::new_checked(n, n, pattern.col_ptr(), None, pattern.row_idx());
         let threshold = match self.structure {

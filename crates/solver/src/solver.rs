@@ -85,6 +85,10 @@ pub enum SolverKind {
     /// half the factor time and memory where f32 suffices (45 k cube, 89 k plate); on thin
     /// laminates it falls back to f64 and costs more (docs/PERFORMANCE.md).
     FaerLdltMixed(usize),
+    /// `FaerLdltMixed` from [`crate::MIXED_FROM_DOFS`] DOFs on, `FaerLdltThreads` below (this
+    /// many threads, 0: the rayon pool's): the default of scenes solved by full Newton, where
+    /// each factorisation serves one solve.
+    FaerLdltAuto(usize),
 }
 
 impl SolverKind {
@@ -103,7 +107,7 @@ impl SolverKind {
             Self::FaerLdltThreads(n) => {
                 Box::new(crate::FaerSolver::new(crate::FaerMode::Ldlt).with_threads(n))
             }
-            Self::FaerLdltMixed(n) => {
+            Self::FaerLdltMixed(n) | Self::FaerLdltAuto(n) => {
                 let threads = if n == 0 {
                     rayon::current_num_threads()
                 } else {
@@ -111,6 +115,9 @@ impl SolverKind {
                 };
                 let mut s = crate::FaerSolver::new(crate::FaerMode::Ldlt).with_threads(threads);
                 s.precision = crate::FaerPrecision::mixed();
+                if let Self::FaerLdltAuto(_) = self {
+                    s.mixed_from_dofs = crate::MIXED_FROM_DOFS;
+                }
                 Box::new(s)
             }
         }

@@ -7,7 +7,7 @@ use crate::{Factorization, SolverError, SymmetricMatrix};
 impl FaerSolver {
     /// Whether factorisations go through the f32 path.
     pub(super) fn uses_mixed(&self) -> bool {
-        self.precision != FaerPrecision::Double && self.mode == FaerMode::Ldlt
+        self.precision != FaerPrecision::Double && self.mode == FaerMode::Ldlt && !self.below_mixed
     }
 
     /// The f64 factorisation: split when the analysis split, else unsplit.

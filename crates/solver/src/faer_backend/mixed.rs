@@ -12,7 +12,9 @@
 //!   factor, and the next f32 factor must agree with it to be used;
 //! - refinement stalls (the backward error falls by less than half in a step) or has not
 //!   reached the tolerance in [`MAX_REFINEMENT_STEPS`]: A is too ill-conditioned for f32
-//!   (cond(A)·ε₃₂ ≳ 0.5).
+//!   (cond(A)·ε₃₂ ≳ 0.5);
+//! - f32 was refused for one of the conditioning reasons above before any f32 factor served
+//!   since the analysis, or [`REFUSALS_BEFORE_F64`] times in a row: f64 until the next one.
 //!
 //! With [`super::FaerSplit::Halves`] the f32 factor is the split one (f32 halves, S in f64)
 //! and the same rules hold; the f64 fallback is then the f64 split.
@@ -31,6 +33,15 @@ pub const SINGLE_PIVOT_FLOOR: f64 = 1e-4;
 /// Refinement steps before falling back to f64 (cond(A)·ε₃₂ = 0.1 needs about 7 from
 /// ε₃₂ to 1e-14).
 pub const MAX_REFINEMENT_STEPS: usize = 20;
+
+/// f32 attempts refused in a row for the matrix's conditioning (any reason but a change of
+/// the negative pivot count: an entry beyond f32, an f32 zero pivot, a pivot below the floor,
+/// refinement stalling) after which the solver factorises in f64 until its next analysis: a
+/// tangent too ill-conditioned for f32 stays so over a path, and each refused attempt costs an
+/// f32 factorisation (and refinement steps) on top of the f64 one (the thin laminate: 1.6–1.7×
+/// the f64 cost, docs/PERFORMANCE.md). One refusal after f32 has served (a small pivot near a
+/// bifurcation) does not give f32 up; a refusal before any f32 factor has served does.
+pub const REFUSALS_BEFORE_F64: usize = 2;
 
 /// The default refinement target for the normwise backward error
 /// ‖b − A x‖∞ / (‖A‖∞‖x‖∞ + ‖b‖∞). The f64 factor gives 2e-19–3e-16 on the bench's Hex20
@@ -81,6 +92,10 @@ pub struct MixedStats {
     pub last_fallback: Option<&'static str>,
 }
 
+/// Why an f32 factor whose inertia differs from the last factorisation's is not used (the
+/// one refusal that says nothing about the matrix's conditioning).
+const PIVOT_COUNT_CHANGED: &str = "the negative pivot count changed";
+
 /// The f32 factor and what refinement needs.
 #[derive(Debug, Default)]
 pub(super) struct MixedState {
@@ -92,6 +107,10 @@ pub(super) struct MixedState {
     /// The active factor is the f32 one.
     single: bool,
     last_negative: Option<usize>,
+    /// f32 attempts refused for conditioning since the last one kept whose solves converged.
+    refused_in_a_row: usize,
+    /// Whether an f32 factor has served a converged refinement since the analysis.
+    served: bool,
     stats: MixedStats,
 }
 
@@ -109,6 +128,15 @@ impl MixedState {
 
     pub(super) fn single_active(&self) -> bool {
         self.single
+    }
+
+    /// Counts an f32 attempt refused for conditioning ([`REFUSALS_BEFORE_F64`]): before any f32
+    /// factor has served, one is enough.
+    fn refuse(&mut self) {
+        self.refused_in_a_row = match self.served {
+            true => self.refused_in_a_row + 1,
+            false => REFUSALS_BEFORE_F64,
+        };
     }
 }
 
@@ -169,9 +197,20 @@ impl FaerSolver {
             slot => *slot = Some(a.clone()),
         }
         self.mixed.a_norm = inf_norm(a);
+        if self.mixed.refused_in_a_row >= REFUSALS_BEFORE_F64 {
+            return self.fall_back(
+                a,
+                "f32 refused before it served, or twice in a row: f64 until the next analysis",
+            );
+        }
         match self.factorize_single(a)? {
             Ok(f) => Ok(f),
-            Err(reason) => self.fall_back(a, reason),
+            Err(reason) => {
+                if reason != PIVOT_COUNT_CHANGED {
+                    self.mixed.refuse();
+                }
+                self.fall_back(a, reason)
+            }
         }
     }
 
@@ -231,7 +270,7 @@ impl FaerSolver {
             .last_negative
             .is_some_and(|last| last != f.negative_pivots)
         {
-            return Ok(Err("the negative pivot count changed"));
+            return Ok(Err(PIVOT_COUNT_CHANGED));
         }
         // The f64 factor, if a fallback made one, is not needed now.
         self.l_values = Vec::new();
@@ -300,7 +339,11 @@ impl FaerSolver {
                 break;
             }
         }
-        if stalled {
+        if !stalled {
+            self.mixed.refused_in_a_row = 0;
+            self.mixed.served = true;
+        } else {
+            self.mixed.refuse();
             let Some(a) = self.mixed.a.take() else {
                 return Err(SolverError::NotReady("solve called before factorize"));
             };
@@ -401,142 +444,4 @@ fn refine_column(
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::{FaerMode, FaerOrdering, LinearSolver, SymmetricPattern};
-    use std::sync::Arc;
-
-    /// A chain of n unit springs between two walls (the 1-D Laplacian tridiag(−1, 2, −1)),
-    /// times `scale`, minus `shift`·I. Eigenvalues scale·(2 − 2 cos(kπ/(n+1))) − shift, so
-    /// cond ≈ 4(n+1)²/π² unshifted; every pivot of any elimination order is ≥ 1/n of its
-    /// diagonal (the Schur complement onto a node is the spring to the walls, ≥ 2/(n+1)).
-    fn chain(n: usize, scale: f64, shift: f64) -> SymmetricMatrix {
-        let lists: Vec<Vec<usize>> = (0..n - 1).map(|i| vec![i, i + 1]).collect();
-        let p = Arc::new(SymmetricPattern::from_dof_lists(n, &lists).unwrap());
-        let mut a = SymmetricMatrix::zeros(p);
-        for i in 0..n {
-            a.add(i, i, scale * 2.0 - shift).unwrap();
-            if i + 1 < n {
-                a.add(i + 1, i, -scale).unwrap();
-            }
-        }
-        a
-    }
-
-    fn solver(precision: FaerPrecision) -> FaerSolver {
-        let mut s = FaerSolver::new(FaerMode::Ldlt).with_ordering(FaerOrdering::NestedDissection);
-        s.precision = precision;
-        s
-    }
-
-    /// (x, negative pivots) of A x = b with b_i = 1 + i mod 3.
-    fn solve(s: &mut FaerSolver, a: &SymmetricMatrix) -> (Vec<f64>, usize) {
-        s.analyze(a.pattern()).unwrap();
-        let f = s.factorize(a).unwrap();
-        let mut x: Vec<f64> = (0..a.n()).map(|i| 1.0 + (i % 3) as f64).collect();
-        s.solve_in_place(&mut x, 1).unwrap();
-        (x, f.negative_pivots)
-    }
-
-    /// n = 300: cond ≈ 3.7e4, so each refinement step gains a factor cond·ε₃₂ ≈ 4e-3: the
-    /// f32 factor is kept and refinement reaches 1e-14 in a few steps. Both solutions then have
-    /// backward error ≤ 1e-14, so they differ by at most 2·cond·1e-14 ≈ 1e-9 relative.
-    #[test]
-    fn refinement_reaches_the_f64_solution() {
-        let a = chain(300, 1.0, 0.0);
-        let (x64, _) = solve(&mut solver(FaerPrecision::Double), &a);
-        let mut s = solver(FaerPrecision::mixed());
-        let (x, neg) = solve(&mut s, &a);
-        let m = s.mixed_stats();
-        assert_eq!(
-            (neg, m.single_factorizations, m.double_factorizations),
-            (0, 1, 0)
-        );
-        assert!((2..=6).contains(&m.refinement_steps), "{m:?}");
-        assert!(m.last_backward_error <= DEFAULT_REFINEMENT_TOLERANCE);
-        let scale = x64.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        for (p, q) in x.iter().zip(&x64) {
-            assert!((p - q).abs() <= 1e-9 * scale, "{p} vs {q}");
-        }
-    }
-
-    /// A tolerance below f64's own rounding floor (backward errors of ~1e-17 here): refinement
-    /// stops gaining and must fall back; the answer is then the f64 factor's, bit for bit.
-    #[test]
-    fn a_stalled_refinement_falls_back_to_f64() {
-        let a = chain(300, 1.0, 0.0);
-        let (x64, _) = solve(&mut solver(FaerPrecision::Double), &a);
-        let mut s = solver(FaerPrecision::Mixed {
-            tolerance: 1e-30,
-            pivot_floor: SINGLE_PIVOT_FLOOR,
-        });
-        let (x, _) = solve(&mut s, &a);
-        let m = s.mixed_stats();
-        assert_eq!(m.last_fallback, Some("refinement stalled"), "{m:?}");
-        assert_eq!((m.single_factorizations, m.double_factorizations), (1, 1));
-        assert!(x.iter().zip(&x64).all(|(p, q)| p.to_bits() == q.to_bits()));
-    }
-
-    /// A free chain held only by springs ε = 1e-8 to ground at every node (A = L + εI, L the
-    /// singular free-free Laplacian): f32 rounds 2 + ε to 2 (its spacing at 2 is 2.4e-7), so
-    /// the f32 matrix is singular and its last pivot is rounding noise. That factor is refused
-    /// and the f64 one (smallest eigenvalue ε, well inside f64) gives the answer.
-    #[test]
-    fn a_doubtful_f32_pivot_falls_back_to_f64() {
-        let n = 400;
-        let mut a = chain(n, 1.0, -1e-8);
-        // Free ends: one spring fewer at each.
-        a.add(0, 0, -1.0).unwrap();
-        a.add(n - 1, n - 1, -1.0).unwrap();
-        let (x64, neg) = solve(&mut solver(FaerPrecision::Double), &a);
-        assert_eq!(neg, 0);
-        let mut s = solver(FaerPrecision::mixed());
-        let (x, _) = solve(&mut s, &a);
-        let m = s.mixed_stats();
-        assert!(
-            matches!(
-                m.last_fallback,
-                Some("an f32 pivot is too small to trust its sign")
-                    | Some("f32 elimination met a zero pivot")
-            ),
-            "{m:?}"
-        );
-        assert_eq!((m.single_factorizations, m.double_factorizations), (0, 1));
-        assert!(x.iter().zip(&x64).all(|(p, q)| p.to_bits() == q.to_bits()));
-    }
-
-    /// The inertia: an SPD factor in f32, then A − 0.5·I (the eigenvalues below 0.5 turn
-    /// negative): the count changed, so it comes from an f64 factor and equals the f64 solver's;
-    /// the same matrix again keeps the f32 factor (its count agrees).
-    #[test]
-    fn a_changed_negative_pivot_count_is_confirmed_in_f64() {
-        let (spd, shifted) = (chain(200, 1.0, 0.0), chain(200, 1.0, 0.5));
-        let (_, expected) = solve(&mut solver(FaerPrecision::Double), &shifted);
-        // 2 − 2cos(kπ/201) < 0.5 for k < 201·acos(0.75)/π = 46.3: 46 negative eigenvalues.
-        assert_eq!(expected, 46);
-        let mut s = solver(FaerPrecision::mixed());
-        s.analyze(spd.pattern()).unwrap();
-        assert_eq!(s.factorize(&spd).unwrap().negative_pivots, 0);
-        assert_eq!(s.mixed_stats().double_factorizations, 0);
-        assert_eq!(s.factorize(&shifted).unwrap().negative_pivots, expected);
-        let m = s.mixed_stats();
-        assert_eq!(m.last_fallback, Some("the negative pivot count changed"));
-        assert_eq!((m.single_factorizations, m.double_factorizations), (1, 1));
-        assert_eq!(s.factorize(&shifted).unwrap().negative_pivots, expected);
-        assert_eq!(s.mixed_stats().single_factorizations, 2);
-    }
-
-    /// Entries beyond f32's range (3.4e38) go to f64 and give the f64 answer.
-    #[test]
-    fn entries_beyond_f32_go_to_f64() {
-        let a = chain(50, 1e39, 0.0);
-        let (x64, _) = solve(&mut solver(FaerPrecision::Double), &a);
-        let mut s = solver(FaerPrecision::mixed());
-        let (x, _) = solve(&mut s, &a);
-        assert_eq!(
-            s.mixed_stats().last_fallback,
-            Some("an entry does not fit f32")
-        );
-        assert_eq!(x, x64);
-    }
-}
+mod tests;

@@ -81,6 +81,14 @@ pub enum FaerSplit {
 /// meshes of the error estimate (1.8–6.4 k DOF) run beside a main model on the other core.
 pub const SPLIT_FROM_DOFS: usize = 5_000;
 
+/// From this many DOFs on, [`crate::SolverKind::FaerLdltAuto`] factorises in f32 (refined in
+/// f64, [`super::FaerPrecision::mixed`]); below it in f64. Measured on the committed scenes
+/// (docs/PERFORMANCE.md, "Mixed precision from 10 000 DOF"): at 13.5–18.4 k DOF the f32 factor
+/// took 0.86–0.92 of the wall time and 0.81–0.88 of the CPU, the same answers; at 6.8 k DOF
+/// and below it gained 0–9 % on five scenes and lost 4–10 % on four (thin sublaminates whose
+/// first f32 factor is refused, the 3.4 k through-width strip, the 2.8 k thin film).
+pub const MIXED_FROM_DOFS: usize = 10_000;
+
 /// Below this many DOFs faer's own dense kernels run on one thread whatever
 /// [`super::FaerSolver::par`] says (the split's halves still take two): two threads inside
 /// faer's kernels cost 1.16× the wall time of one at 6 789 DOF, 1.27× at 18 393 DOF and

@@ -1,0 +1,220 @@
+//! Unit tests of mixed precision: refinement, the fallbacks to f64, the size rule.
+
+use super::*;
+use crate::{FaerMode, FaerOrdering, LinearSolver, SymmetricPattern};
+use std::sync::Arc;
+
+/// A chain of n unit springs between two walls (the 1-D Laplacian tridiag(−1, 2, −1)),
+/// times `scale`, minus `shift`·I. Eigenvalues scale·(2 − 2 cos(kπ/(n+1))) − shift, so
+/// cond ≈ 4(n+1)²/π² unshifted; every pivot of any elimination order is ≥ 1/n of its
+/// diagonal (the Schur complement onto a node is the spring to the walls, ≥ 2/(n+1)).
+fn chain(n: usize, scale: f64, shift: f64) -> SymmetricMatrix {
+    let lists: Vec<Vec<usize>> = (0..n - 1).map(|i| vec![i, i + 1]).collect();
+    let p = Arc::new(SymmetricPattern::from_dof_lists(n, &lists).unwrap());
+    let mut a = SymmetricMatrix::zeros(p);
+    for i in 0..n {
+        a.add(i, i, scale * 2.0 - shift).unwrap();
+        if i + 1 < n {
+            a.add(i + 1, i, -scale).unwrap();
+        }
+    }
+    a
+}
+
+fn solver(precision: FaerPrecision) -> FaerSolver {
+    let mut s = FaerSolver::new(FaerMode::Ldlt).with_ordering(FaerOrdering::NestedDissection);
+    s.precision = precision;
+    s
+}
+
+/// (x, negative pivots) of A x = b with b_i = 1 + i mod 3.
+fn solve(s: &mut FaerSolver, a: &SymmetricMatrix) -> (Vec<f64>, usize) {
+    s.analyze(a.pattern()).unwrap();
+    let f = s.factorize(a).unwrap();
+    let mut x: Vec<f64> = (0..a.n()).map(|i| 1.0 + (i % 3) as f64).collect();
+    s.solve_in_place(&mut x, 1).unwrap();
+    (x, f.negative_pivots)
+}
+
+/// n = 300: cond ≈ 3.7e4, so each refinement step gains a factor cond·ε₃₂ ≈ 4e-3: the
+/// f32 factor is kept and refinement reaches 1e-14 in a few steps. Both solutions then have
+/// backward error ≤ 1e-14, so they differ by at most 2·cond·1e-14 ≈ 1e-9 relative.
+#[test]
+fn refinement_reaches_the_f64_solution() {
+    let a = chain(300, 1.0, 0.0);
+    let (x64, _) = solve(&mut solver(FaerPrecision::Double), &a);
+    let mut s = solver(FaerPrecision::mixed());
+    let (x, neg) = solve(&mut s, &a);
+    let m = s.mixed_stats();
+    assert_eq!(
+        (neg, m.single_factorizations, m.double_factorizations),
+        (0, 1, 0)
+    );
+    assert!((2..=6).contains(&m.refinement_steps), "{m:?}");
+    assert!(m.last_backward_error <= DEFAULT_REFINEMENT_TOLERANCE);
+    let scale = x64.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    for (p, q) in x.iter().zip(&x64) {
+        assert!((p - q).abs() <= 1e-9 * scale, "{p} vs {q}");
+    }
+}
+
+/// A tolerance below f64's own rounding floor (backward errors of ~1e-17 here): refinement
+/// stops gaining and must fall back; the answer is then the f64 factor's, bit for bit.
+#[test]
+fn a_stalled_refinement_falls_back_to_f64() {
+    let a = chain(300, 1.0, 0.0);
+    let (x64, _) = solve(&mut solver(FaerPrecision::Double), &a);
+    let mut s = solver(FaerPrecision::Mixed {
+        tolerance: 1e-30,
+        pivot_floor: SINGLE_PIVOT_FLOOR,
+    });
+    let (x, _) = solve(&mut s, &a);
+    let m = s.mixed_stats();
+    assert_eq!(m.last_fallback, Some("refinement stalled"), "{m:?}");
+    assert_eq!((m.single_factorizations, m.double_factorizations), (1, 1));
+    assert!(x.iter().zip(&x64).all(|(p, q)| p.to_bits() == q.to_bits()));
+}
+
+/// A free chain held only by springs ε = 1e-8 to ground at every node (A = L + εI, L the
+/// singular free-free Laplacian): f32 rounds 2 + ε to 2 (its spacing at 2 is 2.4e-7), so
+/// the f32 matrix is singular and its last pivot is rounding noise. That factor is refused
+/// and the f64 one (smallest eigenvalue ε, well inside f64) gives the answer.
+#[test]
+fn a_doubtful_f32_pivot_falls_back_to_f64() {
+    let n = 400;
+    let mut a = chain(n, 1.0, -1e-8);
+    // Free ends: one spring fewer at each.
+    a.add(0, 0, -1.0).unwrap();
+    a.add(n - 1, n - 1, -1.0).unwrap();
+    let (x64, neg) = solve(&mut solver(FaerPrecision::Double), &a);
+    assert_eq!(neg, 0);
+    let mut s = solver(FaerPrecision::mixed());
+    let (x, _) = solve(&mut s, &a);
+    let m = s.mixed_stats();
+    assert!(
+        matches!(
+            m.last_fallback,
+            Some("an f32 pivot is too small to trust its sign")
+                | Some("f32 elimination met a zero pivot")
+        ),
+        "{m:?}"
+    );
+    assert_eq!((m.single_factorizations, m.double_factorizations), (0, 1));
+    assert!(x.iter().zip(&x64).all(|(p, q)| p.to_bits() == q.to_bits()));
+}
+
+/// The inertia: an SPD factor in f32, then A − 0.5·I (the eigenvalues below 0.5 turn
+/// negative): the count changed, so it comes from an f64 factor and equals the f64 solver's;
+/// the same matrix again keeps the f32 factor (its count agrees).
+#[test]
+fn a_changed_negative_pivot_count_is_confirmed_in_f64() {
+    let (spd, shifted) = (chain(200, 1.0, 0.0), chain(200, 1.0, 0.5));
+    let (_, expected) = solve(&mut solver(FaerPrecision::Double), &shifted);
+    // 2 − 2cos(kπ/201) < 0.5 for k < 201·acos(0.75)/π = 46.3: 46 negative eigenvalues.
+    assert_eq!(expected, 46);
+    let mut s = solver(FaerPrecision::mixed());
+    s.analyze(spd.pattern()).unwrap();
+    assert_eq!(s.factorize(&spd).unwrap().negative_pivots, 0);
+    assert_eq!(s.mixed_stats().double_factorizations, 0);
+    assert_eq!(s.factorize(&shifted).unwrap().negative_pivots, expected);
+    let m = s.mixed_stats();
+    assert_eq!(m.last_fallback, Some("the negative pivot count changed"));
+    assert_eq!((m.single_factorizations, m.double_factorizations), (1, 1));
+    assert_eq!(s.factorize(&shifted).unwrap().negative_pivots, expected);
+    assert_eq!(s.mixed_stats().single_factorizations, 2);
+}
+
+/// A stall (a tolerance refinement cannot reach) before any f32 factor has served gives
+/// f32 up at once: the second factorisation goes straight to f64, until the next analysis.
+/// After f32 has served, it takes two refusals in a row; a change of the pivot count alone
+/// does not count (the test above keeps f32 after one).
+#[test]
+fn f32_refused_before_it_served_or_twice_in_a_row_stays_f64_until_the_next_analysis() {
+    const GIVEN_UP: Option<&str> =
+        Some("f32 refused before it served, or twice in a row: f64 until the next analysis");
+    let a = chain(300, 1.0, 0.0);
+    let mut s = solver(FaerPrecision::Mixed {
+        tolerance: 1e-30,
+        pivot_floor: SINGLE_PIVOT_FLOOR,
+    });
+    s.analyze(a.pattern()).unwrap();
+    let mut b = vec![1.0; a.n()];
+    for _ in 0..2 {
+        s.factorize(&a).unwrap();
+        s.solve_in_place(&mut b, 1).unwrap();
+    }
+    let m = s.mixed_stats();
+    assert_eq!(
+        (m.single_factorizations, m.double_factorizations),
+        (1, 2),
+        "{m:?}"
+    );
+    assert_eq!(m.last_fallback, GIVEN_UP);
+    // After f32 served: one refusal keeps it, the second in a row gives it up.
+    let mut s = solver(FaerPrecision::mixed());
+    s.analyze(a.pattern()).unwrap();
+    s.factorize(&a).unwrap();
+    s.solve_in_place(&mut b, 1).unwrap();
+    s.mixed.refuse();
+    s.factorize(&a).unwrap();
+    assert_eq!(s.mixed_stats().single_factorizations, 2);
+    s.mixed.refuse();
+    s.factorize(&a).unwrap();
+    let m = s.mixed_stats();
+    assert_eq!(
+        (m.single_factorizations, m.double_factorizations),
+        (2, 1),
+        "{m:?}"
+    );
+    assert_eq!(m.last_fallback, GIVEN_UP);
+    // A new analysis tries f32 again.
+    s.analyze(a.pattern()).unwrap();
+    s.factorize(&a).unwrap();
+    assert_eq!(s.mixed_stats().single_factorizations, 1);
+}
+
+/// `SolverKind::FaerLdltAuto`'s size rule: f64 below `MIXED_FROM_DOFS` (no mixed stats,
+/// the f64 solver's bits), an f32 factor from it on. The chains are shifted by I
+/// (eigenvalues in [1, 5]) so that f32 suffices at any length.
+#[test]
+fn auto_precision_is_f64_below_its_threshold_and_f32_from_it() {
+    let build = || crate::SolverKind::FaerLdltAuto(1).build();
+    let below = chain(crate::MIXED_FROM_DOFS - 1, 1.0, -1.0);
+    let mut s = build();
+    s.analyze(below.pattern()).unwrap();
+    s.factorize(&below).unwrap();
+    assert_eq!(s.mixed_stats(), None);
+    let mut x = vec![1.0; below.n()];
+    s.solve_in_place(&mut x, 1).unwrap();
+    let mut f64_solver = crate::SolverKind::FaerLdltThreads(1).build();
+    f64_solver.analyze(below.pattern()).unwrap();
+    f64_solver.factorize(&below).unwrap();
+    let mut y = vec![1.0; below.n()];
+    f64_solver.solve_in_place(&mut y, 1).unwrap();
+    assert!(x.iter().zip(&y).all(|(p, q)| p.to_bits() == q.to_bits()));
+    let from = chain(crate::MIXED_FROM_DOFS, 1.0, -1.0);
+    s.analyze(from.pattern()).unwrap();
+    s.factorize(&from).unwrap();
+    let mut x = vec![1.0; from.n()];
+    s.solve_in_place(&mut x, 1).unwrap();
+    let m = s.mixed_stats().unwrap();
+    assert_eq!(
+        (m.single_factorizations, m.double_factorizations),
+        (1, 0),
+        "{m:?}"
+    );
+}
+
+/// Entries beyond f32's range (3.4e38) go to f64 and give the f64 answer.
+#[test]
+fn entries_beyond_f32_go_to_f64() {
+    let a = chain(50, 1e39, 0.0);
+    let (x64, _) = solve(&mut solver(FaerPrecision::Double), &a);
+    let mut s = solver(FaerPrecision::mixed());
+    let (x, _) = solve(&mut s, &a);
+    assert_eq!(
+        s.mixed_stats().last_fallback,
+        Some("an entry does not fit f32")
+    );
+    assert_eq!(x, x64);
+}
