@@ -29,7 +29,7 @@ mod split;
 pub use directions::FaerDirections;
 pub use mixed::{FaerPrecision, MixedStats};
 pub use options::{
-    AUTO_WITHOUT_AMD_DOFS, FaerMode, FaerOrdering, FaerSplit, FaerStructure,
+    AUTO_METIS_ONLY_DOFS, AUTO_WITHOUT_AMD_DOFS, FaerMode, FaerOrdering, FaerSplit, FaerStructure,
     KERNEL_THREADS_FROM_DOFS, MIXED_FROM_DOFS, SPLIT_FROM_DOFS,
 };
 

@@ -46,9 +46,9 @@ mod solver;
 pub use budget::{MemoryBudget, set_memory_budget};
 pub use error::SolverError;
 pub use faer_backend::{
-    AUTO_WITHOUT_AMD_DOFS, FaerDirections, FaerMode, FaerOrdering, FaerPrecision, FaerSolver,
-    FaerSplit, FaerStructure, KERNEL_THREADS_FROM_DOFS, MIXED_FROM_DOFS, MixedStats,
-    SPLIT_FROM_DOFS,
+    AUTO_METIS_ONLY_DOFS, AUTO_WITHOUT_AMD_DOFS, FaerDirections, FaerMode, FaerOrdering,
+    FaerPrecision, FaerSolver, FaerSplit, FaerStructure, KERNEL_THREADS_FROM_DOFS, MIXED_FROM_DOFS,
+    MixedStats, SPLIT_FROM_DOFS,
 };
 pub use matrix::SymmetricMatrix;
 pub use metis::{METIS_SEED, metis_nested_dissection};

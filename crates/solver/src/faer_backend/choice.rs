@@ -13,7 +13,8 @@ pub(super) type SymbolicResult = Result<SymbolicCholesky<usize>, SolverError>;
 /// symbolic factor with the fewest flops kept, earlier candidates winning ties. One symbolic
 /// factor is kept alive beside the one being made: a loser's structure is dropped at once
 /// (AMD's is rebuilt from its order if it wins). A METIS failure only removes METIS from the
-/// comparison.
+/// comparison. From [`super::AUTO_METIS_ONLY_DOFS`] DOFs on (`n`) METIS alone, nested
+/// dissection only if METIS fails.
 pub(super) fn auto_choice(
     symbolic_for: &dyn Fn(SymmetricOrdering<'_, usize>) -> SymbolicResult,
     nested: &dyn Fn() -> SymbolicResult,
@@ -21,6 +22,12 @@ pub(super) fn auto_choice(
     with_amd: bool,
     n: usize,
 ) -> Result<(SymbolicCholesky<usize>, FaerOrdering), SolverError> {
+    if n >= super::AUTO_METIS_ONLY_DOFS {
+        return match metis() {
+            Ok(m) => Ok((m, FaerOrdering::Metis)),
+            Err(_) => Ok((nested()?, FaerOrdering::NestedDissection)),
+        };
+    }
     let mut best_flops = f64::INFINITY;
     let mut amd_perm: Option<Option<(Vec<usize>, Vec<usize>)>> = None;
     if with_amd {

@@ -42,13 +42,24 @@ pub enum FaerOrdering {
     /// every model measured from 10 k DOF up — cubes, laminates, the scene plates, the
     /// through-width model — so its analysis was time spent for nothing, 0.1 s of each
     /// 18 k-DOF analysis; neither nested dissection nor METIS was always the better:
-    /// docs/PERFORMANCE.md). A METIS failure only removes it from the comparison.
+    /// docs/PERFORMANCE.md). A METIS failure only removes it from the comparison. From
+    /// [`AUTO_METIS_ONLY_DOFS`] DOFs on, METIS alone (nested dissection if METIS fails).
     #[default]
     Auto,
 }
 
 /// From this many DOFs on, [`FaerOrdering::Auto`] leaves AMD out of its comparison.
 pub const AUTO_WITHOUT_AMD_DOFS: usize = 10_000;
+
+/// From this many DOFs on, [`FaerOrdering::Auto`] takes METIS's order without comparing it
+/// with our nested dissection's (which it uses only if METIS fails). Measured
+/// (docs/PERFORMANCE.md, "METIS alone from 10 000 DOF"): METIS had the fewer flops on every
+/// scene mesh from 10 k DOF (by 7–16 % at 13.5–18.4 k DOF, the error-estimate companions'
+/// contact systems below 10 k excepted) and on 5 of the 6 bench models (by 1–21 %); our
+/// nested dissection won two boxes by 1.7 % and 2.4 %. Its analysis cost 1.6–1.7× METIS's
+/// (0.13–0.14 s against 0.08 s at 18 k DOF; in the bench table, loaded, 3.0 against 1.9 s at
+/// 45 k DOF).
+pub const AUTO_METIS_ONLY_DOFS: usize = 10_000;
 
 /// Whether [`super::FaerSolver`]'s LDLᵀ splits the matrix at the nested-dissection order's top
 /// separator and factors the two halves on two threads (tree-level parallelism, `split.rs`).

@@ -55,21 +55,17 @@ fn order_is_a_deterministic_permutation_on_any_thread_count() {
 }
 
 /// METIS on a 3-D Hex20 box needs less fill than AMD (measured 0.55 of AMD's nnz(L) on
-/// 14×14×6 elements; ask for 0.8), and Auto keeps the candidate with the fewest flops:
-/// its flops equal the smallest of the three analyses'.
+/// 14×14×6 elements; ask for 0.8). Below `AUTO_METIS_ONLY_DOFS` Auto keeps the candidate
+/// with the fewest flops (its flops equal the smallest of the three analyses'); from it on
+/// METIS's order, without the comparison.
 #[test]
-fn auto_keeps_the_fewest_flops_of_three() {
-    let p = Arc::new(hex20(14, 14, 6));
-    let (_, amd) = analysed(&p, FaerOrdering::Amd);
-    let (_, nd) = analysed(&p, FaerOrdering::NestedDissection);
-    let (_, metis) = analysed(&p, FaerOrdering::Metis);
-    assert!(
-        (metis.lower_nonzeros as f64) < 0.8 * amd.lower_nonzeros as f64,
-        "METIS {} vs AMD {}",
-        metis.lower_nonzeros,
-        amd.lower_nonzeros
-    );
-    let (s, auto) = analysed(&p, FaerOrdering::Auto);
+fn auto_keeps_the_fewest_flops_of_three_below_its_threshold_and_metis_from_it() {
+    let small = Arc::new(hex20(8, 8, 4));
+    assert!(small.n() < crate::AUTO_METIS_ONLY_DOFS);
+    let (_, amd) = analysed(&small, FaerOrdering::Amd);
+    let (_, nd) = analysed(&small, FaerOrdering::NestedDissection);
+    let (_, metis) = analysed(&small, FaerOrdering::Metis);
+    let (s, auto) = analysed(&small, FaerOrdering::Auto);
     let best = [
         (amd.flops, FaerOrdering::Amd),
         (nd.flops, FaerOrdering::NestedDissection),
@@ -80,6 +76,20 @@ fn auto_keeps_the_fewest_flops_of_three() {
     .unwrap();
     assert_eq!(auto.flops, best.0);
     assert_eq!(s.chosen_ordering(), Some(best.1));
+
+    let big = Arc::new(hex20(14, 14, 6));
+    assert!(big.n() >= crate::AUTO_METIS_ONLY_DOFS);
+    let (_, amd) = analysed(&big, FaerOrdering::Amd);
+    let (_, metis) = analysed(&big, FaerOrdering::Metis);
+    assert!(
+        (metis.lower_nonzeros as f64) < 0.8 * amd.lower_nonzeros as f64,
+        "METIS {} vs AMD {}",
+        metis.lower_nonzeros,
+        amd.lower_nonzeros
+    );
+    let (s, auto) = analysed(&big, FaerOrdering::Auto);
+    assert_eq!(s.chosen_ordering(), Some(FaerOrdering::Metis));
+    assert_eq!(auto.flops, metis.flops);
 }
 
 /// On a path (a 1-D chain of springs) every order without fill is optimal: AMD finds one, so
