@@ -16,8 +16,8 @@
 //! than 10 passes (src/contact.rs), when it needs contact where the companion did not with
 //! another count of negative pivots than the companion's, when it does not converge, or when
 //! it converges on another branch than the companion's (a centre deflection of the other
-//! sign, or unstable where the companion is stable). After a seeded
-//! level, the next is seeded only if this one's start was close ([`KEEP_SEEDING`]).
+//! sign, or unstable where the companion is stable). After a seeded level, the next is seeded
+//! only if this one's start was close ([`KEEP_SEEDING`]).
 
 use super::deflections;
 use super::level::{Solved, engage_contact};
