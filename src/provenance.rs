@@ -43,7 +43,12 @@ pub fn peak_memory_bytes() -> Option<u64> {
 
 /// The solver's name and its ordering, in words.
 pub fn solver_names(kind: SolverKind) -> (String, String) {
-    const AUTO: &str = "AMD, nested dissection or METIS, whichever needs the fewest flops";
+    // `FaerOrdering::Auto` (nonlin3d_solver::AUTO_METIS_ONLY_DOFS).
+    let auto = format!(
+        "METIS from {} DOF; below, AMD, nested dissection or METIS, whichever needs the \
+         fewest flops",
+        nonlin3d_solver::AUTO_METIS_ONLY_DOFS
+    );
     // `FaerSplit::Auto`, the solver's default (nonlin3d_solver::SPLIT_FROM_DOFS).
     let split = format!(
         "split at the top separator from {} DOF, the two halves side by side",
@@ -51,14 +56,14 @@ pub fn solver_names(kind: SolverKind) -> (String, String) {
     );
     match kind {
         SolverKind::Profile => ("profile LDLᵀ".into(), "reverse Cuthill–McKee".into()),
-        SolverKind::FaerLdlt => (format!("faer LDLᵀ ({split})"), AUTO.into()),
-        SolverKind::FaerLlt => ("faer LLᵀ".into(), AUTO.into()),
+        SolverKind::FaerLdlt => (format!("faer LDLᵀ ({split})"), auto.clone()),
+        SolverKind::FaerLlt => ("faer LLᵀ".into(), auto.clone()),
         SolverKind::FaerLdltThreads(n) => {
-            (format!("faer LDLᵀ on {n} threads ({split})"), AUTO.into())
+            (format!("faer LDLᵀ on {n} threads ({split})"), auto.clone())
         }
         SolverKind::FaerLdltMixed(n) => (
             format!("faer LDLᵀ, f32 factor refined in f64, on {n} threads (0: all cores; {split})"),
-            AUTO.into(),
+            auto.clone(),
         ),
         SolverKind::FaerLdltAuto(n) => (
             format!(
@@ -66,7 +71,7 @@ pub fn solver_names(kind: SolverKind) -> (String, String) {
                  (0: all cores; {split})",
                 nonlin3d_solver::MIXED_FROM_DOFS
             ),
-            AUTO.into(),
+            auto.clone(),
         ),
     }
 }

@@ -144,7 +144,7 @@ pub enum SolverName {
     /// factorisation, each refined in f64: mixed precision costs 1.5× on the plate decks).
     #[default]
     Auto,
-    /// faer's supernodal/simplicial LDLᵀ with AMD, nested-dissection or METIS ordering (`FaerOrdering::Auto`: whichever needs the fewest flops), f64.
+    /// faer's supernodal/simplicial LDLᵀ with AMD, nested-dissection or METIS ordering (`FaerOrdering::Auto`: METIS from 10 000 DOF, below whichever needs the fewest flops), f64.
     Faer,
     /// The thesis's profile (skyline) LDLᵀ with RCM ordering.
     Profile,

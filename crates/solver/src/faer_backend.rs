@@ -1,5 +1,5 @@
 //! faer's sparse Cholesky (supernodal or simplicial, chosen by faer from the flop count) with
-//! AMD, nested-dissection or METIS ordering (by default the one needing the fewest flops): LLᵀ for positive definite matrices, LDLᵀ for symmetric indefinite ones.
+//! AMD, nested-dissection or METIS ordering (by default METIS from 10 000 DOF, below the one needing the fewest flops): LLᵀ for positive definite matrices, LDLᵀ for symmetric indefinite ones.
 //! Symbolic analysis once per pattern, numeric factorisation many times.
 
 use crate::budget::{MemoryBudget, Need, current_budget, try_zeros};

@@ -190,6 +190,13 @@ impl FaerSolver {
         a: &SymmetricMatrix,
     ) -> Result<Factorization, SolverError> {
         self.mixed.single = false;
+        if self.mixed.refused_in_a_row >= REFUSALS_BEFORE_F64 {
+            // f64 from here on: no copy of A for refinement is needed.
+            return self.fall_back(
+                a,
+                "f32 refused before it served, or twice in a row: f64 until the next analysis",
+            );
+        }
         match &mut self.mixed.a {
             Some(m) if std::sync::Arc::ptr_eq(m.pattern(), a.pattern()) => {
                 m.values_mut().copy_from_slice(a.values());
@@ -197,12 +204,6 @@ impl FaerSolver {
             slot => *slot = Some(a.clone()),
         }
         self.mixed.a_norm = inf_norm(a);
-        if self.mixed.refused_in_a_row >= REFUSALS_BEFORE_F64 {
-            return self.fall_back(
-                a,
-                "f32 refused before it served, or twice in a row: f64 until the next analysis",
-            );
-        }
         match self.factorize_single(a)? {
             Ok(f) => Ok(f),
             Err(reason) => {

@@ -37,8 +37,8 @@ pub enum FaerOrdering {
     Metis,
     /// The candidates' symbolic factors compared by flops (Σ c_k² over the column counts),
     /// the fewest kept (ties: AMD, then nested dissection, then METIS). The default. Below
-    /// [`AUTO_WITHOUT_AMD_DOFS`] DOFs the candidates are AMD, nested dissection and METIS; at
-    /// and above it nested dissection and METIS (AMD needed 1.6–6× the best one's flops on
+    /// [`AUTO_WITHOUT_AMD_DOFS`] DOFs the candidates are AMD, nested dissection and METIS;
+    /// AMD is left out from it on (AMD needed 1.6–6× the best one's flops on
     /// every model measured from 10 k DOF up — cubes, laminates, the scene plates, the
     /// through-width model — so its analysis was time spent for nothing, 0.1 s of each
     /// 18 k-DOF analysis; neither nested dissection nor METIS was always the better:

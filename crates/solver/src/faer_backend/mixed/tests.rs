@@ -28,7 +28,7 @@ fn solver(precision: FaerPrecision) -> FaerSolver {
 }
 
 /// (x, negative pivots) of A x = b with b_i = 1 + i mod 3.
-fn solve(s: &mut FaerSolver, a: &SymmetricMatrix) -> (Vec<f64>, usize) {
+fn solve(s: &mut dyn LinearSolver, a: &SymmetricMatrix) -> (Vec<f64>, usize) {
     s.analyze(a.pattern()).unwrap();
     let f = s.factorize(a).unwrap();
     let mut x: Vec<f64> = (0..a.n()).map(|i| 1.0 + (i % 3) as f64).collect();
@@ -178,25 +178,13 @@ fn f32_refused_before_it_served_or_twice_in_a_row_stays_f64_until_the_next_analy
 /// (eigenvalues in [1, 5]) so that f32 suffices at any length.
 #[test]
 fn auto_precision_is_f64_below_its_threshold_and_f32_from_it() {
-    let build = || crate::SolverKind::FaerLdltAuto(1).build();
+    let mut s = crate::SolverKind::FaerLdltAuto(1).build();
     let below = chain(crate::MIXED_FROM_DOFS - 1, 1.0, -1.0);
-    let mut s = build();
-    s.analyze(below.pattern()).unwrap();
-    s.factorize(&below).unwrap();
+    let (x, _) = solve(&mut *s, &below);
     assert_eq!(s.mixed_stats(), None);
-    let mut x = vec![1.0; below.n()];
-    s.solve_in_place(&mut x, 1).unwrap();
-    let mut f64_solver = crate::SolverKind::FaerLdltThreads(1).build();
-    f64_solver.analyze(below.pattern()).unwrap();
-    f64_solver.factorize(&below).unwrap();
-    let mut y = vec![1.0; below.n()];
-    f64_solver.solve_in_place(&mut y, 1).unwrap();
+    let (y, _) = solve(&mut *crate::SolverKind::FaerLdltThreads(1).build(), &below);
     assert!(x.iter().zip(&y).all(|(p, q)| p.to_bits() == q.to_bits()));
-    let from = chain(crate::MIXED_FROM_DOFS, 1.0, -1.0);
-    s.analyze(from.pattern()).unwrap();
-    s.factorize(&from).unwrap();
-    let mut x = vec![1.0; from.n()];
-    s.solve_in_place(&mut x, 1).unwrap();
+    solve(&mut *s, &chain(crate::MIXED_FROM_DOFS, 1.0, -1.0));
     let m = s.mixed_stats().unwrap();
     assert_eq!(
         (m.single_factorizations, m.double_factorizations),
