@@ -284,7 +284,10 @@ fn sweep(
         vcct_s: 0.0,
         mixed: None,
     };
-    let mut stage = ContactStage::new(scene);
+    let host = sub
+        .as_deref_mut()
+        .and_then(Substructured::take_contact_host);
+    let mut stage = ContactStage::new(scene, host);
     let arc = arc_length(scene);
     // `on` solves every level in the contact loop (load control); `auto` only the levels
     // whose faces overlap, the others by arc length.

@@ -256,8 +256,7 @@ pub(super) fn follow_level(
             }
         };
     }
-    // (Contact and substructuring together are refused by the scene checks: the contact
-    // stage works on the full model's DOFs.)
+    // (With a superelement `u` is the nonlinear region's and the stage works on it.)
     let contact = engage_contact(
         stage,
         scene,
@@ -287,8 +286,8 @@ pub(super) fn engage_contact(
     (newton, stepping): (&NewtonSettings, &Stepping),
     (solved, t): (&mut Solved, Instant),
 ) -> Result<Option<ContactSummary>, Error> {
-    // (Contact and substructuring together are refused by the scene checks: the contact
-    // stage works on the full model's DOFs.)
+    // (With a superelement `u` is the nonlinear region's and the stage works on it:
+    // src/substructure.rs, `ContactHost`.)
     if !(stage.active() || stage.overlaps(model, u)) {
         return Ok(None);
     }
@@ -343,7 +342,7 @@ pub(super) fn record_level(
         }
         None => (front_table(scene, model, problem, u)?, u.to_vec()),
     };
-    let closed = stage.closed_upper(model);
+    let closed = stage.closed_upper();
     let states = respect_contact(&mut front, &model.front, |a, _| closed.contains(&a));
     let vcct_s = t.elapsed().as_secs_f64();
     let (centre, peak) = deflections(model, &full);

@@ -163,16 +163,17 @@ fn substructure(s: &Scene) -> Result<(), Error> {
                 .into(),
         );
     }
-    // The contact stage works on the full model's DOFs; with a superelement the Newton problem
-    // holds the nonlinear region's only.
-    if sub.partition != PartitionName::None
+    // Contact acts on the nonlinear region's DOFs (src/substructure.rs): the sublaminate
+    // partition takes the base cells under the delamination in; the thesis's keeps the
+    // sublaminate's strip next to the front, crack faces included, in the linear region.
+    if sub.partition == PartitionName::Thesis
         && s.contact.crack_faces != crate::scene::CrackFacesName::Off
     {
         return bad(format!(
-            "substructure.partition = \"{}\" with contact.crack_faces = \"{}\": crack-face \
-             contact in a substructured model is not available yet; set [contact] crack_faces = \
-             \"off\" (overlapping faces are then reported as overlapped) or partition = \"none\"",
-            sub.partition.name(),
+            "substructure.partition = \"thesis\" with contact.crack_faces = \"{}\": the \
+             thesis's partition condenses the crack faces next to the front, where contact \
+             would act; choose partition = \"sublaminate\" (its nonlinear region then holds \
+             both crack faces) or set [contact] crack_faces = \"off\"",
             s.contact.crack_faces.name()
         ));
     }

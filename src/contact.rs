@@ -21,17 +21,21 @@
 //!   `max_step`, followed again from its start in the loop's sub-levels.
 //!
 //! The contact system (all candidate pairs reserved in its pattern) is built on first use,
-//! beside the level loop's own system, with its own solver session.
+//! beside the level loop's own system, with its own solver session. In a substructured model
+//! (src/substructure.rs) it is the nonlinear region's problem, superelement included, and the
+//! pairs are the region's (`ContactHost` in src/substructure.rs).
 
 use crate::model::Model;
 use crate::problem::build_problem;
 pub use crate::results::{ContactPass, ContactSummary};
 pub use crate::scene::{ContactModeName, ContactOptions, CrackFacesName, DEFAULT_TOLERANCE_MM};
+use crate::substructure::ContactHost;
 use crate::{Error, Scene};
 use nonlin3d_contact::{
     Contact, ContactLevel, ContactSettings, ContactState, CrackFaces, Iterate, LevelSettings, Mode,
     Resumed, Tolerances, update,
 };
+use nonlin3d_mesh::Mesh;
 use nonlin3d_mesh::names::{CRACK_LOWER, CRACK_UPPER};
 use nonlin3d_newton::{
     IncrementReport, LevelReport, NewtonSettings, PathSolver, Stepping, StructuralProblem,
@@ -49,15 +53,24 @@ struct Engaged {
 pub(crate) struct ContactStage {
     options: ContactOptions,
     engaged: Option<Engaged>,
+    /// The nonlinear region of a substructured model (None: the model itself).
+    host: Option<ContactHost>,
 }
 
 impl ContactStage {
-    /// The stage of a scene (nothing built yet).
-    pub(crate) fn new(scene: &Scene) -> Self {
+    /// The stage of a scene (nothing built yet), on the model's DOFs or (`host`) on a
+    /// superelement's nonlinear region.
+    pub(crate) fn new(scene: &Scene, host: Option<ContactHost>) -> Self {
         Self {
             options: scene.contact,
             engaged: None,
+            host,
         }
+    }
+
+    /// The mesh whose DOFs the level loop's `u` holds.
+    fn mesh<'a>(&'a self, model: &'a Model) -> &'a Mesh {
+        self.host.as_ref().map_or(&model.mesh, |h| &h.mesh)
     }
 
     /// Whether contact can act (`auto`/`on`): then the facade's stand-ins for contact (the BFGS
@@ -76,7 +89,7 @@ impl ContactStage {
     /// lower face without normals (degenerate) engages, and the loop reports it.
     pub(crate) fn overlaps(&self, model: &Model, u: &[f64]) -> bool {
         self.enabled()
-            && max_overlap(model, u, self.options.mode)
+            && overlap_on(self.mesh(model), u, self.options.mode)
                 .map_or(true, |o| o > self.options.tolerance() * 1e-3)
     }
 
@@ -219,12 +232,16 @@ impl ContactStage {
         model: &Model,
         newton: &NewtonSettings,
     ) -> Result<Engaged, Error> {
-        let contact = Contact::new(&model.mesh, self.settings())?;
-        let (assembler, constraints) = build_problem(scene, model)?.into_parts()?;
-        let problem =
-            StructuralProblem::with_contributions(assembler, Vec::new(), constraints, |b| {
-                contact.reserve(b)
-            })?;
+        let contact = Contact::new(self.mesh(model), self.settings())?;
+        let problem = match &self.host {
+            Some(host) => host.problem(scene, model, |b| contact.reserve(b))?,
+            None => {
+                let (assembler, constraints) = build_problem(scene, model)?.into_parts()?;
+                StructuralProblem::with_contributions(assembler, Vec::new(), constraints, |b| {
+                    contact.reserve(b)
+                })?
+            }
+        };
         let session = PathSolver::new(&problem, newton.solver)?;
         Ok(Engaged {
             contact,
@@ -269,16 +286,20 @@ impl ContactStage {
         self.engaged.as_ref().and_then(|e| e.session.mixed_stats())
     }
 
-    /// The closed pairs' upper nodes (empty when contact never engaged).
-    pub(crate) fn closed_upper(&self, model: &Model) -> std::collections::HashSet<usize> {
+    /// The closed pairs' upper nodes, numbered in the model's mesh (empty when contact never
+    /// engaged).
+    pub(crate) fn closed_upper(&self) -> std::collections::HashSet<usize> {
         let Some(e) = &self.engaged else {
             return Default::default();
         };
-        let up = &model.mesh.node_sets[CRACK_UPPER];
-        up.iter()
+        let full = |n: usize| self.host.as_ref().map_or(n, |h| h.to_full[n]);
+        e.contact
+            .faces()
+            .pairs()
+            .iter()
             .zip(e.contact.active())
             .filter(|(_, a)| *a)
-            .map(|(&n, _)| n)
+            .map(|(p, _)| full(p.upper))
             .collect()
     }
 }
@@ -458,11 +479,17 @@ fn summary(level: &ContactLevel) -> ContactSummary {
 /// face's normal. Errors: a mesh whose crack faces the contact crate refuses, a degenerate
 /// deformed lower face.
 pub fn max_overlap(model: &Model, u: &[f64], mode: ContactModeName) -> Result<f64, Error> {
-    let sets = &model.mesh.node_sets;
+    overlap_on(&model.mesh, u, mode)
+}
+
+/// [`max_overlap`] on `mesh` (the model's, or a superelement's nonlinear region) whose DOFs
+/// `u` holds.
+fn overlap_on(mesh: &Mesh, u: &[f64], mode: ContactModeName) -> Result<f64, Error> {
+    let sets = &mesh.node_sets;
     if !(sets.contains_key(CRACK_UPPER) && sets.contains_key(CRACK_LOWER)) {
         return Ok(0.0);
     }
-    let faces = CrackFaces::from_mesh(&model.mesh)?;
+    let faces = CrackFaces::from_mesh(mesh)?;
     let normals = faces.normals(u)?;
     let gaps = faces.gaps(u, &normals);
     let gaps = match mode {

@@ -7,6 +7,10 @@
 //! linear region is recovered, u_i = K_ii⁻¹ (f_i − K_ib u_b − K_ip u_p), and VCCT runs on the
 //! full field.
 //!
+//! With crack-face contact (`auto`/`on`, the sublaminate partition only) the nonlinear region
+//! also holds the base cells under the delamination, so that both faces of every pair are
+//! Newton's DOFs, and the contact stage runs on the nonlinear problem (`ContactHost`).
+//!
 //! VCCT forces (§2.8): the front's nodal forces come from the cells above the front, each
 //! with the kinematics of its region: a linear cell's are K_e u_e (small strain, what the
 //! thesis used with the front in the linear region and what the superelement assumed), a
@@ -16,12 +20,14 @@ use crate::Error;
 use crate::model::Model;
 use crate::problem::{constraints, load_factors};
 use crate::scene::{ForceKinematics, PartitionName, Scene};
-use nonlin3d_assembly::Assembler;
+use nonlin3d_assembly::{Assembler, Constraints, SystemBuilder};
 use nonlin3d_element::Kinematics;
 use nonlin3d_laminate::ShearCoupling;
-use nonlin3d_mesh::{Partition as Cells, nonlinear_region};
+use nonlin3d_mesh::{Mesh, Partition as Cells, nonlinear_region};
 use nonlin3d_newton::StructuralProblem;
-use nonlin3d_substructure::{CondenseSettings, Partition, Recovery, condense, mtx_text};
+use nonlin3d_substructure::{
+    CondenseSettings, Partition, Recovery, Superelement, condense, mtx_text,
+};
 
 /// The file `[substructure] write_matrix = true` writes K_red to, in the output folder.
 pub const MATRIX_FILE: &str = "superelement.mtx";
@@ -68,8 +74,10 @@ pub struct SubstructureSummary {
     pub full_dofs: usize,
     /// DOFs of the nonlinear problem Newton solves.
     pub nonlinear_dofs: usize,
-    /// Nonlinear and linear cells.
+    /// Nonlinear cells.
     pub nonlinear_cells: usize,
+    /// Of those, base cells under the delamination (with crack-face contact; 0 without).
+    pub crack_base_cells: usize,
     /// Linear cells.
     pub linear_cells: usize,
     /// One entry per superelement.
@@ -82,8 +90,54 @@ pub struct Substructured {
     partition: Partition,
     recovery: Recovery,
     full: Assembler,
+    /// What the contact stage works on (with crack-face contact), until it takes it.
+    contact: Option<ContactHost>,
     /// What was done.
     pub summary: SubstructureSummary,
+}
+
+/// What the contact stage (src/contact.rs) works on in a substructured model: the nonlinear
+/// sub-mesh (both crack faces in it), its nodes' numbers in the full mesh, and the parts of
+/// its problem.
+pub(crate) struct ContactHost {
+    /// The nonlinear sub-mesh.
+    pub(crate) mesh: Mesh,
+    /// Its node → the full mesh's node.
+    pub(crate) to_full: Vec<usize>,
+    superelement: Superelement,
+    constraints: Constraints,
+}
+
+impl ContactHost {
+    /// The nonlinear problem (its solid, the superelement, its constraints) with `reserve`
+    /// (the contact pairs) in its pattern.
+    pub(crate) fn problem(
+        &self,
+        scene: &Scene,
+        model: &Model,
+        reserve: impl FnOnce(SystemBuilder) -> SystemBuilder,
+    ) -> Result<StructuralProblem, Error> {
+        Ok(StructuralProblem::with_contributions(
+            assembler(scene, model, &self.mesh)?,
+            vec![Box::new(self.superelement.clone())],
+            self.constraints.clone(),
+            reserve,
+        )?)
+    }
+}
+
+/// The nonlinear-kinematics assembler of `mesh` (the full mesh or a sub-mesh of it) with the
+/// model's materials and the scene's rule.
+fn assembler(scene: &Scene, model: &Model, mesh: &Mesh) -> Result<Assembler, Error> {
+    let rule = scene.analysis.integration.rule();
+    Ok(Assembler::new(
+        mesh,
+        &model.materials,
+        ShearCoupling::Exact,
+        rule,
+        rule,
+        Kinematics::Nonlinear,
+    )?)
 }
 
 /// The nonlinear problem and its [`Substructured`] companion for a scene whose
@@ -93,27 +147,19 @@ pub fn build(
     model: &Model,
 ) -> Result<Option<(StructuralProblem, Substructured)>, Error> {
     let options = scene.substructure;
+    let contact = scene.contact.enabled();
     let (cells, name) = match options.partition {
         PartitionName::None => return Ok(None),
         PartitionName::Thesis => {
             let offset_m = options.offset_mm.map_or(model.h, |l| l * 1e-3);
             (Cells::Thesis { offset_m }, "thesis")
         }
+        PartitionName::Sublaminate if contact => (Cells::SublaminateAndCrackBase, "sublaminate"),
         PartitionName::Sublaminate => (Cells::Sublaminate, "sublaminate"),
     };
     let region = nonlinear_region(&model.mesh, &model.front_shape, cells)?;
     let partition = Partition::from_nonlinear_cells(&model.mesh, &region.cells)?;
-    let rule = scene.analysis.integration.rule();
-    let build = |mesh: &nonlin3d_mesh::Mesh| {
-        Assembler::new(
-            mesh,
-            &model.materials,
-            ShearCoupling::Exact,
-            rule,
-            rule,
-            Kinematics::Nonlinear,
-        )
-    };
+    let build = |mesh: &Mesh| assembler(scene, model, mesh);
     let (_, reference) = load_factors(scene);
     let c = constraints(model, reference)?;
     let threads = match scene.analysis.threads {
@@ -128,10 +174,17 @@ pub fn build(
     let mtx = options
         .write_matrix
         .then(|| mtx_text(&partition, &done.superelement, 1.0));
+    let constraints = partition.nonlinear_constraints(&c)?;
+    let host = contact.then(|| ContactHost {
+        mesh: partition.nonlinear_mesh().clone(),
+        to_full: partition.nonlinear_nodes().to_vec(),
+        superelement: done.superelement.clone(),
+        constraints: constraints.clone(),
+    });
     let problem = StructuralProblem::with_contributions(
         build(partition.nonlinear_mesh())?,
         vec![Box::new(done.superelement)],
-        partition.nonlinear_constraints(&c)?,
+        constraints,
         |b| b,
     )?;
     let r = &done.report;
@@ -139,7 +192,7 @@ pub fn build(
         partition: name.into(),
         offset_mm: match cells {
             Cells::Thesis { offset_m } => Some(offset_m * 1e3),
-            Cells::Sublaminate => None,
+            Cells::Sublaminate | Cells::SublaminateAndCrackBase => None,
         },
         realised_offset_mm: region
             .realised_offset_m
@@ -147,6 +200,14 @@ pub fn build(
         full_dofs: 3 * model.mesh.nodes.len(),
         nonlinear_dofs: problem.assembler().n(),
         nonlinear_cells: partition.nonlinear_cells().len(),
+        crack_base_cells: match cells {
+            Cells::SublaminateAndCrackBase => model
+                .mesh
+                .cell_sets
+                .get(nonlin3d_mesh::names::SUBLAMINATE)
+                .map_or(0, |sub| region.cells.len().saturating_sub(sub.len())),
+            _ => 0,
+        },
         linear_cells: partition.linear_cells().len(),
         superelements: vec![SuperelementSummary {
             interface_dofs: r.interface_dofs,
@@ -165,12 +226,18 @@ pub fn build(
         partition,
         recovery: done.recovery,
         full,
+        contact: host,
         summary,
     };
     Ok(Some((problem, sub)))
 }
 
 impl Substructured {
+    /// What the contact stage works on (None without crack-face contact, or once taken).
+    pub(crate) fn take_contact_host(&mut self) -> Option<ContactHost> {
+        self.contact.take()
+    }
+
     /// Nodal loads in the full mesh's numbering renumbered to the nonlinear sub-mesh's (the
     /// perturbation, §3.2: it acts on the sublaminate's centre, in the nonlinear region).
     pub fn to_nonlinear(&self, loads: &[(usize, f64)]) -> Result<Vec<(usize, f64)>, Error> {

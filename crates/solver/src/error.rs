@@ -72,6 +72,17 @@ pub enum SolverError {
     /// `solve` before `factorize`, or `factorize` before `analyze`.
     #[error("{0}")]
     NotReady(&'static str),
+    /// A DOF list of a block partition (interior and boundary of a Schur complement) that
+    /// names a DOF outside the matrix or twice.
+    #[error("DOF {dof} of a {n}-DOF matrix: {reason}")]
+    BlockDof {
+        /// The offending DOF.
+        dof: usize,
+        /// Matrix dimension.
+        n: usize,
+        /// What is wrong with it.
+        reason: &'static str,
+    },
     /// The envelope or factor would not fit in memory (entries counted).
     #[error("{what} needs {entries} entries, more than the allowed {limit}")]
     TooLarge {

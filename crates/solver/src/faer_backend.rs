@@ -32,6 +32,7 @@ pub use options::{
     AUTO_METIS_ONLY_DOFS, AUTO_WITHOUT_AMD_DOFS, FaerMode, FaerOrdering, FaerSplit, FaerStructure,
     KERNEL_THREADS_FROM_DOFS, MIXED_FROM_DOFS, SPLIT_FROM_DOFS,
 };
+pub use split::{SchurComplement, SchurOutcome};
 
 /// faer's sparse Cholesky behind [`LinearSolver`].
 pub struct FaerSolver {

@@ -48,7 +48,7 @@ pub use error::SolverError;
 pub use faer_backend::{
     AUTO_METIS_ONLY_DOFS, AUTO_WITHOUT_AMD_DOFS, FaerDirections, FaerMode, FaerOrdering,
     FaerPrecision, FaerSolver, FaerSplit, FaerStructure, KERNEL_THREADS_FROM_DOFS, MIXED_FROM_DOFS,
-    MixedStats, SPLIT_FROM_DOFS,
+    MixedStats, SPLIT_FROM_DOFS, SchurComplement, SchurOutcome,
 };
 pub use matrix::SymmetricMatrix;
 pub use metis::{METIS_SEED, metis_nested_dissection};

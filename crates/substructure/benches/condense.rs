@@ -1,7 +1,8 @@
 //! Substructuring cost on the thesis's reference plate (30 mm circle, Hex20, 2 263 nodes) and
 //! on a refined one (16 slices, two sublaminate layers); thesis Fig. 3.2.2's partition: the sublaminate inside the front offset inward by ℓ = h is
-//! nonlinear, the rest linear): the condensation (assembly of the linear region, factorisation
-//! of K_ii, the blocked multi-RHS solves) at block widths 1 (reference only), 16, 64 and all, and one Newton
+//! nonlinear, the rest linear): the condensation by the partial factorisation with the interface
+//! last (the default, with each ordering of the interior) and by K_ii's factor and blocked
+//! multi-RHS solves at block widths 16, 64 and all, and one Newton
 //! iteration (residual + tangent assembly, factorisation, solve) on the nonlinear region with
 //! the superelement against the same on the whole model. The sizes are printed first.
 //!
@@ -117,20 +118,28 @@ fn bench(cr: &mut Criterion) {
         );
         let mut g = cr.benchmark_group("condense");
         g.measurement_time(Duration::from_secs(6)).sample_size(10);
+        // K_red from the partial factorisation (the default) against K_ii's factor and block
+        // solves of `block` columns.
+        g.bench_function(format!("{name}, partial factorisation"), |b| {
+            let s = CondenseSettings::default();
+            b.iter(|| black_box(condense(&part, &linear, &c, &s).map(|d| d.report.block)))
+        });
         for &block in blocks {
             g.bench_function(format!("{name}, block {block}"), |b| {
                 let s = CondenseSettings {
                     block,
+                    schur: false,
                     ..CondenseSettings::default()
                 };
                 b.iter(|| black_box(condense(&part, &linear, &c, &s).map(|d| d.report.block)))
             });
         }
-        // K_ii's ordering (block 64): Auto analyses with AMD and nested dissection and keeps
-        // the one with fewer flops.
+        // The interior's ordering in the partial factorisation: Auto orders by AMD and METIS and
+        // keeps the one with fewer flops.
         for (label, ordering) in [
             ("amd", FaerOrdering::Amd),
             ("nested dissection", FaerOrdering::NestedDissection),
+            ("metis", FaerOrdering::Metis),
         ] {
             let s = CondenseSettings {
                 ordering,

@@ -7,17 +7,20 @@
 //!
 //! b the interface DOFs, i the interior's free DOFs, p its prescribed DOFs (u_p = base + λ v).
 //! The linear region's internal force on the interface is K_red u_b − f_c(λ): the superelement
-//! adds K_red u_b to the internal force and f_c(λ) to the external one. K_ii is factorised once
-//! (faer LDLᵀ, AMD) and K_ii⁻¹K_ib formed in blocks of right-hand sides.
+//! adds K_red u_b to the internal force and f_c(λ) to the external one.
+//!
+//! K_red is the trailing block of one partial LDLᵀ of [K_ii K_ib; K_bi K_bb], the interior in a
+//! fill-reducing order and the interface last ([`SchurComplement`]); the loads' −K_bi K_ii⁻¹ x
+//! are the interface rows of its forward sweeps. When K_red is singular or nearly so (an
+//! interface that leaves the interior free to move as a rigid body) that rebuild is inexact,
+//! and K_ii alone is factorised and K_ii⁻¹K_ib formed in blocks of right-hand sides (also
+//! [`CondenseSettings::schur`] = false).
 
 use crate::partition::values_at_0_and_1;
+use crate::reduce::{by_blocks, by_schur};
 use crate::{Partition, Recovery, SubstructureError, Superelement};
 use nonlin3d_assembly::{Assembler, Constraints};
-use nonlin3d_solver::{
-    FaerMode, FaerOrdering, FaerSolver, LinearSolver, SolverError, SymmetricMatrix,
-    SymmetricPattern,
-};
-use std::sync::Arc;
+use nonlin3d_solver::{FaerOrdering, SolverError};
 use std::time::Instant;
 
 /// How a linear region is condensed.
@@ -30,6 +33,9 @@ pub struct CondenseSettings {
     pub threads: usize,
     /// The fill-reducing ordering of K_ii.
     pub ordering: FaerOrdering,
+    /// K_red from one partial factorisation with the interface last (true), or from K_ii's
+    /// factor and block solves (false; also the fallback when K_red is near singular).
+    pub schur: bool,
 }
 
 impl Default for CondenseSettings {
@@ -39,6 +45,7 @@ impl Default for CondenseSettings {
             block: 64,
             threads: 1,
             ordering: FaerOrdering::Auto,
+            schur: true,
         }
     }
 }
@@ -54,9 +61,10 @@ pub struct CondensationReport {
     pub prescribed_dofs: usize,
     /// Entries of K_ii's factor.
     pub factor_entries: usize,
-    /// Right-hand sides per block used.
+    /// Right-hand sides per block used (0: K_red from the partial factorisation).
     pub block: usize,
-    /// max |K_red − K_redᵀ| / max |K_red| before symmetrising (rounding of the solves).
+    /// max |K_red − K_redᵀ| / max |K_red| before symmetrising (rounding of the block solves;
+    /// 0 from the partial factorisation, symmetric by construction).
     pub asymmetry: f64,
     /// Seconds: assembly of K, factorisation of K_ii, the block solves and products.
     pub seconds: [f64; 3],
@@ -153,100 +161,6 @@ fn split(partition: &Partition, constraints: &Constraints) -> Result<Split, Subs
     Ok(s)
 }
 
-/// The blocks of K the condensation needs: K_ii (sparse, factorised), K_ib by interface column
-/// (interior index, value), K_bb dense row-major.
-struct Blocks {
-    kii: SymmetricMatrix,
-    kib: Vec<Vec<(usize, f64)>>,
-    kbb: Vec<f64>,
-}
-
-/// Splits the lower-triangle `k` into K_ii, K_ib and K_bb by `class`.
-fn blocks(k: &SymmetricMatrix, s: &Split) -> Result<Blocks, SubstructureError> {
-    let (ni, nb) = (s.interior.len(), s.boundary.len());
-    let (cp, ri) = (k.pattern().col_ptr(), k.pattern().row_idx());
-    let mut columns: Vec<Vec<usize>> = vec![Vec::new(); ni];
-    let mut kib: Vec<Vec<(usize, f64)>> = vec![Vec::new(); nb];
-    let mut kbb = vec![0.0; nb * nb];
-    let mut ii = Vec::new();
-    for j in 0..k.n() {
-        for p in cp[j]..cp[j + 1] {
-            let (i, v) = (ri[p], k.values()[p]);
-            match (s.class[i], s.class[j]) {
-                // Interior numbering follows the linear numbering: i ≥ j stays lower.
-                (Class::Interior(a), Class::Interior(b)) => {
-                    columns[b].push(a);
-                    ii.push((a, b, v));
-                }
-                (Class::Interior(a), Class::Boundary(b))
-                | (Class::Boundary(b), Class::Interior(a)) => {
-                    kib[b].push((a, v));
-                }
-                (Class::Boundary(a), Class::Boundary(b)) => {
-                    kbb[a * nb + b] = v;
-                    kbb[b * nb + a] = v;
-                }
-                _ => {}
-            }
-        }
-    }
-    let pattern = Arc::new(SymmetricPattern::from_lower_columns(ni, &columns)?);
-    // K's columns hold their rows ascending with the diagonal, and the interior numbering
-    // follows the linear one, so the values came in the pattern's order (no search per entry);
-    // the slow path only if the pattern had to add a diagonal.
-    let kii = if pattern.nnz_lower() == ii.len() {
-        SymmetricMatrix::from_values(pattern, ii.into_iter().map(|(_, _, v)| v).collect())?
-    } else {
-        let mut kii = SymmetricMatrix::zeros(pattern);
-        for (a, b, v) in ii {
-            kii.add(a, b, v)?;
-        }
-        kii
-    };
-    Ok(Blocks { kii, kib, kbb })
-}
-
-/// Factorises K_ii, naming the full-mesh DOF of a zero pivot.
-fn factorise(
-    kii: &SymmetricMatrix,
-    s: &Split,
-    partition: &Partition,
-    settings: &CondenseSettings,
-) -> Result<(FaerSolver, usize), SubstructureError> {
-    let mut solver = FaerSolver::new(FaerMode::Ldlt)
-        .with_threads(settings.threads)
-        .with_ordering(settings.ordering);
-    let analysis = solver.analyze(kii.pattern())?;
-    let full = |k: usize| {
-        let d = s.interior[k];
-        partition.from_linear(d / 3).map_or(d, |v| 3 * v + d % 3)
-    };
-    match solver.factorize(kii) {
-        Ok(f) if f.negative_pivots > 0 => Err(SubstructureError::IndefiniteInterior {
-            count: f.negative_pivots,
-        }),
-        Ok(_) => Ok((solver, analysis.factor_entries)),
-        Err(SolverError::ZeroPivot {
-            dof,
-            pivot,
-            diagonal,
-            ..
-        }) => Err(SubstructureError::SingularInterior {
-            dof: full(dof),
-            pivot,
-            diagonal,
-        }),
-        Err(e) => Err(e.into()),
-    }
-}
-
-/// y = K_bi x for one interior vector x (K_bi = K_ibᵀ by interface column).
-fn times_kbi(kib: &[Vec<(usize, f64)>], x: &[f64]) -> Vec<f64> {
-    kib.iter()
-        .map(|col| col.iter().map(|&(i, v)| v * x[i]).sum())
-        .collect()
-}
-
 /// Condenses the linear region of `partition` onto its interface (module docs): `linear` is an
 /// [`Assembler`] on [`Partition::linear_mesh`] (its tangent at u = 0 is the small-strain K
 /// whatever its kinematics: no stress, no geometric stiffness, B_NL = 0), `constraints` those
@@ -272,87 +186,77 @@ pub fn condense(
     let mut k = linear.new_tangent();
     linear.assemble(&vec![0.0; n], Some(&mut k))?;
     let assembled = clock.elapsed().as_secs_f64();
-    let b = blocks(&k, &s)?;
-    let (mut solver, factor_entries) = factorise(&b.kii, &s, partition, settings)?;
-    let factored = clock.elapsed().as_secs_f64();
-    let (ni, nb) = (s.interior.len(), s.boundary.len());
 
     // Condensed loads: three right-hand sides f_i per unit λ, −K_ip v, dead − K_ip base.
     let mut kv = vec![0.0; n];
     let mut kbase = vec![0.0; n];
     k.matvec(&s.value, &mut kv)?;
     k.matvec(&s.base, &mut kbase)?;
-    let mut rhs = vec![0.0; 3 * ni];
-    for (a, &d) in s.interior.iter().enumerate() {
-        rhs[a] = s.load[d];
-        rhs[ni + a] = -kv[d];
-        rhs[2 * ni + a] = s.dead[d] - kbase[d];
-    }
-    solver.solve_in_place(&mut rhs, 3)?;
-    let load = times_kbi(&b.kib, &rhs[..ni]).iter().map(|x| -x).collect();
-    let prescribed = times_kbi(&b.kib, &rhs[ni..2 * ni])
-        .iter()
-        .zip(&s.boundary)
-        .map(|(x, &d)| -x - kv[d])
-        .collect();
-    let dead = times_kbi(&b.kib, &rhs[2 * ni..])
-        .iter()
-        .zip(&s.boundary)
-        .map(|(x, &d)| -x - kbase[d])
-        .collect();
-
-    // K_red = K_bb − K_bi (K_ii⁻¹ K_ib), block of columns by block.
-    let block = if settings.block == 0 {
-        nb.max(1)
-    } else {
-        settings.block
+    let rhs = [
+        s.interior.iter().map(|&d| s.load[d]).collect(),
+        s.interior.iter().map(|&d| -kv[d]).collect(),
+        s.interior.iter().map(|&d| s.dead[d] - kbase[d]).collect(),
+    ];
+    let singular = |e| singular_interior(e, partition);
+    let schur = match settings.schur {
+        true => by_schur(&k, &s, settings.ordering, &rhs).map_err(singular)?,
+        false => None,
     };
-    let mut kred = b.kbb;
-    let mut x = vec![0.0; ni * block.min(nb.max(1))];
-    for start in (0..nb).step_by(block) {
-        let w = block.min(nb - start);
-        let x = &mut x[..ni * w];
-        x.fill(0.0);
-        for c in 0..w {
-            for &(i, v) in &b.kib[start + c] {
-                x[c * ni + i] = v;
-            }
-        }
-        solver.solve_in_place(x, w)?;
-        for c in 0..w {
-            let col = &x[c * ni..(c + 1) * ni];
-            for (a, kib) in b.kib.iter().enumerate() {
-                let dot: f64 = kib.iter().map(|&(i, v)| v * col[i]).sum();
-                kred[a * nb + start + c] -= dot;
-            }
-        }
-    }
-    let asymmetry = symmetrise(&mut kred, nb);
+    let r = match schur {
+        Some(r) => r,
+        None => by_blocks(&k, &s, settings, &rhs).map_err(singular)?,
+    };
+    let [load, prescribed, dead] = r.loads;
+    let boundary = |x: Vec<f64>, k: &[f64]| -> Vec<f64> {
+        x.iter().zip(&s.boundary).map(|(x, &d)| x - k[d]).collect()
+    };
+    let prescribed = boundary(prescribed, &kv);
+    let dead = boundary(dead, &kbase);
     let solved = clock.elapsed().as_secs_f64();
+    let nb = s.boundary.len();
     let report = CondensationReport {
         interface_dofs: nb,
-        interior_dofs: ni,
-        prescribed_dofs: s.class.len() - ni - nb,
-        factor_entries,
-        block,
-        asymmetry,
-        seconds: [assembled, factored - assembled, solved - factored],
+        interior_dofs: s.interior.len(),
+        prescribed_dofs: s.class.len() - s.interior.len() - nb,
+        factor_entries: r.factor_entries,
+        block: r.block,
+        asymmetry: r.asymmetry,
+        seconds: [assembled, r.factored_s, solved - assembled - r.factored_s],
     };
     let superelement = Superelement::new(
         partition.interface_dofs_nonlinear(),
-        kred,
+        r.kred,
         crate::CondensedLoad {
             load,
             prescribed,
             dead,
         },
     )?;
-    let recovery = Recovery::new(partition, k, s, solver);
+    let recovery = Recovery::new(partition, k, s, r.interior);
     Ok(Condensed {
         superelement,
         recovery,
         report,
     })
+}
+
+/// A zero pivot of K_ii (the linear sub-mesh's DOF) named by its full-mesh DOF.
+fn singular_interior(e: SubstructureError, partition: &Partition) -> SubstructureError {
+    match e {
+        SubstructureError::Solver(SolverError::ZeroPivot {
+            dof,
+            pivot,
+            diagonal,
+            ..
+        }) => SubstructureError::SingularInterior {
+            dof: partition
+                .from_linear(dof / 3)
+                .map_or(dof, |v| 3 * v + dof % 3),
+            pivot,
+            diagonal,
+        },
+        e => e,
+    }
 }
 
 /// K ← (K + Kᵀ)/2 for a dense row-major n × n `k`; returns max |K − Kᵀ| / max |K| before.
@@ -417,10 +321,73 @@ mod tests {
         assert!(diff <= 1e-14 * scale, "{diff:e} of {scale:e}");
     }
 
-    /// K_red does not depend on the block width (1, 5 and all columns at once): the same
-    /// solves in another grouping, equal to rounding.
+    /// K_red does not depend on how it is formed: the partial factorisation against block
+    /// solves of 1, 5 and all columns at once, equal to rounding (1e-12 of the largest
+    /// entry; the same elimination in another grouping), loads likewise.
     #[test]
-    fn the_block_width_changes_nothing() {
+    fn the_partial_factorisation_and_the_block_widths_agree() {
+        let mesh = structured_box(&BoxParams::new(
+            ElementKind::Hex8,
+            [4, 2, 2],
+            [4.0, 2.0, 2.0],
+        ))
+        .unwrap();
+        let p = Partition::from_linear_cells(&mesh, &(0..8).collect::<Vec<_>>()).unwrap();
+        // x = 0 clamped (u = 0.1 along x) and z = 0 held along z: the linear region (the
+        // bottom layer) cannot move with its interface free, K_red is regular.
+        let mut c = Constraints::new(3 * mesh.nodes.len());
+        for &v in &mesh.node_sets[names::X0] {
+            for (r, value) in [0.1, 0.0, 0.0].into_iter().enumerate() {
+                c.prescribe(3 * v + r, value).unwrap();
+            }
+        }
+        for &v in &mesh.node_sets[names::Z0] {
+            if !c.is_constrained(3 * v + 2) {
+                c.prescribe(3 * v + 2, 0.0).unwrap();
+            }
+        }
+        let a = assembler(p.linear_mesh(), Kinematics::Linear);
+        let k = |block: Option<usize>| {
+            let s = CondenseSettings {
+                block: block.unwrap_or(64),
+                schur: block.is_none(),
+                ..CondenseSettings::default()
+            };
+            let done = condense(&p, &a, &c, &s).unwrap();
+            assert_eq!(done.report.block == 0, block.is_none());
+            (
+                done.superelement.stiffness().to_vec(),
+                done.superelement.load().clone(),
+            )
+        };
+        let (k0, l0) = k(None);
+        let scale = k0.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let close = |x: &[f64], y: &[f64], what: &str| {
+            let size = y.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            let diff = x
+                .iter()
+                .zip(y)
+                .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+            assert!(
+                diff <= 1e-12 * size.max(scale * 1e-6),
+                "{what}: {diff:e} of {size:e}"
+            );
+        };
+        for block in [0, 1, 5] {
+            let (kb, lb) = k(Some(block));
+            close(&kb, &k0, "K_red");
+            close(&lb.load, &l0.load, "load");
+            close(&lb.prescribed, &l0.prescribed, "prescribed");
+            close(&lb.dead, &l0.dead, "dead");
+        }
+        assert!(l0.prescribed.iter().any(|&x| x != 0.0));
+    }
+
+    /// With x = 0 held along x only, the linear region (the bottom layer) can slide and turn
+    /// with its interface free: K_red is singular, the partial factorisation gives way to block solves, and the
+    /// superelement is formed all the same.
+    #[test]
+    fn a_singular_reduced_stiffness_is_formed_by_block_solves() {
         let mesh = structured_box(&BoxParams::new(
             ElementKind::Hex8,
             [4, 2, 2],
@@ -433,28 +400,14 @@ mod tests {
             c.prescribe(3 * v, 0.1).unwrap();
         }
         let a = assembler(p.linear_mesh(), Kinematics::Linear);
-        let k = |block: usize| {
-            let s = CondenseSettings {
-                block,
-                ..CondenseSettings::default()
-            };
-            let done = condense(&p, &a, &c, &s).unwrap();
-            (
-                done.superelement.stiffness().to_vec(),
-                done.superelement.load().clone(),
-            )
-        };
-        let (k0, l0) = k(0);
-        let scale = k0.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        for block in [1, 5] {
-            let (kb, lb) = k(block);
-            let diff = kb
+        let done = condense(&p, &a, &c, &CondenseSettings::default()).unwrap();
+        assert_eq!(done.report.block, 64);
+        assert!(
+            done.superelement
+                .load()
+                .prescribed
                 .iter()
-                .zip(&k0)
-                .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
-            assert!(diff <= 1e-12 * scale, "block {block}: {diff:e}");
-            assert_eq!(lb, l0);
-        }
-        assert!(l0.prescribed.iter().any(|&x| x != 0.0));
+                .any(|&x| x != 0.0)
+        );
     }
 }

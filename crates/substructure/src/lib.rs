@@ -23,7 +23,7 @@
 //! | item | what it is |
 //! |---|---|
 //! | [`Partition`], [`Region`] | linear and nonlinear cells, the interface Γ, interior nodes, the two sub-meshes and their node maps; [`Partition::nonlinear_constraints`] |
-//! | [`condense`], [`CondenseSettings`], [`Condensed`], [`CondensationReport`] | K_red and f_c by one factorisation of K_ii and blocked multi-RHS solves |
+//! | [`condense`], [`CondenseSettings`], [`Condensed`], [`CondensationReport`] | K_red and f_c by one partial LDLᵀ with the interface last (or K_ii's factor and blocked multi-RHS solves) |
 //! | [`Superelement`], [`CondensedLoad`] | K_red and f_c(λ) as a contribution on the nonlinear sub-mesh's DOFs |
 //! | [`Recovery`], [`Recovered`] | u_i from u_b; the region's nodal forces K u and reactions, in the full mesh's numbering |
 //! | [`mtx_text`] | K_red as the `.mtx` text CalculiX's `*SUBSTRUCTURE MATRIX OUTPUT` writes |
@@ -58,6 +58,7 @@ mod error;
 mod mtx;
 mod partition;
 mod recover;
+mod reduce;
 mod superelement;
 
 pub use condense::{CondensationReport, CondenseSettings, Condensed, condense};

@@ -4,8 +4,9 @@
 //! and the reactions K u − f_ext at its prescribed DOFs.
 
 use crate::condense::{Class, Split};
+use crate::reduce::Interior;
 use crate::{Partition, SubstructureError};
-use nonlin3d_solver::{FaerSolver, LinearSolver, SymmetricMatrix};
+use nonlin3d_solver::SymmetricMatrix;
 
 /// The linear region's state, in the full mesh's numbering (3 DOFs per node).
 #[derive(Debug, Clone, PartialEq)]
@@ -19,12 +20,12 @@ pub struct Recovered {
     pub reactions: Vec<f64>,
 }
 
-/// What recovers a condensed region: its K (linear sub-mesh numbering), the factorised K_ii,
+/// What recovers a condensed region: its K (linear sub-mesh numbering), what solves with K_ii,
 /// the DOF split and the node maps. Made by [`condense`](crate::condense).
 pub struct Recovery {
     k: SymmetricMatrix,
     split: Split,
-    solver: FaerSolver,
+    interior: Interior,
     /// Linear sub-mesh node → full node.
     linear_to_full: Vec<usize>,
     /// Nonlinear sub-mesh DOF of each interface DOF.
@@ -39,12 +40,12 @@ impl Recovery {
         partition: &Partition,
         k: SymmetricMatrix,
         split: Split,
-        solver: FaerSolver,
+        interior: Interior,
     ) -> Self {
         Self {
             k,
             split,
-            solver,
+            interior,
             linear_to_full: partition.linear_nodes().to_vec(),
             boundary_nonlinear: partition.interface_dofs_nonlinear(),
             nonlinear_to_full: partition.nonlinear_nodes().to_vec(),
@@ -90,7 +91,7 @@ impl Recovery {
             .iter()
             .map(|&d| lambda * s.load[d] + s.dead[d] - ku[d])
             .collect();
-        self.solver.solve_in_place(&mut ui, 1)?;
+        self.interior.solve(&mut ui)?;
         for (&d, x) in s.interior.iter().zip(&ui) {
             u[d] = *x;
         }

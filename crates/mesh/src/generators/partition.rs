@@ -37,6 +37,10 @@ pub enum Partition {
     /// The conservative choice: the whole sublaminate (set `sublaminate`) nonlinear, the base
     /// laminate linear.
     Sublaminate,
+    /// [`Partition::Sublaminate`] and the base cells with a node on the lower crack face (set
+    /// `crack_lower`: the base's top under the delamination): both faces of every crack pair
+    /// in the nonlinear region, where crack-face contact (thesis §2.7) acts on them.
+    SublaminateAndCrackBase,
 }
 
 /// The nonlinear substructure of a [`Partition`] on a mesh.
@@ -107,6 +111,29 @@ pub fn nonlinear_region(
         .collect();
     let cells = match partition {
         Partition::Sublaminate => sorted(sub.clone()),
+        Partition::SublaminateAndCrackBase => {
+            let lower = mesh
+                .node_sets
+                .get(names::CRACK_LOWER)
+                .ok_or(MeshError::MissingSet {
+                    kind: "node",
+                    name: names::CRACK_LOWER,
+                    purpose: "the base cells under the delamination join the nonlinear region",
+                })?;
+            let mut on = vec![false; mesh.nodes.len()];
+            for &n in lower {
+                if let Some(x) = on.get_mut(n) {
+                    *x = true;
+                }
+            }
+            let mut cells = sub.clone();
+            cells.extend(
+                (0..mesh.cells.len()).filter(|&c| mesh.cells[c].nodes.iter().any(|&n| on[n])),
+            );
+            cells.sort_unstable();
+            cells.dedup();
+            cells
+        }
         Partition::Thesis { offset_m } => {
             check_front(mesh, front, &distance)?;
             thesis_cells(mesh, sub, front, &distance, offset_m)?

@@ -39,6 +39,8 @@ use faer::{Accum, Conj, Mat, MatMut, Par, Side};
 
 mod half;
 use half::Half;
+mod schur;
+pub use schur::{SchurComplement, SchurOutcome};
 mod top;
 pub(super) use top::top_split;
 

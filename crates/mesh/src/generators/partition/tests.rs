@@ -125,6 +125,45 @@ fn the_whole_sublaminate_is_the_conservative_partition() {
     );
 }
 
+/// With the base cells under the delamination, both faces of every crack pair are in the
+/// nonlinear region and off its interface (contact acts on them, never on a condensed node);
+/// the added cells are base cells, each with a node on the lower face.
+#[test]
+fn the_crack_base_joins_the_sublaminate_for_contact() {
+    let p = EmbeddedParams::thesis_reference();
+    let mesh = embedded_delamination(&p).unwrap();
+    let plain = nonlinear_region(&mesh, &p.front_shape(), Partition::Sublaminate).unwrap();
+    let region =
+        nonlinear_region(&mesh, &p.front_shape(), Partition::SublaminateAndCrackBase).unwrap();
+    let lower = &mesh.node_sets[names::CRACK_LOWER];
+    let upper = &mesh.node_sets[names::CRACK_UPPER];
+    let mut in_region = vec![false; mesh.nodes.len()];
+    for &c in &region.cells {
+        for &n in &mesh.cells[c].nodes {
+            in_region[n] = true;
+        }
+    }
+    for &n in lower.iter().chain(upper) {
+        assert!(in_region[n], "crack node {n} outside the nonlinear region");
+        assert!(region.interface.binary_search(&n).is_err(), "node {n}");
+    }
+    let sub = &mesh.cell_sets[names::SUBLAMINATE];
+    let added: Vec<usize> = region
+        .cells
+        .iter()
+        .copied()
+        .filter(|c| plain.cells.binary_search(c).is_err())
+        .collect();
+    assert!(!added.is_empty());
+    for c in added {
+        assert!(!sub.contains(&c), "cell {c}");
+        assert!(
+            mesh.cells[c].nodes.iter().any(|n| lower.contains(n)),
+            "cell {c}"
+        );
+    }
+}
+
 #[test]
 fn every_delamination_model_partitions_with_the_same_properties() {
     let reference = EmbeddedParams::thesis_reference();

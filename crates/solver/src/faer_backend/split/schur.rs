@@ -1,0 +1,377 @@
+//! The Schur complement of a symmetric matrix's interior block onto its boundary, from one
+//! partial LDLᵀ (static condensation, thesis §2.6):
+//!
+//! A = [A_ii A_ib; A_bi A_bb] ⇒ S = A_bb − A_bi A_ii⁻¹ A_ib.
+//!
+//! M = [A_ii A_ib; A_bi A_bb] is factored with the interior in a fill-reducing order and the
+//! boundary last (a split [`Half`] whose separator is the boundary): its trailing block gives
+//! L_bb D_b L_bbᵀ = S, so S costs one sparse factorisation and a dense product instead of
+//! one solve with A_ii per boundary column. The same factor solves A_ii x = b (the forward
+//! sweep over the interior, then the backward one with the boundary held at zero) and gives
+//! −A_bi A_ii⁻¹ b (the boundary rows of the forward sweep).
+
+use super::{Half, PivotRule};
+use crate::{
+    FaerOrdering, SolverError, SymmetricMatrix, SymmetricPattern, approximate_minimum_degree,
+    metis_nested_dissection, nested_dissection,
+};
+
+/// Pivots of A_ii at or below this fraction of their diagonal entry are zero pivots (an error
+/// naming the DOF), as the f64 LDLᵀ judges them.
+const ZERO_PIVOT: f64 = 1e-13;
+
+/// A's interior block factored with the boundary appended (module docs). Made once per
+/// pattern by [`analyze`](Self::analyze); [`factorize`](Self::factorize) per set of values.
+pub struct SchurComplement {
+    half: Half,
+    /// Interior DOFs of A in the caller's order.
+    interior: Vec<usize>,
+    /// Local interior position (elimination order) → index in `interior`.
+    order: Vec<usize>,
+    boundary: usize,
+    ordering: FaerOrdering,
+    flops: f64,
+    /// Whether the last factorisation succeeded (the sweeps need it).
+    factored: bool,
+}
+
+/// What [`SchurComplement::factorize`] found.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SchurOutcome {
+    /// S = A_bb − A_bi A_ii⁻¹ A_ib, row-major, nb × nb, in the boundary's order (symmetric:
+    /// both triangles written from the lower one).
+    pub schur: Vec<f64>,
+    /// Negative pivots of A_ii.
+    pub negative_pivots: usize,
+}
+
+impl SchurComplement {
+    /// The structure for A of pattern `pattern` (lower triangle, A's numbering) with the
+    /// interior DOFs `interior` and boundary DOFs `boundary` (disjoint; any other DOF of A is
+    /// left out, e.g. a prescribed one). The interior is ordered by `ordering`: AMD, our nested
+    /// dissection, METIS, or (`Auto`) AMD and METIS both, the one whose factor needs fewer
+    /// flops (nested dissection if METIS fails).
+    pub fn analyze(
+        pattern: &SymmetricPattern,
+        interior: &[usize],
+        boundary: &[usize],
+        ordering: FaerOrdering,
+    ) -> Result<Self, SolverError> {
+        let n = pattern.n();
+        let mut local = vec![usize::MAX; n];
+        for (k, &d) in interior.iter().chain(boundary).enumerate() {
+            let slot = local.get_mut(d).ok_or(SolverError::BlockDof {
+                dof: d,
+                n,
+                reason: "out of range",
+            })?;
+            if *slot != usize::MAX {
+                return Err(SolverError::BlockDof {
+                    dof: d,
+                    n,
+                    reason: "listed twice (the interior and the boundary are disjoint)",
+                });
+            }
+            *slot = k;
+        }
+        let ni = interior.len();
+        let mut columns: Vec<Vec<usize>> = vec![Vec::new(); ni];
+        for &j in interior {
+            for &i in pattern.column(j) {
+                let (a, b) = (local[i], local[j]);
+                if a < ni && i != j {
+                    columns[a.min(b)].push(a.max(b));
+                }
+            }
+        }
+        let inner = SymmetricPattern::from_lower_columns(ni, &columns)?;
+        drop(columns);
+        let candidates: Vec<(FaerOrdering, Result<Vec<usize>, SolverError>)> = match ordering {
+            FaerOrdering::Amd => vec![(ordering, approximate_minimum_degree(&inner))],
+            FaerOrdering::NestedDissection => vec![(ordering, nested_dissection(&inner))],
+            FaerOrdering::Metis => vec![(ordering, metis_nested_dissection(&inner))],
+            FaerOrdering::Auto => {
+                let metis = match metis_nested_dissection(&inner) {
+                    Ok(p) => (FaerOrdering::Metis, Ok(p)),
+                    Err(_) => (FaerOrdering::NestedDissection, nested_dissection(&inner)),
+                };
+                vec![
+                    (FaerOrdering::Amd, approximate_minimum_degree(&inner)),
+                    metis,
+                ]
+            }
+        }
+        .into_iter()
+        .map(|(o, p)| (o, p.map(|p| p.forward().to_vec())))
+        .collect();
+        let mut best: Option<Self> = None;
+        for (chosen, order) in candidates {
+            let order = order?;
+            let mut dofs: Vec<usize> = order.iter().map(|&k| interior[k]).collect();
+            dofs.extend_from_slice(boundary);
+            let half = Half::new(pattern, dofs, ni, 0)?;
+            let flops = super::super::factor_flops(&half.symbolic);
+            if best.as_ref().is_none_or(|b| flops < b.flops) {
+                best = Some(Self {
+                    half,
+                    interior: interior.to_vec(),
+                    order,
+                    boundary: boundary.len(),
+                    ordering: chosen,
+                    flops,
+                    factored: false,
+                });
+            }
+        }
+        best.ok_or(SolverError::NotReady(
+            "Schur complement: no ordering candidate",
+        ))
+    }
+
+    /// The ordering the interior got ([`FaerOrdering::Amd`], `NestedDissection` or `Metis`).
+    pub fn ordering(&self) -> FaerOrdering {
+        self.ordering
+    }
+
+    /// Entries of the factor (the interior's columns and the boundary's dense block).
+    pub fn factor_entries(&self) -> usize {
+        self.half.symbolic.len_val()
+    }
+
+    /// Σc² over the factor's column counts.
+    pub fn flops(&self) -> f64 {
+        self.flops
+    }
+
+    /// Factors A (`a` on the pattern given to [`analyze`](Self::analyze)) in f64 on one
+    /// thread and forms S. `Ok(None)` when S itself is singular or nearly so (a pivot of its
+    /// LDLᵀ at or below 1e-8 of its diagonal entry: a boundary that leaves the interior free
+    /// to move as a rigid body, say): the rebuild would be inexact, the caller takes another
+    /// way. Errors: a zero pivot of A_ii (naming its DOF of A).
+    pub fn factorize(&mut self, a: &SymmetricMatrix) -> Result<Option<SchurOutcome>, SolverError> {
+        self.factored = false;
+        let diag = a.diagonal();
+        let rule = PivotRule::Double {
+            tolerance: ZERO_PIVOT,
+        };
+        let outcome = match self.half.factorize::<f64>(a.values(), &diag, rule)? {
+            Ok(o) => o,
+            Err(_) => return Ok(None),
+        };
+        self.factored = true;
+        let nb = self.boundary;
+        let mut schur = vec![0.0; nb * nb];
+        for j in 0..nb {
+            for i in j..nb {
+                let v = outcome.schur[(i, j)];
+                schur[i * nb + j] = v;
+                schur[j * nb + i] = v;
+            }
+        }
+        Ok(Some(SchurOutcome {
+            schur,
+            negative_pivots: outcome.negative,
+        }))
+    }
+
+    /// The local vector of interior values `x` (in the order of `interior` given to
+    /// [`analyze`](Self::analyze)) with the boundary's zero.
+    fn local(&self, x: &[f64]) -> Vec<f64> {
+        let mut z = vec![0.0; self.order.len() + self.boundary];
+        for (slot, &k) in z.iter_mut().zip(&self.order) {
+            *slot = x[k];
+        }
+        z
+    }
+
+    fn check(&self, x: &[f64]) -> Result<(), SolverError> {
+        match x.len() == self.interior.len() {
+            true => Ok(()),
+            false => Err(SolverError::DimensionMismatch {
+                what: "interior values of a Schur complement",
+                expected: self.interior.len(),
+                got: x.len(),
+            }),
+        }
+    }
+
+    /// −A_bi A_ii⁻¹ x for interior values `x` (the order of `interior`), in the boundary's
+    /// order: the boundary rows of the forward sweep. Needs a factorisation.
+    pub fn reduce(&self, x: &[f64]) -> Result<Vec<f64>, SolverError> {
+        self.check(x)?;
+        let l = self.factor()?;
+        let mut z = self.local(x);
+        self.half.forward::<f64>(l, &mut z);
+        Ok(z.split_off(self.order.len()))
+    }
+
+    /// x ← A_ii⁻¹ x for interior values `x` (the order of `interior`): the forward sweep, the
+    /// boundary rows set to zero, the backward sweep. Needs a factorisation.
+    pub fn solve_interior(&self, x: &mut [f64]) -> Result<(), SolverError> {
+        self.check(x)?;
+        let l = self.factor()?;
+        let mut z = self.local(x);
+        self.half.forward::<f64>(l, &mut z);
+        let ni = self.order.len();
+        z[ni..].fill(0.0);
+        self.half.backward::<f64>(l, &mut z);
+        for (v, &k) in z.iter().zip(&self.order) {
+            x[k] = *v;
+        }
+        Ok(())
+    }
+
+    fn factor(&self) -> Result<&[f64], SolverError> {
+        match self.factored {
+            true => Ok(<f64 as super::Real>::view(&self.half.l)),
+            false => Err(SolverError::NotReady(
+                "a Schur complement's sweeps before a successful factorisation",
+            )),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::sync::Arc;
+
+    /// A 1-D chain of springs with a diagonal shift: tridiagonal, SPD.
+    fn chain(n: usize) -> SymmetricMatrix {
+        let columns: Vec<Vec<usize>> = (0..n)
+            .map(|j| if j + 1 < n { vec![j, j + 1] } else { vec![j] })
+            .collect();
+        let p = Arc::new(SymmetricPattern::from_lower_columns(n, &columns).unwrap());
+        let mut a = SymmetricMatrix::zeros(p);
+        for j in 0..n {
+            a.add(j, j, 2.5 + 0.1 * j as f64).unwrap();
+            if j + 1 < n {
+                a.add(j + 1, j, -1.0).unwrap();
+            }
+        }
+        a
+    }
+
+    fn dense(a: &SymmetricMatrix) -> Vec<Vec<f64>> {
+        let n = a.n();
+        let mut m = vec![vec![0.0; n]; n];
+        for j in 0..n {
+            for (p, &i) in a.pattern().column(j).iter().enumerate() {
+                let v = a.values()[a.pattern().col_ptr()[j] + p];
+                m[i][j] = v;
+                m[j][i] = v;
+            }
+        }
+        m
+    }
+
+    /// Dense Gaussian elimination of m x = b.
+    fn solve_dense(mut m: Vec<Vec<f64>>, mut b: Vec<f64>) -> Vec<f64> {
+        let n = b.len();
+        for k in 0..n {
+            for i in k + 1..n {
+                let f = m[i][k] / m[k][k];
+                for j in k..n {
+                    m[i][j] -= f * m[k][j];
+                }
+                b[i] -= f * b[k];
+            }
+        }
+        let mut x = vec![0.0; n];
+        for k in (0..n).rev() {
+            let s: f64 = (k + 1..n).map(|j| m[k][j] * x[j]).sum();
+            x[k] = (b[k] - s) / m[k][k];
+        }
+        x
+    }
+
+    /// S, A_ii⁻¹ b and −A_bi A_ii⁻¹ b against dense elimination on a chain whose boundary is
+    /// scattered through it (DOFs 0, 7, 13 of 20; 19 left out as if prescribed), with every
+    /// ordering: the same numbers to rounding (1e-12 of their size).
+    #[test]
+    fn schur_solve_and_reduce_match_dense_elimination() {
+        let a = chain(20);
+        let full = dense(&a);
+        let boundary = [7, 0, 13];
+        let interior: Vec<usize> = (1..19).filter(|d| !boundary.contains(d)).rev().collect();
+        let sub = |rows: &[usize], cols: &[usize]| -> Vec<Vec<f64>> {
+            rows.iter()
+                .map(|&i| cols.iter().map(|&j| full[i][j]).collect())
+                .collect()
+        };
+        let aii = sub(&interior, &interior);
+        let x: Vec<f64> = (0..interior.len())
+            .map(|k| (k as f64 * 0.7).sin())
+            .collect();
+        let y = solve_dense(aii.clone(), x.clone());
+        let abi = sub(&boundary, &interior);
+        let reduced: Vec<f64> = abi
+            .iter()
+            .map(|row| -row.iter().zip(&y).map(|(a, b)| a * b).sum::<f64>())
+            .collect();
+        for ordering in [
+            FaerOrdering::Amd,
+            FaerOrdering::NestedDissection,
+            FaerOrdering::Metis,
+            FaerOrdering::Auto,
+        ] {
+            let mut s =
+                SchurComplement::analyze(a.pattern(), &interior, &boundary, ordering).unwrap();
+            let out = s.factorize(&a).unwrap().unwrap();
+            assert_eq!(out.negative_pivots, 0);
+            for (bi, &i) in boundary.iter().enumerate() {
+                for (bj, &j) in boundary.iter().enumerate() {
+                    let col: Vec<f64> = interior.iter().map(|&k| full[k][j]).collect();
+                    let z = solve_dense(aii.clone(), col);
+                    let want = full[i][j]
+                        - interior
+                            .iter()
+                            .zip(&z)
+                            .map(|(&k, v)| full[i][k] * v)
+                            .sum::<f64>();
+                    let got = out.schur[bi * 3 + bj];
+                    assert!(
+                        (got - want).abs() <= 1e-12 * want.abs().max(1.0),
+                        "{ordering:?}"
+                    );
+                }
+            }
+            let mut solved = x.clone();
+            s.solve_interior(&mut solved).unwrap();
+            for (g, w) in solved.iter().zip(&y) {
+                assert!((g - w).abs() <= 1e-12, "{ordering:?}: {g} against {w}");
+            }
+            for (g, w) in s.reduce(&x).unwrap().iter().zip(&reduced) {
+                assert!((g - w).abs() <= 1e-12, "{ordering:?}: {g} against {w}");
+            }
+        }
+    }
+
+    /// An interior that the boundary does not hold (a chain cut off from it) is singular:
+    /// the zero pivot is an error naming a DOF of A; a singular S gives `None`.
+    #[test]
+    fn a_singular_interior_is_an_error_and_a_singular_schur_complement_is_none() {
+        let p = Arc::new(
+            SymmetricPattern::from_lower_columns(3, &[vec![0, 1], vec![1], vec![2]]).unwrap(),
+        );
+        let mut a = SymmetricMatrix::zeros(p);
+        for (i, j, v) in [(0, 0, 1.0), (1, 0, -1.0), (1, 1, 1.0), (2, 2, 1.0)] {
+            a.add(i, j, v).unwrap();
+        }
+        // Interior {0, 1}: the free spring pair, singular.
+        let mut s =
+            SchurComplement::analyze(a.pattern(), &[0, 1], &[2], FaerOrdering::Amd).unwrap();
+        assert!(matches!(
+            s.factorize(&a),
+            Err(SolverError::ZeroPivot { dof: 0 | 1, .. })
+        ));
+        // Interior {0}, boundary {1, 2}: S = [0 0; 0 1] is singular.
+        let mut s =
+            SchurComplement::analyze(a.pattern(), &[0], &[1, 2], FaerOrdering::Amd).unwrap();
+        assert_eq!(s.factorize(&a).unwrap(), None);
+        assert!(matches!(
+            s.solve_interior(&mut [1.0]),
+            Err(SolverError::NotReady(_))
+        ));
+    }
+}
