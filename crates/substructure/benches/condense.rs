@@ -134,8 +134,7 @@ fn bench(cr: &mut Criterion) {
                 b.iter(|| black_box(condense(&part, &linear, &c, &s).map(|d| d.report.block)))
             });
         }
-        // The interior's ordering in the partial factorisation: Auto orders by AMD and METIS and
-        // keeps the one with fewer flops.
+        // The interior's ordering in the partial factorisation (Auto: METIS).
         for (label, ordering) in [
             ("amd", FaerOrdering::Amd),
             ("nested dissection", FaerOrdering::NestedDissection),
