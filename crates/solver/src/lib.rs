@@ -8,6 +8,7 @@
 //! | [`reverse_cuthill_mckee`], [`approximate_minimum_degree`], [`nested_dissection`], [`metis_nested_dissection`], [`envelope_stats`] | orderings and their bandwidth/profile |
 //! | [`ProfileLdlt`] | envelope LDLᵀ, RCM ordered, SIMD inner products |
 //! | [`FaerSolver`], [`FaerOrdering`], [`FaerSplit`] | faer LDLᵀ / LLᵀ, AMD, nested-dissection or METIS ordered, supernodal or simplicial; LDLᵀ split at the top separator from 5 000 DOF (the halves side by side; the same bits on any thread count) |
+//! | [`SchurComplement`], [`SchurOutcome`] | S = A_bb − A_bi A_ii⁻¹ A_ib from one partial LDLᵀ with the boundary last (static condensation), A_ii solves from the same factor |
 //! | [`LinearSolver`], [`SolverKind`] | the common interface; [`Factorization::negative_pivots`] is the inertia |
 //! | [`MemoryBudget`], [`set_memory_budget`] | the bytes a factorisation may take, checked by `analyze` before allocating |
 //!

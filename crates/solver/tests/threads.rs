@@ -35,6 +35,10 @@ fn solve_on(
         .with_threads(threads);
     s.split = split;
     s.precision = precision;
+    // faer's dense kernels on the pool's threads at this size too (the split's halves then
+    // run theirs on them, so a thread the shorter half leaves free takes the longer one's
+    // tiles): the path the large systems take.
+    s.kernel_threads_from = 0;
     s.analyze(a.pattern()).unwrap();
     assert_eq!(s.split_sizes().is_some(), split == FaerSplit::Halves);
     let f = s.factorize(a).unwrap();

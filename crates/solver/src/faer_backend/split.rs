@@ -267,8 +267,9 @@ impl Split {
         self.factored
     }
 
-    /// Factors `a`: the halves in precision `T` on `par`'s threads (one each), S in f64 on
-    /// `kernel`'s, pivots judged by `rule`. `Ok(Err(reason))` when a half's trailing block (which
+    /// Factors `a`: the halves in precision `T` on `par`'s threads (one each, their dense
+    /// kernels on `kernel`'s, so that a thread the shorter half leaves free takes tiles of the
+    /// longer one's), S in f64 on `kernel`'s, pivots judged by `rule`. `Ok(Err(reason))` when a half's trailing block (which
     /// the unsplit factor never forms) meets a pivot too small to trust, or an f32 pivot is in
     /// doubt: the caller takes another path.
     pub(super) fn factorize<T: Real>(
@@ -283,8 +284,8 @@ impl Split {
         let diag = a.diagonal();
         let values = a.values();
         let [h0, h1] = &mut self.halves;
-        let mut half0 = || timed(|| h0.factorize::<T>(values, &diag, rule));
-        let mut half1 = || timed(|| h1.factorize::<T>(values, &diag, rule));
+        let mut half0 = || timed(|| h0.factorize::<T>(values, &diag, rule, kernel));
+        let mut half1 = || timed(|| h1.factorize::<T>(values, &diag, rule, kernel));
         let ((r0, t0), (r1, t1)) = if par.degree() > 1 {
             rayon::join(half0, half1)
         } else {

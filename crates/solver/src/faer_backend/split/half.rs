@@ -85,8 +85,11 @@ impl Half {
         let order = SymmetricOrdering::Custom(faer::perm::PermRef::new_checked(&id, &id, m));
         let symbolic = factorize_symbolic_cholesky(sym, Side::Lower, order, params)
             .map_err(|e| SolverError::Faer(format!("split half, symbolic: {e:?}")))?;
+        // Scratch for the factorisation on one thread or on the pool's (`factorize`'s `par`).
+        let pool = Par::rayon(rayon::current_num_threads().max(1));
         let req = symbolic
             .factorize_numeric_ldlt_scratch::<f64>(Par::Seq, Default::default())
+            .or(symbolic.factorize_numeric_ldlt_scratch::<f64>(pool, Default::default()))
             .or(symbolic.solve_in_place_scratch::<f64>(1, Par::Seq));
         let buffer = MemBuffer::try_new(req).map_err(|_| SolverError::OutOfMemory {
             what: "a split half's workspace",
@@ -111,13 +114,15 @@ impl Half {
         }
     }
 
-    /// Factors Mᵢ in precision `T` (one thread), judges the interior pivots by `rule` against
-    /// A's diagonal and returns S′ᵢ = Lₛₛ Dₛ Lₛₛᵀ.
+    /// Factors Mᵢ in precision `T` with faer's dense kernels on `par` (their tiles may be taken
+    /// by a thread the other half has left free; the bits do not depend on it), judges the
+    /// interior pivots by `rule` against A's diagonal and returns S′ᵢ = Lₛₛ Dₛ Lₛₛᵀ.
     pub(super) fn factorize<T: Real>(
         &mut self,
         a: &[f64],
         diag: &[f64],
         rule: PivotRule,
+        par: Par,
     ) -> Attempt<HalfOutcome> {
         let values: Vec<T> = self
             .gather
@@ -146,7 +151,7 @@ impl Half {
             mat,
             LdltRegularization::default(),
             sn,
-            Par::Seq,
+            par,
             MemStack::new(&mut self.buffer),
             Default::default(),
         );

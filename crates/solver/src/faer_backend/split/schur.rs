@@ -139,7 +139,10 @@ impl SchurComplement {
         let rule = PivotRule::Double {
             tolerance: ZERO_PIVOT,
         };
-        let outcome = match self.half.factorize::<f64>(a.values(), &diag, rule)? {
+        let outcome = match self
+            .half
+            .factorize::<f64>(a.values(), &diag, rule, faer::Par::Seq)?
+        {
             Ok(o) => o,
             Err(_) => return Ok(None),
         };
