@@ -16,7 +16,7 @@
 //! and K_ii alone is factorised and K_ii⁻¹K_ib formed in blocks of right-hand sides (also
 //! [`CondenseSettings::schur`] = false).
 
-use crate::partition::values_at_0_and_1;
+use crate::dofs::split;
 use crate::reduce::{by_blocks, by_schur};
 use crate::{Partition, Recovery, SubstructureError, Superelement};
 use nonlin3d_assembly::{Assembler, Constraints};
@@ -81,86 +81,6 @@ pub struct Condensed {
     pub report: CondensationReport,
 }
 
-/// Where a DOF of the linear sub-mesh goes.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) enum Class {
-    /// Interface DOF k (3 per interface node, in interface order).
-    Boundary(usize),
-    /// Free interior DOF k (a row of K_ii).
-    Interior(usize),
-    /// Prescribed interior DOF k.
-    Prescribed(usize),
-}
-
-/// The linear region's DOFs, split, with their prescribed values and loads (linear sub-mesh
-/// numbering).
-pub(crate) struct Split {
-    pub class: Vec<Class>,
-    /// Linear DOF of each free interior DOF.
-    pub interior: Vec<usize>,
-    /// Linear DOF of each interface DOF.
-    pub boundary: Vec<usize>,
-    /// Prescribed values at λ = 0 (base) and per unit λ (v), zero at unprescribed DOFs.
-    pub base: Vec<f64>,
-    pub value: Vec<f64>,
-    /// External force per unit λ and dead (λ-independent), every DOF.
-    pub load: Vec<f64>,
-    pub dead: Vec<f64>,
-}
-
-/// Classifies the linear sub-mesh's DOFs and gathers the region's constraints and loads from
-/// the full mesh's `constraints`.
-fn split(partition: &Partition, constraints: &Constraints) -> Result<Split, SubstructureError> {
-    partition.check_full("constraints", constraints.n())?;
-    let interior_node = |v: usize| partition.interior().binary_search(&v).is_ok();
-    for t in constraints.ties() {
-        let touched = std::iter::once(t.slave)
-            .chain(t.masters.iter().map(|m| m.0))
-            .find(|&d| interior_node(d / 3));
-        if let Some(d) = touched {
-            return Err(SubstructureError::TieInLinearRegion {
-                slave: t.slave,
-                node: d / 3,
-            });
-        }
-    }
-    let nodes = partition.linear_nodes();
-    let n = 3 * nodes.len();
-    let (at0, at1) = values_at_0_and_1(constraints);
-    let mut s = Split {
-        class: Vec::with_capacity(n),
-        interior: Vec::new(),
-        boundary: vec![0; 3 * partition.interface().len()],
-        base: vec![0.0; n],
-        value: vec![0.0; n],
-        load: vec![0.0; n],
-        dead: vec![0.0; n],
-    };
-    let mut prescribed = 0;
-    for (l, &v) in nodes.iter().enumerate() {
-        let on_interface = partition.interface().binary_search(&v).ok();
-        for r in 0..3 {
-            let (d, full) = (3 * l + r, 3 * v + r);
-            s.load[d] = at1.forces[full] - at0.forces[full];
-            s.dead[d] = at0.forces[full];
-            let class = if let Some(k) = on_interface {
-                s.boundary[3 * k + r] = d;
-                Class::Boundary(3 * k + r)
-            } else if constraints.is_constrained(full) {
-                s.base[d] = at0.values[full];
-                s.value[d] = at1.values[full] - at0.values[full];
-                prescribed += 1;
-                Class::Prescribed(prescribed - 1)
-            } else {
-                s.interior.push(d);
-                Class::Interior(s.interior.len() - 1)
-            };
-            s.class.push(class);
-        }
-    }
-    Ok(s)
-}
-
 /// Condenses the linear region of `partition` onto its interface (module docs): `linear` is an
 /// [`Assembler`] on [`Partition::linear_mesh`] (its tangent at u = 0 is the small-strain K
 /// whatever its kinematics: no stress, no geometric stiffness, B_NL = 0), `constraints` those
@@ -204,7 +124,13 @@ pub fn condense(
     };
     let r = match schur {
         Some(r) => r,
-        None => by_blocks(&k, &s, settings, &rhs).map_err(singular)?,
+        None => by_blocks(
+            &k,
+            &s,
+            (settings.block, settings.threads, settings.ordering),
+            &rhs,
+        )
+        .map_err(singular)?,
     };
     let [load, prescribed, dead] = r.loads;
     let boundary = |x: Vec<f64>, k: &[f64]| -> Vec<f64> {
@@ -257,22 +183,6 @@ fn singular_interior(e: SubstructureError, partition: &Partition) -> Substructur
         },
         e => e,
     }
-}
-
-/// K ← (K + Kᵀ)/2 for a dense row-major n × n `k`; returns max |K − Kᵀ| / max |K| before.
-pub(crate) fn symmetrise(k: &mut [f64], n: usize) -> f64 {
-    let scale = k.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-    let mut worst = 0.0f64;
-    for a in 0..n {
-        for b in 0..a {
-            let (x, y) = (k[a * n + b], k[b * n + a]);
-            worst = worst.max((x - y).abs());
-            let m = 0.5 * (x + y);
-            k[a * n + b] = m;
-            k[b * n + a] = m;
-        }
-    }
-    if scale > 0.0 { worst / scale } else { 0.0 }
 }
 
 #[cfg(test)]

@@ -54,6 +54,7 @@
 )]
 
 mod condense;
+mod dofs;
 mod error;
 mod mtx;
 mod partition;

@@ -3,7 +3,7 @@
 //! region's nodal forces K u (the linear force kinematics VCCT uses in a linear region, §2.8)
 //! and the reactions K u − f_ext at its prescribed DOFs.
 
-use crate::condense::{Class, Split};
+use crate::dofs::{Class, Split};
 use crate::reduce::Interior;
 use crate::{Partition, SubstructureError};
 use nonlin3d_solver::SymmetricMatrix;

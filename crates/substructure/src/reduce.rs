@@ -9,7 +9,7 @@
 //! Both keep what solves K_ii x = b for the recovery ([`Interior`]).
 
 use crate::SubstructureError;
-use crate::condense::{Class, CondenseSettings, Split, symmetrise};
+use crate::dofs::{Class, Split};
 use nonlin3d_solver::{
     FaerMode, FaerOrdering, FaerSolver, LinearSolver, SchurComplement, SolverError,
     SymmetricMatrix, SymmetricPattern,
@@ -86,17 +86,18 @@ pub(crate) fn by_schur(
     }))
 }
 
-/// K_red by K_ii's factor and blocks of `settings.block` right-hand sides K_ii⁻¹K_ib. Errors:
-/// a zero pivot of K_ii (its DOF of the linear sub-mesh), negative pivots.
+/// K_red by K_ii's factor (on `threads`, ordered by `ordering`) and blocks of `block` right-hand
+/// sides K_ii⁻¹K_ib (0: all at once). Errors: a zero pivot of K_ii (its DOF of the linear
+/// sub-mesh), negative pivots.
 pub(crate) fn by_blocks(
     k: &SymmetricMatrix,
     s: &Split,
-    settings: &CondenseSettings,
+    (block, threads, ordering): (usize, usize, FaerOrdering),
     rhs: &[Vec<f64>; 3],
 ) -> Result<Reduced, SubstructureError> {
     let clock = Instant::now();
     let b = blocks(k, s)?;
-    let (mut solver, factor_entries) = factorise(&b.kii, s, settings)?;
+    let (mut solver, factor_entries) = factorise(&b.kii, s, threads, ordering)?;
     let factored_s = clock.elapsed().as_secs_f64();
     let (ni, nb) = (s.interior.len(), s.boundary.len());
     let mut x = rhs.concat();
@@ -107,11 +108,7 @@ pub(crate) fn by_blocks(
         reduce(&x[ni..2 * ni]),
         reduce(&x[2 * ni..]),
     ];
-    let block = if settings.block == 0 {
-        nb.max(1)
-    } else {
-        settings.block
-    };
+    let block = if block == 0 { nb.max(1) } else { block };
     let mut kred = b.kbb;
     let mut x = vec![0.0; ni * block.min(nb.max(1))];
     for start in (0..nb).step_by(block) {
@@ -201,11 +198,12 @@ fn blocks(k: &SymmetricMatrix, s: &Split) -> Result<Blocks, SubstructureError> {
 fn factorise(
     kii: &SymmetricMatrix,
     s: &Split,
-    settings: &CondenseSettings,
+    threads: usize,
+    ordering: FaerOrdering,
 ) -> Result<(FaerSolver, usize), SubstructureError> {
     let mut solver = FaerSolver::new(FaerMode::Ldlt)
-        .with_threads(settings.threads)
-        .with_ordering(settings.ordering);
+        .with_threads(threads)
+        .with_ordering(ordering);
     let analysis = solver.analyze(kii.pattern())?;
     match solver.factorize(kii) {
         Ok(f) if f.negative_pivots > 0 => Err(SubstructureError::IndefiniteInterior {
@@ -233,4 +231,20 @@ fn times_kbi(kib: &[Vec<(usize, f64)>], x: &[f64]) -> Vec<f64> {
     kib.iter()
         .map(|col| col.iter().map(|&(i, v)| v * x[i]).sum())
         .collect()
+}
+
+/// K ← (K + Kᵀ)/2 for a dense row-major n × n `k`; returns max |K − Kᵀ| / max |K| before.
+pub(crate) fn symmetrise(k: &mut [f64], n: usize) -> f64 {
+    let scale = k.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let mut worst = 0.0f64;
+    for a in 0..n {
+        for b in 0..a {
+            let (x, y) = (k[a * n + b], k[b * n + a]);
+            worst = worst.max((x - y).abs());
+            let m = 0.5 * (x + y);
+            k[a * n + b] = m;
+            k[b * n + a] = m;
+        }
+    }
+    if scale > 0.0 { worst / scale } else { 0.0 }
 }
