@@ -85,6 +85,13 @@ impl Half {
         let order = SymmetricOrdering::Custom(faer::perm::PermRef::new_checked(&id, &id, m));
         let symbolic = factorize_symbolic_cholesky(sym, Side::Lower, order, params)
             .map_err(|e| SolverError::Faer(format!("split half, symbolic: {e:?}")))?;
+        // Forced supernodal, faer still answers an empty matrix with a simplicial structure;
+        // the sweeps below read supernodes.
+        if !matches!(symbolic.raw(), SymbolicCholeskyRaw::Supernodal(_)) {
+            return Err(SolverError::Faer(format!(
+                "split half of {m} DOFs: faer gave a simplicial structure"
+            )));
+        }
         // Scratch for the factorisation on one thread or on the pool's (`factorize`'s `par`).
         let pool = Par::rayon(rayon::current_num_threads().max(1));
         let req = symbolic

@@ -23,7 +23,8 @@ const ZERO_PIVOT: f64 = 1e-13;
 /// A's interior block factored with the boundary appended (module docs). Made once per
 /// pattern by [`analyze`](Self::analyze); [`factorize`](Self::factorize) per set of values.
 pub struct SchurComplement {
-    half: Half,
+    /// None when A has no DOF in either list (nothing to factor).
+    half: Option<Half>,
     /// Interior DOFs of A in the caller's order.
     interior: Vec<usize>,
     /// Local interior position (elimination order) → index in `interior`.
@@ -100,8 +101,13 @@ impl SchurComplement {
         let order = order.forward().to_vec();
         let mut dofs: Vec<usize> = order.iter().map(|&k| interior[k]).collect();
         dofs.extend_from_slice(boundary);
-        let half = Half::new(pattern, dofs, ni, 0)?;
-        let flops = super::super::factor_flops(&half.symbolic);
+        let half = match dofs.is_empty() {
+            true => None,
+            false => Some(Half::new(pattern, dofs, ni, 0)?),
+        };
+        let flops = half
+            .as_ref()
+            .map_or(0.0, |h| super::super::factor_flops(&h.symbolic));
         Ok(Self {
             half,
             interior: interior.to_vec(),
@@ -120,7 +126,7 @@ impl SchurComplement {
 
     /// Entries of the factor (the interior's columns and the boundary's dense block).
     pub fn factor_entries(&self) -> usize {
-        self.half.symbolic.len_val()
+        self.half.as_ref().map_or(0, |h| h.symbolic.len_val())
     }
 
     /// Σc² over the factor's column counts.
@@ -139,10 +145,14 @@ impl SchurComplement {
         let rule = PivotRule::Double {
             tolerance: ZERO_PIVOT,
         };
-        let outcome = match self
-            .half
-            .factorize::<f64>(a.values(), &diag, rule, faer::Par::Seq)?
-        {
+        let Some(half) = self.half.as_mut() else {
+            self.factored = true;
+            return Ok(Some(SchurOutcome {
+                schur: Vec::new(),
+                negative_pivots: 0,
+            }));
+        };
+        let outcome = match half.factorize::<f64>(a.values(), &diag, rule, faer::Par::Seq)? {
             Ok(o) => o,
             Err(_) => return Ok(None),
         };
@@ -187,9 +197,11 @@ impl SchurComplement {
     /// order: the boundary rows of the forward sweep. Needs a factorisation.
     pub fn reduce(&self, x: &[f64]) -> Result<Vec<f64>, SolverError> {
         self.check(x)?;
-        let l = self.factor()?;
+        let (half, l) = self.factor()?;
         let mut z = self.local(x);
-        self.half.forward::<f64>(l, &mut z);
+        if let Some(half) = half {
+            half.forward::<f64>(l, &mut z);
+        }
         Ok(z.split_off(self.order.len()))
     }
 
@@ -197,21 +209,28 @@ impl SchurComplement {
     /// boundary rows set to zero, the backward sweep. Needs a factorisation.
     pub fn solve_interior(&self, x: &mut [f64]) -> Result<(), SolverError> {
         self.check(x)?;
-        let l = self.factor()?;
+        let (half, l) = self.factor()?;
+        let Some(half) = half else {
+            return Ok(());
+        };
         let mut z = self.local(x);
-        self.half.forward::<f64>(l, &mut z);
+        half.forward::<f64>(l, &mut z);
         let ni = self.order.len();
         z[ni..].fill(0.0);
-        self.half.backward::<f64>(l, &mut z);
+        half.backward::<f64>(l, &mut z);
         for (v, &k) in z.iter().zip(&self.order) {
             x[k] = *v;
         }
         Ok(())
     }
 
-    fn factor(&self) -> Result<&[f64], SolverError> {
+    /// The half and its factor values (no half: nothing was factored, nothing to sweep).
+    fn factor(&self) -> Result<(Option<&Half>, &[f64]), SolverError> {
         match self.factored {
-            true => Ok(<f64 as super::Real>::view(&self.half.l)),
+            true => Ok(match &self.half {
+                Some(h) => (Some(h), <f64 as super::Real>::view(&h.l)),
+                None => (None, &[]),
+            }),
             false => Err(SolverError::NotReady(
                 "a Schur complement's sweeps before a successful factorisation",
             )),
@@ -335,8 +354,8 @@ mod tests {
         }
     }
 
-    /// No boundary: S is empty and the factor is A_ii's, which still solves; no interior: S
-    /// is A.
+    /// No boundary: S is empty and the factor is A_ii's, which still solves; neither: nothing
+    /// to factor; no interior: S is A.
     #[test]
     fn an_empty_boundary_gives_an_empty_complement() {
         let a = chain(6);
@@ -351,6 +370,11 @@ mod tests {
         a.matvec(&x, &mut ax).unwrap();
         assert!(ax.iter().all(|v| (v - 1.0).abs() < 1e-12), "{ax:?}");
         assert!(s.reduce(&x).unwrap().is_empty());
+        // Nothing in either list (every DOF left out): nothing to factor.
+        let mut s = SchurComplement::analyze(a.pattern(), &[], &[], FaerOrdering::Auto).unwrap();
+        assert_eq!(s.factorize(&a).unwrap().unwrap().schur, Vec::<f64>::new());
+        s.solve_interior(&mut []).unwrap();
+        assert!(s.reduce(&[]).unwrap().is_empty());
         // No interior: S is A itself.
         let mut s =
             SchurComplement::analyze(a.pattern(), &[], &interior, FaerOrdering::Auto).unwrap();
