@@ -232,11 +232,8 @@ mod tests {
         assert!(diff <= 1e-14 * scale, "{diff:e} of {scale:e}");
     }
 
-    /// K_red does not depend on how it is formed: the partial factorisation against block
-    /// solves of 1, 5 and all columns at once, equal to rounding (1e-12 of the largest
-    /// entry; the same elimination in another grouping), loads likewise.
-    #[test]
-    fn the_partial_factorisation_and_the_block_widths_agree() {
+    /// A 4 × 2 × 2 Hex8 box whose bottom layer (cells 0–7) is the linear region.
+    fn bottom_layer_linear() -> (Mesh, Partition) {
         let mesh = structured_box(&BoxParams::new(
             ElementKind::Hex8,
             [4, 2, 2],
@@ -244,6 +241,15 @@ mod tests {
         ))
         .unwrap();
         let p = Partition::from_linear_cells(&mesh, &(0..8).collect::<Vec<_>>()).unwrap();
+        (mesh, p)
+    }
+
+    /// K_red does not depend on how it is formed: the partial factorisation against block
+    /// solves of 1, 5 and all columns at once, equal to rounding (1e-12 of the largest
+    /// entry; the same elimination in another grouping), loads likewise.
+    #[test]
+    fn the_partial_factorisation_and_the_block_widths_agree() {
+        let (mesh, p) = bottom_layer_linear();
         // x = 0 clamped (u = 0.1 along x) and z = 0 held along z: the linear region (the
         // bottom layer) cannot move with its interface free, K_red is regular.
         let mut c = Constraints::new(3 * mesh.nodes.len());
@@ -295,17 +301,11 @@ mod tests {
     }
 
     /// With x = 0 held along x only, the linear region (the bottom layer) can slide and turn
-    /// with its interface free: K_red is singular, the partial factorisation gives way to block solves, and the
-    /// superelement is formed all the same.
+    /// with its interface free: K_red is singular, the partial factorisation gives way to
+    /// block solves, and the superelement is formed all the same.
     #[test]
     fn a_singular_reduced_stiffness_is_formed_by_block_solves() {
-        let mesh = structured_box(&BoxParams::new(
-            ElementKind::Hex8,
-            [4, 2, 2],
-            [4.0, 2.0, 2.0],
-        ))
-        .unwrap();
-        let p = Partition::from_linear_cells(&mesh, &(0..8).collect::<Vec<_>>()).unwrap();
+        let (mesh, p) = bottom_layer_linear();
         let mut c = Constraints::new(3 * mesh.nodes.len());
         for &v in &mesh.node_sets[names::X0] {
             c.prescribe(3 * v, 0.1).unwrap();

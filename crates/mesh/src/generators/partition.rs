@@ -112,14 +112,11 @@ pub fn nonlinear_region(
     let cells = match partition {
         Partition::Sublaminate => sorted(sub.clone()),
         Partition::SublaminateAndCrackBase => {
-            let lower = mesh
-                .node_sets
-                .get(names::CRACK_LOWER)
-                .ok_or(MeshError::MissingSet {
-                    kind: "node",
-                    name: names::CRACK_LOWER,
-                    purpose: "the base cells under the delamination join the nonlinear region",
-                })?;
+            let lower = node_set(
+                mesh,
+                names::CRACK_LOWER,
+                "the base cells under the delamination join the nonlinear region",
+            )?;
             let mut on = vec![false; mesh.nodes.len()];
             for &n in lower {
                 if let Some(x) = on.get_mut(n) {
@@ -130,9 +127,7 @@ pub fn nonlinear_region(
             cells.extend(
                 (0..mesh.cells.len()).filter(|&c| mesh.cells[c].nodes.iter().any(|&n| on[n])),
             );
-            cells.sort_unstable();
-            cells.dedup();
-            cells
+            sorted(cells)
         }
         Partition::Thesis { offset_m } => {
             check_front(mesh, front, &distance)?;
@@ -208,14 +203,11 @@ fn thesis_cells(
 /// the shape was made from other parameters than the mesh. Hex20 mid-edge nodes on a curved
 /// front sit on chords, inside the curve by their sagitta, and are not checked.
 fn check_front(mesh: &Mesh, front: &FrontShape, distance: &[f64]) -> Result<(), MeshError> {
-    let nodes = mesh
-        .node_sets
-        .get(names::FRONT)
-        .ok_or(MeshError::MissingSet {
-            kind: "node",
-            name: names::FRONT,
-            purpose: "the offset ℓ is checked against the front the mesh was generated with",
-        })?;
+    let nodes = node_set(
+        mesh,
+        names::FRONT,
+        "the offset ℓ is checked against the front the mesh was generated with",
+    )?;
     let mut corner = vec![false; mesh.nodes.len()];
     for cell in &mesh.cells {
         for &n in cell.nodes.iter().take(8) {
@@ -253,6 +245,19 @@ fn interface_nodes(mesh: &Mesh, nonlinear: &[usize]) -> Vec<usize> {
 }
 
 /// `v` sorted, without repeats.
+/// The mesh's node set `name`, or the error saying what it was needed for.
+fn node_set<'a>(
+    mesh: &'a Mesh,
+    name: &'static str,
+    purpose: &'static str,
+) -> Result<&'a Vec<usize>, MeshError> {
+    mesh.node_sets.get(name).ok_or(MeshError::MissingSet {
+        kind: "node",
+        name,
+        purpose,
+    })
+}
+
 fn sorted(mut v: Vec<usize>) -> Vec<usize> {
     v.sort_unstable();
     v.dedup();
