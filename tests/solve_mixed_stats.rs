@@ -25,7 +25,12 @@ fn solve(solver: &str, name: &str) -> (String, serde_json::Value) {
 
 /// The NLGEOM cantilever (a well-conditioned Hex20 tangent: cond·ε₃₂ ≪ 0.5) keeps its f32
 /// factors: every converged attempt made at least one of its factorisations in f32, none in
-/// f64, and refined to the solver's default target (normwise backward error ≤ 1e-14).
+/// f64, and refined without a stall, each Newton correction until its residual was within 1 %
+/// of Newton's force tolerance (`nonlin3d_newton::LINEAR_RESIDUAL`) or to the solver's
+/// default backward-error target of 1e-14, whichever came first. The last correction of an
+/// increment is small, so one f32 solve may already leave 1 % of the tolerance: its backward
+/// error is then the f32 solve's (1.8e-8 measured; 1.8e-11 where a step refined), and a
+/// refinement that failed to converge would have fallen back to f64.
 #[test]
 fn mixed_precision_statistics_are_recorded_per_attempt() {
     let (stdout, json) = solve("faer-mixed", "mixed-stats");
@@ -37,7 +42,7 @@ fn mixed_precision_statistics_are_recorded_per_attempt() {
         assert_eq!(m["f64_factorisations"], 0, "{i}");
         assert!(m["fallback"].is_null(), "{i}");
         assert!(m["refinement_steps"].as_u64().unwrap() >= 1, "{i}");
-        assert!(m["backward_error"].as_f64().unwrap() <= 1e-14, "{i}");
+        assert!(m["backward_error"].as_f64().unwrap() <= 1e-6, "{i}");
     }
     assert!(stdout.contains("f32 factor held"), "{stdout}");
 }

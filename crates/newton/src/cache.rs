@@ -59,11 +59,14 @@ impl TangentCache {
         self.pairs.push_back((s, y, 1.0 / ys));
     }
 
-    /// d = −H r by the two-loop recursion with H₀ = K₀⁻¹ (the factorised tangent).
+    /// d = −H r by the two-loop recursion with H₀ = K₀⁻¹ (the factorised tangent); with
+    /// `residual`, H₀ is applied to a residual ‖q − K₀ x‖∞ ≤ `residual` N
+    /// ([`LinearSolver::solve_to_residual`]), else exactly.
     pub(crate) fn direction(
         &self,
         r: &[f64],
         solver: &mut dyn LinearSolver,
+        residual: Option<f64>,
     ) -> Result<Vec<f64>, nonlin3d_solver::SolverError> {
         let mut q: Vec<f64> = r.iter().map(|x| -x).collect();
         let mut alphas = Vec::with_capacity(self.pairs.len());
@@ -72,7 +75,10 @@ impl TangentCache {
             axpy(-a, y, &mut q);
             alphas.push(a);
         }
-        solver.solve_in_place(&mut q, 1)?;
+        match residual {
+            Some(t) => solver.solve_to_residual(&mut q, t)?,
+            None => solver.solve_in_place(&mut q, 1)?,
+        }
         for ((s, y, rho), a) in self.pairs.iter().zip(alphas.iter().rev()) {
             let b = rho * dot(y, &q);
             axpy(a - b, s, &mut q);

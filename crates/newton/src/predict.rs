@@ -39,7 +39,7 @@ pub(crate) fn tangent_predictor(
     if !apply {
         return Ok(Prediction::Changed);
     }
-    let Ok(mut du) = session.cache.direction(&c, session.solver.as_mut()) else {
+    let Ok(mut du) = session.cache.direction(&c, session.solver.as_mut(), None) else {
         session.cache.invalidate();
         return Ok(Prediction::Changed);
     };

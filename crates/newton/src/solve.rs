@@ -86,6 +86,12 @@ impl std::fmt::Display for Termination {
 /// REACHABLE·F is refused, not raised.
 pub const REACHABLE: f64 = 1e-14;
 
+/// The force a Newton correction may leave unbalanced in its linear solve, as a fraction of
+/// the force tolerance: K Δu = −r is solved to ‖K Δu + r‖∞ ≤ 0.01 · tol, so the next
+/// residual differs from the exact step's by at most 1 % of the tolerance (a mixed-precision
+/// solver stops refining there, [`LinearSolver::solve_to_residual`]).
+pub const LINEAR_RESIDUAL: f64 = 0.01;
+
 /// The residual tolerance at a state of force scale `scale` (N): max(force_tolerance,
 /// relative_tolerance·F), refused below [`REACHABLE`]·F. F = 0 (no load, no reaction) gives 0:
 /// only an exactly zero residual converges then, which a zero-load increment has.
@@ -313,7 +319,7 @@ fn iterations(
         };
         cache.age += 1;
         let bfgs_pairs = cache.pairs.len();
-        let mut du = match cache.direction(&r, solver) {
+        let mut du = match cache.direction(&r, solver, Some(LINEAR_RESIDUAL * tolerance)) {
             Ok(d) => d,
             Err(e) => {
                 cache.invalidate();

@@ -409,9 +409,18 @@ impl LinearSolver for FaerSolver {
     fn solve_in_place(&mut self, b: &mut [f64], nrhs: usize) -> Result<(), SolverError> {
         self.check_rhs(b, nrhs)?;
         if self.mixed.single_active() {
-            self.solve_mixed(b, nrhs)
+            self.solve_mixed(b, nrhs, None)
         } else {
             self.solve_f64(b, nrhs)
+        }
+    }
+
+    fn solve_to_residual(&mut self, b: &mut [f64], residual: f64) -> Result<(), SolverError> {
+        self.check_rhs(b, 1)?;
+        if self.mixed.single_active() {
+            self.solve_mixed(b, 1, Some(residual))
+        } else {
+            self.solve_f64(b, 1)
         }
     }
 

@@ -43,6 +43,15 @@ pub trait LinearSolver: Send {
     fn factorize(&mut self, a: &SymmetricMatrix) -> Result<Factorization, SolverError>;
     /// Overwrites the `nrhs` column-major right-hand sides in `b` (n·nrhs values) with A⁻¹b.
     fn solve_in_place(&mut self, b: &mut [f64], nrhs: usize) -> Result<(), SolverError>;
+    /// Overwrites the one right-hand side `b` with a solution x whose residual only has to be
+    /// small in `b`'s own units: ‖b − A x‖∞ ≤ `residual` (a Newton correction, judged by the
+    /// force it leaves unbalanced against Newton's force tolerance). A solver that refines a
+    /// low-precision solution ([`crate::FaerPrecision::Mixed`]) stops there, or at its own
+    /// backward-error target if that comes first; by default the exact solve.
+    fn solve_to_residual(&mut self, b: &mut [f64], residual: f64) -> Result<(), SolverError> {
+        let _ = residual;
+        self.solve_in_place(b, 1)
+    }
     /// Overwrites `b` with an approximation of A⁻¹b, for solves whose result only has to be
     /// close (a search direction: BFGS's H₀ = K₀⁻¹ on a kept tangent), never for an answer.
     /// By default the exact solve; [`crate::FaerSolver`] with

@@ -328,14 +328,20 @@ impl FaerSolver {
         )
     }
 
-    /// Solves with the f32 factor and refines each column in f64; on a stall, factorises in
-    /// f64 and solves directly.
-    pub(super) fn solve_mixed(&mut self, b: &mut [f64], nrhs: usize) -> Result<(), SolverError> {
+    /// Solves with the f32 factor and refines each column in f64, to the backward-error
+    /// target or, with `residual`, until ‖b − A x‖∞ ≤ `residual` if that comes first; on a
+    /// stall, factorises in f64 and solves directly.
+    pub(super) fn solve_mixed(
+        &mut self,
+        b: &mut [f64],
+        nrhs: usize,
+        residual: Option<f64>,
+    ) -> Result<(), SolverError> {
         let original = b.to_vec();
         let n = b.len() / nrhs.max(1);
         let mut stalled = false;
         for col in b.chunks_mut(n.max(1)) {
-            if !self.refine(col)? {
+            if !self.refine(col, residual)? {
                 stalled = true;
                 break;
             }
@@ -360,9 +366,13 @@ impl FaerSolver {
 
     /// Iterative refinement of one column in place with the f32 factor (split or not);
     /// `false` if it stalled.
-    fn refine(&mut self, col: &mut [f64]) -> Result<bool, SolverError> {
+    fn refine(&mut self, col: &mut [f64], residual: Option<f64>) -> Result<bool, SolverError> {
         let FaerPrecision::Mixed { tolerance, .. } = self.precision else {
             return Ok(false);
+        };
+        let target = Target {
+            backward_error: tolerance,
+            residual: residual.unwrap_or(0.0),
         };
         let Some(a) = &self.mixed.a else {
             return Err(SolverError::NotReady("solve called before factorize"));
@@ -371,7 +381,7 @@ impl FaerSolver {
         if let Some(split) = self.split_state.as_mut().filter(|s| s.is_factored()) {
             // The split's solve reads its f32 halves into f64 sums: no scaling needed.
             let correct = |r: &mut [f64]| split.solve_column(r, par);
-            return refine_column(col, a, a_norm, tolerance, stats, correct);
+            return refine_column(col, a, a_norm, target, stats, correct);
         }
         let (Some(symbolic), Some(buffer)) = (&self.symbolic, &mut self.buffer) else {
             return Err(SolverError::NotReady("solve called before factorize"));
@@ -395,19 +405,30 @@ impl FaerSolver {
                 *ri = f64::from(*ci) * scale;
             }
         };
-        refine_column(col, a, a_norm, tolerance, stats, correct)
+        refine_column(col, a, a_norm, target, stats, correct)
     }
+}
+
+/// Where [`refine_column`] stops: the first of the two reached.
+#[derive(Debug, Clone, Copy)]
+struct Target {
+    /// The normwise backward error ‖b − A x‖∞ / (‖A‖∞‖x‖∞ + ‖b‖∞).
+    backward_error: f64,
+    /// ‖b − A x‖∞ in b's units (0: none): what the caller can use
+    /// ([`LinearSolver::solve_to_residual`](crate::LinearSolver::solve_to_residual)).
+    residual: f64,
 }
 
 /// Iterative refinement of `col` (b in, x out): x ← x + C(b − A x) with `correct` applying
 /// the approximate inverse C = (L̃D̃L̃ᵀ)⁻¹ in place, until the normwise backward error
-/// ‖b − A x‖∞ / (‖A‖∞‖x‖∞ + ‖b‖∞) is at most `tolerance` (`true`), or it stalls: falls by
-/// less than half in a step, or [`MAX_REFINEMENT_STEPS`] pass (`false`).
+/// ‖b − A x‖∞ / (‖A‖∞‖x‖∞ + ‖b‖∞) or the residual ‖b − A x‖∞ meets its `target`
+/// (`true`), or it stalls: the backward error falls by less than half in a step, or
+/// [`MAX_REFINEMENT_STEPS`] pass (`false`).
 fn refine_column(
     col: &mut [f64],
     a: &SymmetricMatrix,
     a_norm: f64,
-    tolerance: f64,
+    target: Target,
     stats: &mut MixedStats,
     mut correct: impl FnMut(&mut [f64]),
 ) -> Result<bool, SolverError> {
@@ -430,10 +451,11 @@ fn refine_column(
         for ((ri, bi), axi) in r.iter_mut().zip(&b).zip(&ax) {
             *ri = bi - axi;
         }
-        let omega = max_abs(&r) / (a_norm * max_abs(col) + b_norm);
+        let residual = max_abs(&r);
+        let omega = residual / (a_norm * max_abs(col) + b_norm);
         stats.refinement_steps += 1;
         stats.last_backward_error = omega;
-        if omega <= tolerance {
+        if omega <= target.backward_error || residual <= target.residual {
             return Ok(true);
         }
         if !omega.is_finite() || omega > 0.5 * previous {

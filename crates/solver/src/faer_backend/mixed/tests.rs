@@ -36,6 +36,50 @@ fn solve(s: &mut dyn LinearSolver, a: &SymmetricMatrix) -> (Vec<f64>, usize) {
     (x, f.negative_pivots)
 }
 
+/// `solve_to_residual` stops refining once ‖b − A x‖∞ is within the caller's bound: fewer
+/// steps than the 1e-14 backward-error target takes, the residual within the bound (checked
+/// here in f64), and never worse than the first f32 solve. A bound the first solve already
+/// meets takes that one step; a bound of 0 is the backward-error target itself.
+#[test]
+fn a_residual_bound_stops_refinement_early() {
+    let a = chain(300, 1.0, 0.0);
+    let b: Vec<f64> = (0..a.n()).map(|i| 1.0 + (i % 3) as f64).collect();
+    let residual_of = |x: &[f64]| {
+        let mut ax = vec![0.0; x.len()];
+        a.matvec(x, &mut ax).unwrap();
+        b.iter()
+            .zip(&ax)
+            .fold(0.0f64, |m, (p, q)| m.max((p - q).abs()))
+    };
+    let steps_for = |bound: Option<f64>| {
+        let mut s = solver(FaerPrecision::mixed());
+        s.analyze(a.pattern()).unwrap();
+        s.factorize(&a).unwrap();
+        let mut x = b.clone();
+        match bound {
+            Some(t) => s.solve_to_residual(&mut x, t).unwrap(),
+            None => s.solve_in_place(&mut x, 1).unwrap(),
+        }
+        (s.mixed_stats().refinement_steps, residual_of(&x))
+    };
+    let (full, full_residual) = steps_for(None);
+    let (zero, zero_residual) = steps_for(Some(0.0));
+    assert_eq!(
+        (zero, zero_residual.to_bits()),
+        (full, full_residual.to_bits())
+    );
+    // ‖b‖∞ = 3; f32's first solve leaves about cond·ε₃₂·‖b‖ ≈ 1e-2 at most.
+    let (loose, loose_residual) = steps_for(Some(1.0));
+    assert_eq!(loose, 1);
+    assert!(loose_residual <= 1.0);
+    // Each step gains about cond·ε₃₂ ≈ 4e-3: a tenth of the first solve's residual is met
+    // by the second step, before the backward-error target.
+    let bound = 0.1 * loose_residual;
+    let (early, early_residual) = steps_for(Some(bound));
+    assert!(early < full, "{early} steps against {full}");
+    assert!(early_residual <= bound, "{early_residual}");
+}
+
 /// n = 300: cond ≈ 3.7e4, so each refinement step gains a factor cond·ε₃₂ ≈ 4e-3: the
 /// f32 factor is kept and refinement reaches 1e-14 in a few steps. Both solutions then have
 /// backward error ≤ 1e-14, so they differ by at most 2·cond·1e-14 ≈ 1e-9 relative.
