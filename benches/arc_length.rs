@@ -128,7 +128,7 @@ fn bench_truss(c: &mut Criterion) {
 
 /// The reference scene on 4 slices at −0.001 and −0.003, `path` as given.
 fn scene(path: &str) -> nonlin3d::Scene {
-    let text = nonlin3d::scene::DEFAULT_SCENE
+    let text = nonlin3d::scene::THESIS_SCENE
         .replace("slices = 8", "slices = 4")
         .replace(
             "strains = [-0.001, -0.002, -0.003, -0.004, -0.005]",

@@ -5,9 +5,13 @@
 
 use crate::Error;
 use crate::model::{embedded_params, through_width_params};
-use crate::results::{AccuracyReport, GError, LevelError, LevelResult, MeshChoice, Results};
-use crate::scene::{ErrorEstimateName, Geometry, MeshControls, Scene, Shape};
-use nonlin3d_mesh::{AccuracyRow, EmbeddedParams};
+use crate::results::{
+    AccuracyReport, GError, LevelError, LevelResult, MeshChoice, MeshRule, Results,
+};
+use crate::scene::{
+    ElementName, ErrorEstimateName, Geometry, MeshControls, PartitionName, Scene, Shape,
+};
+use nonlin3d_mesh::{AccuracyRow, DEFAULT_MESH, EmbeddedParams};
 use nonlin3d_vcct::estimate::{self, FrontG, Modes};
 use std::time::Instant;
 
@@ -75,10 +79,50 @@ fn set_controls(c: &mut MeshControls, p: &EmbeddedParams) {
     c.layer_band = p.layer_band.map(|b| [b.inside, b.outside]);
 }
 
-/// The scene with `[mesh] accuracy` turned into knobs (the table's row scaled to the model;
-/// the knobs the scene gives itself override the row's), and what was chosen. A scene
-/// without a target comes back unchanged. Through-width strips have no table: refused.
+/// Whether a scene takes the default mesh ([`nonlin3d_mesh::DEFAULT_MESH`]): an embedded or
+/// edge delamination of homogenised Hex20 layers, without substructuring, whose `[mesh]` gives
+/// no knob that shapes the mesh and no target. Any knob given keeps the thesis's reference
+/// mesh under it (the thesis scenes give `slices = 8`); plates, thin films, ply-level layups,
+/// Hex8 and substructured models keep it too (the default mesh was measured on none of them).
+fn takes_default_mesh(scene: &Scene) -> bool {
+    let m = &scene.mesh;
+    let knobs = [
+        m.slices.is_some(),
+        m.inside.is_some(),
+        m.outside.is_some(),
+        m.front_grading.is_some(),
+        m.front_element_mm.is_some(),
+        m.front_band.is_some(),
+        m.layer_band.is_some(),
+        m.sub_layers.is_some(),
+        m.base_layers.is_some(),
+        m.across.is_some(),
+        m.accuracy.is_some(),
+    ];
+    matches!(
+        scene.geometry,
+        Geometry::Embedded { .. } | Geometry::Edge { .. }
+    ) && !knobs.contains(&true)
+        && scene.layup.is_none()
+        && scene.substructure.partition == PartitionName::None
+        && matches!(m.element, None | Some(ElementName::Hex20))
+}
+
+/// The scene with its mesh resolved to knobs, and what was chosen: `[mesh] accuracy` by the
+/// table's row scaled to the model (the knobs the scene gives itself override the row's); a
+/// scene that [takes the default mesh](takes_default_mesh) by
+/// [`nonlin3d_mesh::DEFAULT_MESH`] scaled alike. Any other scene comes back unchanged.
+/// Through-width strips have no table: a target for one is refused.
 pub(crate) fn resolve_accuracy(scene: &Scene) -> Result<(Scene, Option<MeshChoice>), Error> {
+    if takes_default_mesh(scene)
+        && let Some(p) = embedded_of(scene)
+    {
+        let chosen = p.with_accuracy_row(&DEFAULT_MESH);
+        let mut out = scene.clone();
+        set_controls(&mut out.mesh, &chosen);
+        let choice = MeshChoice::of(&chosen, &DEFAULT_MESH, true, MeshRule::Default, Vec::new());
+        return Ok((out, Some(choice)));
+    }
     let Some(target) = scene.mesh.accuracy else {
         return Ok((scene.clone(), None));
     };
@@ -131,6 +175,7 @@ pub(crate) fn resolve_accuracy(scene: &Scene) -> Result<(Scene, Option<MeshChoic
         m.front_band = None;
     }
     let choice = MeshChoice {
+        rule: MeshRule::Target,
         table_error: row.worst,
         table_meets_target: meets,
         slices: m.slices.unwrap_or(chosen.slices),
@@ -140,6 +185,7 @@ pub(crate) fn resolve_accuracy(scene: &Scene) -> Result<(Scene, Option<MeshChoic
         base_layers: m.base_layers.unwrap_or(chosen.base_layers),
         front_element_mm: m.front_element_mm,
         front_band: m.front_band,
+        layer_band: m.layer_band,
         overridden,
     };
     Ok((out, Some(choice)))

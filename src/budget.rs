@@ -254,9 +254,15 @@ fn factor_estimate(
     (f.min(1e36) as u128).max(c.tangent_nonzeros)
 }
 
-/// The size of `scene`'s model and run, from its counts alone (nothing is meshed). Nodes,
-/// cells, DOFs and tangent nonzeros are exact; the factor is estimated (`factor_estimate`).
+/// The size of `scene`'s model and run, from its counts alone (nothing is meshed), on the mesh
+/// that runs (`[mesh] accuracy` and the default mesh resolved to knobs first). Nodes, cells,
+/// DOFs and tangent nonzeros are exact (without front or layer bands, which the counts do not
+/// know); the factor is estimated (`factor_estimate`).
 pub fn estimate_scene(scene: &Scene) -> Estimate {
+    // The mesh that runs: `[mesh] accuracy`'s or the default mesh's knobs (a scene the
+    // resolution refuses is estimated as written; the run itself reports the refusal).
+    let resolved = crate::analysis::estimate::resolve_accuracy(scene).map(|(s, _)| s);
+    let scene = resolved.as_ref().unwrap_or(scene);
     let (counts, entities, width, _) = scene_counts(scene);
     let hex20 = scene
         .mesh

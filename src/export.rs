@@ -296,7 +296,7 @@ mod tests {
     /// Embedded (the reference scene on 4 slices, three strains: the largest last).
     #[test]
     fn embedded_deck_matches_constraints() {
-        let text = crate::scene::DEFAULT_SCENE.replace("slices = 8", "slices = 4");
+        let text = crate::scene::THESIS_SCENE.replace("slices = 8", "slices = 4");
         deck_matches_constraints(&text);
     }
 

@@ -28,7 +28,7 @@
 //!
 //! ```no_run
 //! // The thesis's reference case end to end (what `nonlin3d run` does without a scene).
-//! let scene = nonlin3d::Scene::thesis_reference()?;
+//! let scene = nonlin3d::Scene::reference()?;
 //! let results = nonlin3d::Analysis::new(scene)?.run()?;
 //! print!("{}", nonlin3d::report::table(&results));
 //! # Ok::<(), nonlin3d::Error>(())

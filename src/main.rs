@@ -75,7 +75,7 @@ impl Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Run a scene (default: the thesis's 30 mm circular delamination, Fig. 5.1.3).
+    /// Run a scene (default: the thesis's 30 mm circular delamination on the default mesh).
     Run {
         /// The scene (TOML); omitted: the built-in reference scene.
         scene: Option<PathBuf>,
@@ -143,7 +143,7 @@ fn lock(monitor: &Shared) -> std::sync::MutexGuard<'_, Monitor> {
 
 fn read_scene(path: Option<&Path>) -> Result<nonlin3d::Scene, nonlin3d::Error> {
     match path {
-        None => nonlin3d::Scene::thesis_reference(),
+        None => nonlin3d::Scene::reference(),
         Some(p) => {
             let text = std::fs::read_to_string(p).map_err(|source| nonlin3d::Error::Io {
                 path: p.to_path_buf(),

@@ -302,6 +302,13 @@ pub fn table(results: &Results) -> String {
              the growth criterion (faces = overlapped in front_K.csv and results.json)"
         );
     }
+    if let Some(m) = results
+        .accuracy
+        .as_ref()
+        .and_then(|a| a.chosen_mesh.as_ref())
+    {
+        let _ = writeln!(s, "{}", mesh_line(m, results.model.dofs));
+    }
     if let Some(dofs) = results.accuracy.as_ref().and_then(|a| a.companion_dofs) {
         let _ = writeln!(
             s,
@@ -404,6 +411,36 @@ pub fn table(results: &Results) -> String {
         }
     }
     s
+}
+
+/// The terminal's line on a mesh the run chose itself (`[mesh] accuracy` or the default mesh).
+fn mesh_line(m: &crate::results::MeshChoice, dofs: usize) -> String {
+    let band = m.front_band.map_or(String::new(), |[i, o]| {
+        format!(
+            " → {} in a band of {i} + {o} rings at the front",
+            3 * m.slices
+        )
+    });
+    let element = m
+        .front_element_mm
+        .map_or(String::new(), |e| format!(", front element {e} mm"));
+    let layers = match m.layer_band {
+        Some(_) => format!(
+            "{} + {} layers at the front, fewer away from it",
+            m.sub_layers, m.base_layers
+        ),
+        None => format!("{} + {} layers", m.sub_layers, m.base_layers),
+    };
+    let why = match m.rule {
+        crate::results::MeshRule::Default => {
+            "the default mesh (no [mesh] knobs; any knob, e.g. slices = 8, runs the thesis's mesh)"
+        }
+        crate::results::MeshRule::Target => "picked by [mesh] accuracy",
+    };
+    format!(
+        "mesh: {why}: {} slices{band}, {} + {} rings{element}, {layers}; {dofs} DOFs",
+        m.slices, m.inside, m.outside
+    )
 }
 
 #[cfg(test)]

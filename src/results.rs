@@ -121,11 +121,23 @@ pub struct AccuracyReport {
     pub chosen_mesh: Option<MeshChoice>,
 }
 
-/// The knobs `[mesh] accuracy` set (the table's row scaled to the model), after the scene's
-/// explicit knobs overrode them.
+/// Why the mesh of a [`MeshChoice`] was chosen.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum MeshRule {
+    /// `[mesh] accuracy`: the cheapest table row within the target.
+    Target,
+    /// No mesh knob and no target: the default mesh (`nonlin3d_mesh::DEFAULT_MESH`).
+    Default,
+}
+
+/// The knobs `[mesh] accuracy` or the default mesh set (the row scaled to the model), after
+/// the scene's explicit knobs overrode them.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct MeshChoice {
-    /// The measured worst error of the chosen row on the reference circle (relative).
+    /// `target` (`[mesh] accuracy`) or `default` (a scene without mesh knobs).
+    pub rule: MeshRule,
+    /// The measured worst error of the chosen row (relative to the converged G_T max).
     pub table_error: f64,
     /// Whether a row of the table meets the target (false: the finest row, short of it).
     pub table_meets_target: bool,
@@ -143,8 +155,37 @@ pub struct MeshChoice {
     pub front_element_mm: Option<f64>,
     /// Front band `[inside, outside]` (null: none).
     pub front_band: Option<[usize; 2]>,
+    /// Layer band `[inside, outside]` (null: none).
+    pub layer_band: Option<[usize; 2]>,
     /// The knobs the scene gave explicitly, which override the table's.
     pub overridden: Vec<String>,
+}
+
+impl MeshChoice {
+    /// The choice of `row`'s knobs as scaled to a model (`chosen`), none overridden but those
+    /// named.
+    pub(crate) fn of(
+        chosen: &nonlin3d_mesh::EmbeddedParams,
+        row: &nonlin3d_mesh::AccuracyRow,
+        meets: bool,
+        rule: MeshRule,
+        overridden: Vec<String>,
+    ) -> Self {
+        Self {
+            rule,
+            table_error: row.worst,
+            table_meets_target: meets,
+            slices: chosen.slices,
+            inside: chosen.radial_inside,
+            outside: chosen.radial_outside,
+            sub_layers: chosen.sub_layers,
+            base_layers: chosen.base_layers,
+            front_element_mm: chosen.front_element.map(|e| e * 1e3),
+            front_band: chosen.front_band.map(|b| [b.inside, b.outside]),
+            layer_band: chosen.layer_band.map(|b| [b.inside, b.outside]),
+            overridden,
+        }
+    }
 }
 
 impl FrontRow {

@@ -21,8 +21,14 @@ pub use loads::{CriterionSpec, Loads};
 mod substructure;
 pub use substructure::{PartitionName, SubstructureOptions};
 
-/// The thesis's reference case (§4.3, §5.1): the scene `nonlin3d run` runs without arguments.
-pub const DEFAULT_SCENE: &str = include_str!("../examples/scenes/fig_5_1_3_circle_30mm.toml");
+/// The thesis's reference case (§4.3, §5.1) on the default mesh (no mesh knobs: the
+/// front-resolving `nonlin3d_mesh::DEFAULT_MESH`): the scene `nonlin3d run` runs without
+/// arguments.
+pub const DEFAULT_SCENE: &str = include_str!("../examples/scenes/reference_circle_30mm.toml");
+
+/// The thesis's reference case on the thesis's own mesh (`slices = 8`, the other knobs the
+/// thesis's reference mesh), as its Fig. 5.1.3 was drawn.
+pub const THESIS_SCENE: &str = include_str!("../examples/scenes/fig_5_1_3_circle_30mm.toml");
 
 /// One analysis: geometry, material, mesh, loads, options.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -418,8 +424,14 @@ impl Scene {
         toml::to_string_pretty(self).map_err(|e| Error::Scene(e.to_string()))
     }
 
-    /// The thesis's reference scene ([`DEFAULT_SCENE`]).
+    /// The thesis's reference case on the thesis's mesh ([`THESIS_SCENE`]).
     pub fn thesis_reference() -> Result<Self, Error> {
+        Self::from_toml(THESIS_SCENE)
+    }
+
+    /// The reference case on the default mesh ([`DEFAULT_SCENE`]): what `nonlin3d run`
+    /// runs without a scene.
+    pub fn reference() -> Result<Self, Error> {
         Self::from_toml(DEFAULT_SCENE)
     }
 

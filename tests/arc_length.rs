@@ -136,7 +136,7 @@ fn the_solve_command_lists_the_lpf_by_increment() {
 
 /// The reference scene on 4 slices at two strains (about a second a run), `path` as given.
 fn coarse_scene(path: &str) -> nonlin3d::Scene {
-    let text = nonlin3d::scene::DEFAULT_SCENE
+    let text = nonlin3d::scene::THESIS_SCENE
         .replace("slices = 8", "slices = 4")
         .replace(
             "strains = [-0.001, -0.002, -0.003, -0.004, -0.005]",

@@ -400,7 +400,7 @@ fn calculix_runs_the_exported_scene_and_lands_on_the_same_buckled_branch() {
         return;
     }
     let mut scene = nonlin3d::Scene::from_toml(
-        &nonlin3d::scene::DEFAULT_SCENE
+        &nonlin3d::scene::THESIS_SCENE
             .replace("slices = 8", "slices = 4")
             .replace(
                 "strains = [-0.001, -0.002, -0.003, -0.004, -0.005]",

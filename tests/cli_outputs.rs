@@ -26,7 +26,7 @@ fn nonlin3d(dir: &Path, args: &[&str]) -> Output {
 
 /// The reference scene on 4 slices with the given strain list, written to `dir/NAME`.
 fn scene(dir: &Path, name: &str, strains: &str) -> PathBuf {
-    let text = nonlin3d::scene::DEFAULT_SCENE
+    let text = nonlin3d::scene::THESIS_SCENE
         .replace("slices = 8", "slices = 4")
         .replace(
             "strains = [-0.001, -0.002, -0.003, -0.004, -0.005]",

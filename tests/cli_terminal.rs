@@ -17,7 +17,7 @@ fn tmp(name: &str) -> PathBuf {
 
 /// The reference scene on `slices` slices with one level at `strain`.
 fn scene(dir: &Path, slices: usize, strain: &str) -> PathBuf {
-    let text = nonlin3d::scene::DEFAULT_SCENE
+    let text = nonlin3d::scene::THESIS_SCENE
         .replace("slices = 8", &format!("slices = {slices}"))
         .replace(
             "strains = [-0.001, -0.002, -0.003, -0.004, -0.005]",

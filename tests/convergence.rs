@@ -4,12 +4,12 @@
 
 use nonlin3d::Scene;
 use nonlin3d::results::Results;
-use nonlin3d::scene::DEFAULT_SCENE;
+use nonlin3d::scene::THESIS_SCENE;
 
 /// The reference scene with an isotropic material of modulus `e_gpa` (ν = 0.3), 4 slices,
 /// ε = −0.001, −0.002, and no `tolerance_n` (the relative criterion).
 fn isotropic(e_gpa: &str) -> String {
-    let text = DEFAULT_SCENE.replace("slices = 8", "slices = 4").replace(
+    let text = THESIS_SCENE.replace("slices = 8", "slices = 4").replace(
         "strains = [-0.001, -0.002, -0.003, -0.004, -0.005]",
         "strains = [-0.001, -0.002]",
     );

@@ -24,7 +24,7 @@ fn nonlin3d(dir: &Path, args: &[&str]) -> Output {
 /// companion 2 slices), one level past buckling, the scene's contact (`auto`: without it every
 /// point of so coarse a mesh overlaps and no G is physical), with `extra` lines under `[mesh]`.
 fn tiny_scene(extra: &str) -> String {
-    nonlin3d::scene::DEFAULT_SCENE
+    nonlin3d::scene::THESIS_SCENE
         .replace(
             "slices = 8",
             &format!(
@@ -150,7 +150,7 @@ fn no_estimate_when_off() {
 fn a_tighter_target_picks_a_finer_mesh() {
     // The model alone (no solve): DOFs of the mesh the target picks, no knob given.
     let dofs = |accuracy: f64| {
-        let mut s = nonlin3d::Scene::from_toml(nonlin3d::scene::DEFAULT_SCENE).unwrap();
+        let mut s = nonlin3d::Scene::from_toml(nonlin3d::scene::THESIS_SCENE).unwrap();
         s.mesh.slices = None;
         s.mesh.accuracy = Some(accuracy);
         let m = nonlin3d::Analysis::new(s).unwrap().model().unwrap();
@@ -160,7 +160,7 @@ fn a_tighter_target_picks_a_finer_mesh() {
     // The table's rows on the reference circle: 5 940, 10 035, 14 919 DOFs (docs/ACCURACY.md).
     assert_eq!((loose, mid, tight), (5940, 10035, 14919));
     // A target that is not a fraction is refused, naming the field.
-    let mut s = nonlin3d::Scene::from_toml(nonlin3d::scene::DEFAULT_SCENE).unwrap();
+    let mut s = nonlin3d::Scene::from_toml(nonlin3d::scene::THESIS_SCENE).unwrap();
     s.mesh.accuracy = Some(2.0);
     let e = nonlin3d::Analysis::new(s).unwrap_err().to_string();
     assert!(e.contains("mesh.accuracy = 2"), "{e}");
@@ -177,7 +177,7 @@ fn a_tighter_target_picks_a_finer_mesh() {
 /// whole range the reference's uncertainty allows (the plain difference fails the second).
 #[test]
 fn a_band_mesh_companion_keeps_the_split_and_brackets_g_ii_within_a_few_times() {
-    let text = nonlin3d::scene::DEFAULT_SCENE
+    let text = nonlin3d::scene::THESIS_SCENE
         .replace(
             "slices = 8",
             "slices = 4\ninside = 7\noutside = 6\nsub_layers = 2\nbase_layers = 2\n\

@@ -243,7 +243,7 @@ fn prebuckling_stress_is_e_times_strain(v: &Vtu, e_x: f64, eps: f64) {
 fn run_writes_fields_and_the_front_matches_results() {
     let dir = tmp("fields-run");
     let scene = dir.join("coarse.toml");
-    let text = nonlin3d::scene::DEFAULT_SCENE
+    let text = nonlin3d::scene::THESIS_SCENE
         .replace("slices = 8", "slices = 4")
         .replace(
             "strains = [-0.001, -0.002, -0.003, -0.004, -0.005]",

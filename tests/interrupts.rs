@@ -3,7 +3,7 @@
 //! `"complete": false` and the reason in `"stopped"`; SIGKILL never leaves a results.json that
 //! claims to be complete; no half-written file is ever visible. Exit codes: 0, 1, 2, 130, 143.
 
-use nonlin3d::scene::DEFAULT_SCENE;
+use nonlin3d::scene::THESIS_SCENE;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
@@ -17,7 +17,7 @@ fn tmp(name: &str) -> PathBuf {
 
 /// The reference scene on 4 slices with the given strain list.
 fn scene_with(strains: &str) -> String {
-    DEFAULT_SCENE.replace("slices = 8", "slices = 4").replace(
+    THESIS_SCENE.replace("slices = 8", "slices = 4").replace(
         "strains = [-0.001, -0.002, -0.003, -0.004, -0.005]",
         &format!("strains = {strains}"),
     )

@@ -3,7 +3,7 @@
 //! allocation; `--max-memory` is read and obeyed; a model that fits still runs.
 #![cfg(unix)]
 
-use nonlin3d::scene::DEFAULT_SCENE;
+use nonlin3d::scene::THESIS_SCENE;
 use std::os::unix::process::ExitStatusExt;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -17,7 +17,7 @@ fn tmp(name: &str) -> PathBuf {
 
 /// The reference scene with `mesh` for its mesh controls and one strain level.
 fn scene_file(dir: &Path, mesh: &str) -> PathBuf {
-    let text = DEFAULT_SCENE.replace("slices = 8", mesh).replace(
+    let text = THESIS_SCENE.replace("slices = 8", mesh).replace(
         "strains = [-0.001, -0.002, -0.003, -0.004, -0.005]",
         "strains = [-0.001]",
     );

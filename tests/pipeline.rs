@@ -2,13 +2,13 @@
 //! failures that must be reported rather than returned as results.
 
 use nonlin3d::Scene;
-use nonlin3d::scene::DEFAULT_SCENE;
+use nonlin3d::scene::THESIS_SCENE;
 use std::path::Path;
 use std::process::Command;
 
 /// The reference scene on 4 slices with two strains: about a second.
 fn coarse_text() -> String {
-    DEFAULT_SCENE.replace("slices = 8", "slices = 4").replace(
+    THESIS_SCENE.replace("slices = 8", "slices = 4").replace(
         "strains = [-0.001, -0.002, -0.003, -0.004, -0.005]",
         "strains = [-0.001, -0.003]",
     )

@@ -12,7 +12,7 @@ fn run(name: &str) -> (PathBuf, String) {
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("plots-{name}"));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
-    let scene = nonlin3d::scene::DEFAULT_SCENE
+    let scene = nonlin3d::scene::THESIS_SCENE
         .replace("slices = 8", "slices = 4")
         .replace(
             "strains = [-0.001, -0.002, -0.003, -0.004, -0.005]",

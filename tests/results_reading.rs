@@ -4,7 +4,7 @@
 //! for what it is; scene errors speak the scene's language.
 
 use nonlin3d::Scene;
-use nonlin3d::scene::DEFAULT_SCENE;
+use nonlin3d::scene::THESIS_SCENE;
 use std::path::Path;
 use std::process::Command;
 
@@ -12,7 +12,7 @@ use std::process::Command;
 /// x axis there (the thesis's dashed stretch), open at S = 0; contact off (with it, the
 /// default, no point overlaps: tests/contact.rs). About a second.
 fn overlapping_scene() -> String {
-    let text = DEFAULT_SCENE.replace("slices = 8", "slices = 4").replace(
+    let text = THESIS_SCENE.replace("slices = 8", "slices = 4").replace(
         "strains = [-0.001, -0.002, -0.003, -0.004, -0.005]",
         "strains = [-0.002, -0.005]",
     );
@@ -138,7 +138,7 @@ fn the_criterion_ignores_overlapped_points() {
 /// not in the mesh generator's internal parameters in metres.
 #[test]
 fn a_geometry_error_names_the_scene_fields_in_mm() {
-    let text = DEFAULT_SCENE
+    let text = THESIS_SCENE
         .replace("a_mm = 15.0", "a_mm = 30.0")
         .replace("b_mm = 15.0", "b_mm = 60.0");
     let dir = tmp("geometry-error");
@@ -162,7 +162,7 @@ fn a_geometry_error_names_the_scene_fields_in_mm() {
 /// and the table, and the run says in a warning that it ends on an unstable state.
 #[test]
 fn unstable_levels_are_flagged_everywhere() {
-    let text = DEFAULT_SCENE
+    let text = THESIS_SCENE
         .replace("slices = 8", "slices = 4")
         .replace(
             "strains = [-0.001, -0.002, -0.003, -0.004, -0.005]",
@@ -237,7 +237,7 @@ fn unstable_levels_are_flagged_everywhere() {
 /// (the √index interpolation from the flat level placed it below the bifurcation).
 #[test]
 fn an_onset_right_after_a_flat_level_is_bracketed() {
-    let text = DEFAULT_SCENE.replace("slices = 8", "slices = 4").replace(
+    let text = THESIS_SCENE.replace("slices = 8", "slices = 4").replace(
         "strains = [-0.001, -0.002, -0.003, -0.004, -0.005]",
         "strains = [-0.001, -0.004]",
     );

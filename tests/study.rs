@@ -52,7 +52,7 @@ analysis = { integration = "selective-reduced", newton = "bfgs" }
 
 fn setup(name: &str, knobs: &str) -> (PathBuf, Output) {
     let dir = tmp(name);
-    std::fs::write(dir.join("scene.toml"), nonlin3d::scene::DEFAULT_SCENE).unwrap();
+    std::fs::write(dir.join("scene.toml"), nonlin3d::scene::THESIS_SCENE).unwrap();
     std::fs::write(dir.join("knobs.toml"), knobs).unwrap();
     let out = nonlin3d(
         &dir,

@@ -4,7 +4,7 @@
 
 use nonlin3d::Scene;
 use nonlin3d::results::Results;
-use nonlin3d::scene::DEFAULT_SCENE;
+use nonlin3d::scene::THESIS_SCENE;
 use std::time::Instant;
 
 /// The reference scene (30 mm circle, h = 0.4 mm) on 4 slices with `strains` and a
@@ -14,7 +14,7 @@ fn scene(strains: &str, partition: &str, extra: &str) -> Scene {
 }
 
 fn parse(strains: &str, partition: &str, extra: &str) -> Result<Scene, nonlin3d::Error> {
-    let text = DEFAULT_SCENE
+    let text = THESIS_SCENE
         .replace("slices = 8", "slices = 4")
         .replace("[-0.001, -0.002, -0.003, -0.004, -0.005]", strains);
     // Contact is not available with a superelement (refused, `contact_with_a_superelement_is_refused`),
@@ -86,7 +86,7 @@ fn linear_level_matches_the_monolithic_model() {
 /// contact (its linear strip holds crack faces); with the sublaminate partition it is taken.
 #[test]
 fn contact_with_the_thesis_partition_is_refused() {
-    let text = DEFAULT_SCENE.replace("slices = 8", "slices = 4");
+    let text = THESIS_SCENE.replace("slices = 8", "slices = 4");
     let with = |partition: &str| {
         Scene::from_toml(&format!(
             "{text}\n[substructure]\npartition = \"{partition}\"\n"
@@ -112,7 +112,7 @@ fn contact_with_the_thesis_partition_is_refused() {
 /// approximation; docs/VALIDATION.md gives the measured differences).
 #[test]
 fn contact_acts_on_the_nonlinear_region_of_a_superelement() {
-    let text = DEFAULT_SCENE.replace("slices = 8", "slices = 4");
+    let text = THESIS_SCENE.replace("slices = 8", "slices = 4");
     let run_with = |partition: &str| {
         run(&Scene::from_toml(&format!(
             "{text}\n[substructure]\npartition = \"{partition}\"\n"

@@ -5,7 +5,7 @@ use super::limits::{
     ARENA, SLACK, address_space_limit, cache_size, cgroup_bound, cgroup_limit, proc_kib,
 };
 use super::*;
-use crate::scene::DEFAULT_SCENE;
+use crate::scene::THESIS_SCENE;
 use nonlin3d_solver::{FaerMode, FaerOrdering, FaerSolver, LinearSolver, SolverError};
 
 const GIB: u64 = 1 << 30;
@@ -156,7 +156,7 @@ fn this_machine_has_readings() {
 }
 
 fn scene(mesh: &str, geometry: Option<&str>) -> Scene {
-    let mut text = DEFAULT_SCENE.replace("slices = 8", mesh);
+    let mut text = THESIS_SCENE.replace("slices = 8", mesh);
     if let Some(g) = geometry {
         let start = text.find("[geometry]").unwrap();
         let end = text.find("[material]").unwrap();

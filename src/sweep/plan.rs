@@ -321,10 +321,10 @@ fn write(
 #[allow(clippy::unwrap_used)]
 mod tests {
     use super::*;
-    use crate::scene::DEFAULT_SCENE;
+    use crate::scene::THESIS_SCENE;
 
     fn study(sweep: &str) -> String {
-        format!("{DEFAULT_SCENE}\n[sweep]\n{sweep}\n")
+        format!("{THESIS_SCENE}\n[sweep]\n{sweep}\n")
     }
 
     #[test]

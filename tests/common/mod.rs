@@ -159,10 +159,10 @@ pub fn structural_problem(
     nonlin3d::newton::StructuralProblem::new(assembler, c).unwrap()
 }
 
-/// The reference scene (`DEFAULT_SCENE`) on the tiny mesh of tests/error_estimate.rs (4 slices,
+/// The thesis reference scene (`THESIS_SCENE`) on the tiny mesh of tests/error_estimate.rs (4 slices,
 /// 2 + 3 rings, 1 + 2 layers: 1 773 DOF, companion 513) at the strains `strains` (TOML array).
 pub fn tiny_scene_text(strains: &str) -> String {
-    nonlin3d::scene::DEFAULT_SCENE
+    nonlin3d::scene::THESIS_SCENE
         .replace(
             "slices = 8",
             "slices = 4\ninside = 2\noutside = 3\nsub_layers = 1\nbase_layers = 2",

@@ -3,7 +3,7 @@
 //! §2b), scaled to a model by its sublaminate thickness h (the front element) and its front
 //! length (the slices).
 
-use super::{EmbeddedParams, FrontBand};
+use super::{EmbeddedParams, FrontBand, LayerBand};
 
 /// One measured mesh of the reference circle and the worst error of G it gave.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -25,6 +25,14 @@ pub struct AccuracyRow {
     pub front_element_over_h: f64,
     /// The band of three times the slices, `[inside, outside]` rings.
     pub band: Option<[usize; 2]>,
+    /// The band of full layers, `[inside, outside]` rings (the rest of the model takes every
+    /// other thickness station).
+    pub layer_band: Option<[usize; 2]>,
+    /// The quarter front length `slices` was measured for, m: a model's slices are scaled by
+    /// its own front length over this.
+    pub front: f64,
+    /// The fewest slices the row gives a model of a shorter front.
+    pub min_slices: usize,
 }
 
 /// The quarter front length of the table's circle (a = b = 15 mm), m.
@@ -43,6 +51,9 @@ pub const ACCURACY_TABLE: [AccuracyRow; 3] = [
         base_layers: 2,
         front_element_over_h: 1.0,
         band: None,
+        layer_band: None,
+        front: REFERENCE_FRONT,
+        min_slices: 2,
     },
     // Q: 4 → 12, 7, 6, 2, 2, e = 0.75 h, band 5 + 3: −2.1 %, −1.2 %, −1.3 %.
     AccuracyRow {
@@ -54,6 +65,9 @@ pub const ACCURACY_TABLE: [AccuracyRow; 3] = [
         base_layers: 2,
         front_element_over_h: 0.75,
         band: Some([5, 3]),
+        layer_band: None,
+        front: REFERENCE_FRONT,
+        min_slices: 2,
     },
     // R: 6 → 18, 7, 6, 2, 2, e = 0.75 h, band 5 + 3: −0.7 %, −0.2 %, −0.9 %.
     AccuracyRow {
@@ -65,8 +79,34 @@ pub const ACCURACY_TABLE: [AccuracyRow; 3] = [
         base_layers: 2,
         front_element_over_h: 0.75,
         band: Some([5, 3]),
+        layer_band: None,
+        front: REFERENCE_FRONT,
+        min_slices: 2,
     },
 ];
+
+/// The mesh of an embedded or edge scene that gives no mesh knobs (issue 25's "accurate G by
+/// default"; docs/ACCURACY.md §2d, mesh S): 6 → 18 slices in a front band of 5 + 3 rings,
+/// 7 + 6 rings, e = h/2, 2 sublaminate and 4 base layers in a layer band of 3 + 2 rings (1 + 2
+/// away from it); 18 444 DOF on the reference circle. Measured with contact (`auto`) at
+/// ε = −0.004 against the converged families: G_T max −1.33 / −0.81 / −0.99 %, G_I(0) −2.23 /
+/// −1.1 / −1.31 %, G_II(0) −1.02 / −0.68 / −1.36 % on the 30 mm circle, the 30 × 60 mm ellipse
+/// and the 15 mm edge delamination; the worst, as the table counts it (over G_T max), 1.4 %.
+/// Six slices met that on quarter fronts of 23.6 mm (circle, edge) and 36.3 mm (ellipse):
+/// longer fronts get proportionally more, shorter ones keep six.
+pub const DEFAULT_MESH: AccuracyRow = AccuracyRow {
+    worst: 0.014,
+    slices: 6,
+    inside: 7,
+    outside: 6,
+    sub_layers: 2,
+    base_layers: 4,
+    front_element_over_h: 0.5,
+    band: Some([5, 3]),
+    layer_band: Some([3, 2]),
+    front: 36.33e-3,
+    min_slices: 6,
+};
 
 /// The quarter perimeter of the ellipse with semi-axes a, b (Ramanujan's second
 /// approximation, within 4·10⁻⁵ relative up to b/a = 5), m.
@@ -89,12 +129,13 @@ impl AccuracyRow {
 
 impl EmbeddedParams {
     /// These parameters with the knobs of `row` scaled to this model: the front element e/h
-    /// times h; the slices times the front length over the reference's (to the even count
-    /// ≥ 2 nearest); rings times ⌈a/b⌉ when the delamination is longer along the load (as
-    /// [`EmbeddedParams::radial_inside_for`]). Rectangles use the ellipse's length.
+    /// times h; the slices times the front length over the row's (to the nearest even count,
+    /// at least `min_slices`); rings times ⌈a/b⌉ when the delamination is longer along the
+    /// load (as [`EmbeddedParams::radial_inside_for`]). Rectangles use the ellipse's length.
     pub fn with_accuracy_row(&self, row: &AccuracyRow) -> Self {
-        let scale = quarter_front_length(self.a, self.b) / REFERENCE_FRONT;
-        let slices = ((row.slices as f64 * scale / 2.0).round() as usize).max(1) * 2;
+        let scale = quarter_front_length(self.a, self.b) / row.front;
+        let slices =
+            (((row.slices as f64 * scale / 2.0).round() as usize).max(1) * 2).max(row.min_slices);
         let stretch = Self::radial_inside_for(self.a, self.b) / 4;
         let inside = row.inside * stretch;
         let e = row.front_element_over_h * self.h;
@@ -107,6 +148,10 @@ impl EmbeddedParams {
             base_layers: row.base_layers,
             front_element: (e < room).then_some(e),
             front_band: row.band.map(|[i, o]| FrontBand {
+                inside: (i * stretch).min(inside - 1),
+                outside: o,
+            }),
+            layer_band: row.layer_band.map(|[i, o]| LayerBand {
                 inside: (i * stretch).min(inside - 1),
                 outside: o,
             }),
@@ -131,6 +176,49 @@ mod tests {
         let (finest, ok) = AccuracyRow::for_target(0.001);
         assert!(!ok);
         assert_eq!(finest, ACCURACY_TABLE[2]);
+    }
+
+    /// The default mesh keeps its six slices on the fronts it was measured on (the circle's
+    /// 23.6 mm and the 30 × 60 mm ellipse's 36.3 mm quarter front) and on shorter ones, takes
+    /// more on longer ones (the 60 mm circle's 47.1 mm: 8), and carries its layer band.
+    #[test]
+    fn the_default_mesh_keeps_six_slices_up_to_its_measured_front() {
+        let p = EmbeddedParams::thesis_reference();
+        let slices = |a: f64, b: f64| {
+            EmbeddedParams { a, b, ..p.clone() }
+                .with_accuracy_row(&DEFAULT_MESH)
+                .slices
+        };
+        assert_eq!(slices(15e-3, 15e-3), 6);
+        assert_eq!(slices(15e-3, 30e-3), 6);
+        assert_eq!(slices(7.5e-3, 7.5e-3), 6);
+        assert_eq!(slices(30e-3, 30e-3), 8);
+        let r = p.with_accuracy_row(&DEFAULT_MESH);
+        assert_eq!(
+            (
+                r.radial_inside,
+                r.radial_outside,
+                r.sub_layers,
+                r.base_layers
+            ),
+            (7, 6, 2, 4)
+        );
+        assert_eq!(
+            r.layer_band,
+            Some(LayerBand {
+                inside: 3,
+                outside: 2
+            })
+        );
+        assert_eq!(
+            r.front_band,
+            Some(FrontBand {
+                inside: 5,
+                outside: 3
+            })
+        );
+        assert!((r.front_element.unwrap_or(0.0) - 0.2e-3).abs() < 1e-15);
+        assert!(super::super::embedded_delamination(&r).is_ok());
     }
 
     #[test]

@@ -12,7 +12,9 @@ mod partition;
 mod structured;
 mod through_width;
 
-pub use accuracy::{ACCURACY_TABLE, AccuracyRow, REFERENCE_FRONT, quarter_front_length};
+pub use accuracy::{
+    ACCURACY_TABLE, AccuracyRow, DEFAULT_MESH, REFERENCE_FRONT, quarter_front_length,
+};
 pub use embedded::{
     Centre, EllipticMap, EmbeddedParams, FrontBand, LayerBand, PlyLayout, edge_delamination,
     embedded_delamination, embedded_delamination_with_front, thin_film,
