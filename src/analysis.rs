@@ -103,8 +103,8 @@ pub fn run(
     scene: &Scene,
     progress: &mut dyn FnMut(Progress) -> Result<(), Error>,
 ) -> Result<Results, Error> {
-    // `[mesh] accuracy` turned into knobs before anything is sized.
-    let (resolved, choice) = estimate::resolve_accuracy(scene)?;
+    // `[mesh] accuracy` or the default mesh turned into knobs before anything is sized.
+    let (resolved, choice) = estimate::resolve_mesh(scene)?;
     // The whole run (tangent and factor too) estimated before meshing.
     crate::budget::check_scene(&resolved, &crate::budget::limit())?;
     let t0 = Instant::now();

@@ -1,6 +1,7 @@
-//! The run's error estimate and its target (issue 25; docs/ACCURACY.md §3, docs/MESH.md
-//! "Accuracy"): orchestration only. The mesh a target picks is the mesh crate's table
-//! ([`nonlin3d_mesh::AccuracyRow`]), the companion mesh its `coarsened()` parameters, the
+//! The run's error estimate, its target and the default mesh (issue 25; docs/ACCURACY.md §2f
+//! and §3, docs/MESH.md "Accuracy" and "The default mesh"): orchestration only. The mesh a
+//! target picks is the mesh crate's table ([`nonlin3d_mesh::AccuracyRow`]), the default mesh
+//! its [`nonlin3d_mesh::DEFAULT_MESH`], the companion mesh its `coarsened()` parameters, the
 //! estimate per point [`nonlin3d_vcct::estimate::companion`].
 
 use crate::Error;
@@ -113,7 +114,7 @@ fn takes_default_mesh(scene: &Scene) -> bool {
 /// scene that [takes the default mesh](takes_default_mesh) by
 /// [`nonlin3d_mesh::DEFAULT_MESH`] scaled alike. Any other scene comes back unchanged.
 /// Through-width strips have no table: a target for one is refused.
-pub(crate) fn resolve_accuracy(scene: &Scene) -> Result<(Scene, Option<MeshChoice>), Error> {
+pub(crate) fn resolve_mesh(scene: &Scene) -> Result<(Scene, Option<MeshChoice>), Error> {
     if takes_default_mesh(scene)
         && let Some(p) = embedded_of(scene)
     {

@@ -261,7 +261,7 @@ fn factor_estimate(
 pub fn estimate_scene(scene: &Scene) -> Estimate {
     // The mesh that runs: `[mesh] accuracy`'s or the default mesh's knobs (a scene the
     // resolution refuses is estimated as written; the run itself reports the refusal).
-    let resolved = crate::analysis::estimate::resolve_accuracy(scene).map(|(s, _)| s);
+    let resolved = crate::analysis::estimate::resolve_mesh(scene).map(|(s, _)| s);
     let scene = resolved.as_ref().unwrap_or(scene);
     let (counts, entities, width, _) = scene_counts(scene);
     let hex20 = scene

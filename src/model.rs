@@ -62,11 +62,12 @@ pub struct Model {
 
 /// Builds the mesh and front of a scene (with its imperfection, if any): the embedded
 /// generator for embedded, edge and plate models (thesis §3.1), the strip for through-width;
-/// `[mesh] accuracy` resolved to knobs first.
+/// `[mesh] accuracy` or the default mesh resolved to knobs first.
 pub fn build_model(scene: &Scene) -> Result<Model, Error> {
     scene.validate()?;
-    // `[mesh] accuracy`: the knobs its table picks (docs/MESH.md), under the scene's own.
-    let (resolved, _) = crate::analysis::estimate::resolve_accuracy(scene)?;
+    // `[mesh] accuracy` (the knobs its table picks, under the scene's own) or, without knobs,
+    // the default mesh (docs/MESH.md).
+    let (resolved, _) = crate::analysis::estimate::resolve_mesh(scene)?;
     let scene = &resolved;
     // Nodes and cells estimated from the scene before anything is allocated.
     crate::budget::check_mesh(scene, &crate::budget::limit())?;
