@@ -206,7 +206,7 @@ fn scene_counts(scene: &Scene) -> (count::Counts, u128, f64, Vec<String>) {
             };
             // A front band carries 3·slices arcs on its rings and its transitions, which the
             // closed form cannot count: counted as if every ring had them, a bound from above
-            // (the default mesh: 18 444 DOF counted as 40 k, where the plain count gave 9 333
+            // (the default mesh: 18 444 DOF counted as 31 005, where the plain count gave 9 333
             // and a Slurm request below the run's peak). A layer band, counted as full layers
             // everywhere, is bounded from above already.
             let arcs = match c.front_band {
