@@ -407,21 +407,11 @@ impl LinearSolver for FaerSolver {
     }
 
     fn solve_in_place(&mut self, b: &mut [f64], nrhs: usize) -> Result<(), SolverError> {
-        self.check_rhs(b, nrhs)?;
-        if self.mixed.single_active() {
-            self.solve_mixed(b, nrhs, None)
-        } else {
-            self.solve_f64(b, nrhs)
-        }
+        self.solve_checked(b, nrhs, None)
     }
 
     fn solve_to_residual(&mut self, b: &mut [f64], residual: f64) -> Result<(), SolverError> {
-        self.check_rhs(b, 1)?;
-        if self.mixed.single_active() {
-            self.solve_mixed(b, 1, Some(residual))
-        } else {
-            self.solve_f64(b, 1)
-        }
+        self.solve_checked(b, 1, Some(residual))
     }
 
     fn solve_direction_in_place(&mut self, b: &mut [f64], nrhs: usize) -> Result<(), SolverError> {
@@ -434,6 +424,23 @@ impl LinearSolver for FaerSolver {
 }
 
 impl FaerSolver {
+    /// `solve_in_place` (`residual` None) or `solve_to_residual`: the right-hand sides
+    /// checked, then the mixed solve (refined to the backward-error target or the residual
+    /// bound) or the f64 one.
+    fn solve_checked(
+        &mut self,
+        b: &mut [f64],
+        nrhs: usize,
+        residual: Option<f64>,
+    ) -> Result<(), SolverError> {
+        self.check_rhs(b, nrhs)?;
+        if self.mixed.single_active() {
+            self.solve_mixed(b, nrhs, residual)
+        } else {
+            self.solve_f64(b, nrhs)
+        }
+    }
+
     /// The f64 numeric factorisation of `a` into `l_values` (allocated if an f32 factor held
     /// its place), with pivot checks and inertia.
     fn factorize_double(&mut self, a: &SymmetricMatrix) -> Result<Factorization, SolverError> {

@@ -269,9 +269,9 @@ impl Split {
 
     /// Factors `a`: the halves in precision `T` on `par`'s threads (one each, their dense
     /// kernels on `kernel`'s, so that a thread the shorter half leaves free takes tiles of the
-    /// longer one's), S in f64 on `kernel`'s, pivots judged by `rule`. `Ok(Err(reason))` when a half's trailing block (which
-    /// the unsplit factor never forms) meets a pivot too small to trust, or an f32 pivot is in
-    /// doubt: the caller takes another path.
+    /// longer one's), S in f64 on `kernel`'s, pivots judged by `rule`. `Ok(Err(reason))` when
+    /// a half's trailing block (which the unsplit factor never forms) meets a pivot too small
+    /// to trust, or an f32 pivot is in doubt: the caller takes another path.
     pub(super) fn factorize<T: Real>(
         &mut self,
         a: &SymmetricMatrix,
