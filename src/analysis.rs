@@ -103,6 +103,18 @@ pub fn run(
     scene: &Scene,
     progress: &mut dyn FnMut(Progress) -> Result<(), Error>,
 ) -> Result<Results, Error> {
+    run_at(scene, progress, 0)
+}
+
+/// [`run`] at `depth` in a chain of companions (0: the run itself; 1: its error estimate's
+/// companion; 2: the companion's own, src/analysis_seed.rs "Nested companions"): a companion
+/// runs beside (or before) it where [`seed::companion_runs`] says so; only the run itself
+/// attaches the estimate, a companion's serves its levels' starts alone.
+pub(crate) fn run_at(
+    scene: &Scene,
+    progress: &mut dyn FnMut(Progress) -> Result<(), Error>,
+    depth: usize,
+) -> Result<Results, Error> {
     // `[mesh] accuracy` or the default mesh turned into knobs before anything is sized.
     let (resolved, choice) = estimate::resolve_mesh(scene)?;
     // The whole run (tangent and factor too) estimated before meshing.
@@ -128,29 +140,33 @@ pub fn run(
     // With two or more threads the companion mesh of the error estimate (an independent run)
     // goes on beside the sweep, in the same pool; sequentially it runs after it. The bits are
     // the same either way (tests/concurrent_estimate.rs).
-    let beside = estimate::wanted(scene) && asked != 1 && rayon::current_num_threads() >= 2;
+    let runs = seed::companion_runs(scene, &model, sub.is_some(), depth);
     let mut companion = None;
     // Nested iteration (src/analysis_seed.rs): the companion sends its levels as they converge
     // and the sweep starts its levels from them, the companion first on one thread.
     let (to, from) = std::sync::mpsc::channel();
-    let mut seeds = if seed::wanted(scene, &model, sub.is_some()) {
-        seeds(scene, &model, from)
+    let mut seeds = if runs && seed::wanted(scene, &model, sub.is_some()) {
+        seeds(scene, &model, from, depth + 1)
     } else {
         None
     };
     let sending = seeds.is_some();
+    // A companion's own companion serves its seeds only: none, no run.
+    let runs = runs && (depth == 0 || sending);
+    let beside = runs && asked != 1 && rayon::current_num_threads() >= 2;
+    let deeper = depth + 1;
     let mut sweep = match (beside, seeds.as_mut()) {
         (true, seeds) => rayon::in_place_scope(|s| {
             s.spawn(|_| {
                 companion = Some(match sending {
-                    true => estimate::run_companion_sending(scene, to),
-                    false => estimate::run_companion(scene),
+                    true => estimate::run_companion_sending(scene, to, deeper),
+                    false => estimate::run_companion(scene, deeper),
                 })
             });
             sweep(scene, &model, &mut problem, sub.as_mut(), progress, seeds)
         }),
         (false, Some(seeds)) => {
-            companion = Some(estimate::run_companion_sending(scene, to));
+            companion = Some(estimate::run_companion_sending(scene, to, deeper));
             sweep(
                 scene,
                 &model,
@@ -203,7 +219,9 @@ pub fn run(
     };
     // The error estimate of every level (the companion mesh) and the target's verdict; its
     // warnings after the scene's and before the stability ones (a run's end says last).
-    estimate::attach(scene, choice, companion, &mut results)?;
+    if depth == 0 {
+        estimate::attach(scene, choice, companion, &mut results)?;
+    }
     let estimated = std::mem::take(&mut results.warnings);
     results.warnings = scene.warnings();
     results.warnings.extend(estimated);
@@ -218,8 +236,9 @@ fn seeds(
     scene: &Scene,
     model: &Model,
     from: std::sync::mpsc::Receiver<seed::SeedLevel>,
+    depth: usize,
 ) -> Option<seed::Seeds> {
-    let built = estimate::companion_scene(scene)
+    let built = estimate::companion_scene(scene, depth)
         .and_then(|c| build_model(&c))
         .and_then(|coarse| seed::Seeds::new(scene, &coarse, model, from));
     built

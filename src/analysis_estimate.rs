@@ -192,15 +192,23 @@ pub(crate) fn resolve_mesh(scene: &Scene) -> Result<(Scene, Option<MeshChoice>),
     Ok((out, Some(choice)))
 }
 
-/// The companion scene: the same scene on the companion mesh (`coarsened()` of the mesh
-/// crate: in-plane counts halved, the front's through-thickness mesh kept where it resolves
-/// the mode split), without an estimate or target of its own.
-pub(crate) fn companion_scene(scene: &Scene) -> Result<Scene, Error> {
+/// The companion scene at `depth` (1: the error estimate's companion of `scene`; 2: the
+/// companion's own, whose `scene` is the companion's, src/analysis_seed.rs "Nested
+/// companions"): the same scene on the companion mesh — at depth 1 `coarsened()` of the mesh
+/// crate (in-plane counts halved, the front's through-thickness mesh kept where it resolves
+/// the mode split), deeper `coarsened_along_front()` (the slices halved, an error when they
+/// cannot; a strip has none) — without an estimate or target of its own.
+pub(crate) fn companion_scene(scene: &Scene, depth: usize) -> Result<Scene, Error> {
     let mut c = scene.clone();
     c.mesh.error_estimate = Some(ErrorEstimateName::Off);
     c.mesh.accuracy = None;
     match embedded_of(scene) {
+        Some(p) if depth > 1 => match p.coarsened_along_front() {
+            Some(q) => set_controls(&mut c.mesh, &q),
+            None => return Err(Error::Scene("no slices to halve".into())),
+        },
         Some(p) => set_controls(&mut c.mesh, &p.coarsened()),
+        None if depth > 1 => return Err(Error::Scene("a strip has no slices to halve".into())),
         None => {
             let Geometry::ThroughWidth {
                 a_mm,
@@ -304,13 +312,23 @@ pub(crate) fn wanted(scene: &Scene) -> bool {
     scene.mesh.error_estimate.unwrap_or_default() == ErrorEstimateName::Companion
 }
 
-/// The companion mesh's run ([`companion_scene`], then [`super::run`] on it, silently): an
-/// independent run, so it may go on beside the main one (`super::run` does so with two or
-/// more threads); its results do not depend on when or on which thread it runs.
-pub(crate) fn run_companion(scene: &Scene) -> CompanionRun {
-    let _span = tracing::info_span!(crate::log::COMPANION_SPAN).entered();
+/// The span a companion at `depth` runs in (crate::log: its Newton events are told apart
+/// from the run's, and a coarser companion's from the companion's, on any thread).
+fn companion_span(depth: usize) -> tracing::Span {
+    if depth > 1 {
+        tracing::info_span!(crate::log::COARSER_COMPANION_SPAN)
+    } else {
+        tracing::info_span!(crate::log::COMPANION_SPAN)
+    }
+}
+
+/// The companion mesh's run ([`companion_scene`], then [`super::run_at`] on it at `depth`,
+/// silently): an independent run, so it may go on beside the main one (`super::run` does so
+/// with two or more threads); its results do not depend on when or on which thread it runs.
+pub(crate) fn run_companion(scene: &Scene, depth: usize) -> CompanionRun {
+    let _span = companion_span(depth).entered();
     let t = Instant::now();
-    let run = companion_scene(scene).and_then(|c| super::run(&c, &mut |_| Ok(())));
+    let run = companion_scene(scene, depth).and_then(|c| super::run_at(&c, &mut |_| Ok(()), depth));
     (run, t.elapsed().as_secs_f64())
 }
 
@@ -320,16 +338,21 @@ pub(crate) fn run_companion(scene: &Scene) -> CompanionRun {
 pub(crate) fn run_companion_sending(
     scene: &Scene,
     to: std::sync::mpsc::Sender<super::seed::SeedLevel>,
+    depth: usize,
 ) -> CompanionRun {
-    let _span = tracing::info_span!(crate::log::COMPANION_SPAN).entered();
+    let _span = companion_span(depth).entered();
     let t = Instant::now();
-    let run = companion_scene(scene).and_then(|c| {
-        super::run(&c, &mut |p| {
-            if let super::Progress::Level { index, result, .. } = p {
-                super::seed::SeedLevel::send(index, result, &to);
-            }
-            Ok(())
-        })
+    let run = companion_scene(scene, depth).and_then(|c| {
+        super::run_at(
+            &c,
+            &mut |p| {
+                if let super::Progress::Level { index, result, .. } = p {
+                    super::seed::SeedLevel::send(index, result, &to);
+                }
+                Ok(())
+            },
+            depth,
+        )
     });
     drop(to);
     (run, t.elapsed().as_secs_f64())
@@ -358,6 +381,7 @@ pub(crate) fn attach(
         .into(),
         companion_dofs: None,
         companion_s: None,
+        companion_seeded_levels: None,
         unavailable: None,
         worst_relative: None,
         target,
@@ -365,7 +389,7 @@ pub(crate) fn attach(
         chosen_mesh: choice,
     };
     if method == ErrorEstimateName::Companion {
-        let (run, seconds) = companion.unwrap_or_else(|| run_companion(scene));
+        let (run, seconds) = companion.unwrap_or_else(|| run_companion(scene, 1));
         match run {
             Ok(c) if c.levels.len() == results.levels.len() => {
                 let keeps = embedded_of(scene).is_some_and(|p| p.resolves_the_split());
@@ -375,6 +399,8 @@ pub(crate) fn attach(
                 }
                 report.companion_dofs = Some(c.model.dofs);
                 report.companion_s = Some(seconds);
+                report.companion_seeded_levels =
+                    Some(c.levels.iter().filter(|l| l.convergence.seeded).count());
             }
             Ok(c) => {
                 report.unavailable = Some(format!(

@@ -18,6 +18,11 @@
 //! it converges on another branch than the companion's (a centre deflection of the other
 //! sign, or unstable where the companion is stable). After a seeded level, the next is seeded
 //! only if this one's start was close ([`KEEP_SEEDING`]).
+//!
+//! **Nested companions.** A companion of [`NESTED_FROM_DOFS`] or more starts its own levels
+//! from a coarser companion of its own in the same way (the companion's `coarsened()` mesh),
+//! which follows the path itself ([`DEEPEST`]): three meshes, each path followed on the
+//! cheapest. The coarser companion serves the seeds only; the estimate is the companion's.
 
 use super::deflections;
 use super::level::{Solved, engage_contact};
@@ -52,7 +57,9 @@ pub(crate) struct SeedLevel {
     centre: f64,
     /// Whether the contact stage acted at the level.
     contact: bool,
-    /// Whether the companion applied the §3.2 perturbation at the level.
+    /// Whether the companion applied the §3.2 perturbation at the level, or started it from
+    /// a perturbed state of its own companion's (nested companions: a level is seeded only
+    /// from the level its companion perturbed at on).
     perturbed: bool,
     /// The bifurcation the companion crossed in the level.
     bifurcation: Option<Crossing>,
@@ -68,7 +75,7 @@ impl SeedLevel {
             displacements: level.displacements.clone(),
             centre: level.centre_deflection_mm * 1e-3,
             contact: level.contact.is_some(),
-            perturbed: level.convergence.perturbed,
+            perturbed: level.convergence.perturbed || level.convergence.seeded,
             bifurcation: level.convergence.bifurcation,
             pivots: level.convergence.negative_pivots,
         }
@@ -80,12 +87,41 @@ impl SeedLevel {
     }
 }
 
-/// Whether a scene's levels start from the companion: `start = "companion"`, the companion
-/// runs (the error estimate), load control, no substructure, an embedded, edge or
-/// through-width model (the models whose companion mesh covers the same body).
+/// From this many DOFs on, a companion mesh starts its levels from a coarser companion of
+/// its own (module docs, "Nested companions"). Measured in docs/PERFORMANCE.md, "Nested
+/// companions".
+pub(crate) const NESTED_FROM_DOFS: usize = 5_000;
+
+/// The deepest companion: the run is depth 0, its companion 1, the companion's own 2, which
+/// follows its path itself.
+pub(crate) const DEEPEST: usize = 2;
+
+/// Whether a run at `depth` (0 the run itself, 1 its companion, …) has a companion run beside
+/// or before it: the run when the scene asks for the error estimate; a companion when its
+/// levels can start from a coarser one's ([`wanted`]), it has [`NESTED_FROM_DOFS`] or more
+/// and is not the deepest.
+pub(crate) fn companion_runs(
+    scene: &Scene,
+    model: &Model,
+    substructured: bool,
+    depth: usize,
+) -> bool {
+    match depth {
+        0 => super::estimate::wanted(scene),
+        d => {
+            d < DEEPEST
+                && 3 * model.mesh.nodes.len() >= NESTED_FROM_DOFS
+                && model.kind != ModelKind::ThroughWidth
+                && wanted(scene, model, substructured)
+        }
+    }
+}
+
+/// Whether a scene's levels can start from a companion's: `start = "companion"`, load
+/// control, no substructure, an embedded, edge or through-width model (the models whose
+/// companion mesh covers the same body). They do where a companion runs ([`companion_runs`]).
 pub(crate) fn wanted(scene: &Scene, model: &Model, substructured: bool) -> bool {
     scene.analysis.start == StartName::Companion
-        && super::estimate::wanted(scene)
         && scene.analysis.path == PathName::Load
         && !substructured
         && matches!(
@@ -133,6 +169,17 @@ impl Seeds {
             weighted: scene.contact.mode == ContactModeName::TwoBody,
             pays: true,
         })
+    }
+
+    /// Whether the companion's level `k` has arrived (those that have are taken in).
+    fn arrived(&mut self, k: usize) -> bool {
+        while self.received.len() <= k {
+            match self.from.try_recv() {
+                Ok(next) => self.received.push(next),
+                Err(_) => return false,
+            }
+        }
+        true
     }
 
     /// The companion's level `k`, waiting for it; None if the companion stopped before it.
@@ -255,10 +302,21 @@ pub(super) fn solve_seeded(
     // Newton's or BFGS's, may fail to converge from it, and the contact loop runs full Newton).
     let full = newton.full_newton();
     let newton = &full;
+    // The last seeded level's start was far: this one is followed, without waiting for the
+    // companion's.
+    if !seeds.pays {
+        return Ok(None);
+    }
+    // The wait for the companion's level is spent building this mesh's contact system, which
+    // a seeded level past the buckling level mostly needs (measured in docs/PERFORMANCE.md,
+    // "Nested companions").
+    if !seeds.arrived(k) {
+        stage.prepare(scene, model, newton);
+    }
     let Some(level) = seeds.level(k).cloned() else {
         return Ok(None);
     };
-    if !seeds.received.iter().any(|l| l.perturbed) || !seeds.pays {
+    if !seeds.received.iter().any(|l| l.perturbed) {
         return Ok(None);
     }
     let mut start = seeds.transfer.apply(&level.displacements, 3)?;

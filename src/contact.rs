@@ -53,6 +53,9 @@ struct Engaged {
 pub(crate) struct ContactStage {
     options: ContactOptions,
     engaged: Option<Engaged>,
+    /// A contact system built ahead of its first use ([`prepare`](Self::prepare)), never
+    /// used yet, with the solver kind it was analysed for.
+    prepared: Option<(Engaged, nonlin3d_solver::SolverKind)>,
     /// The nonlinear region of a substructured model (None: the model itself).
     host: Option<ContactHost>,
 }
@@ -64,6 +67,7 @@ impl ContactStage {
         Self {
             options: scene.contact,
             engaged: None,
+            prepared: None,
             host,
         }
     }
@@ -225,8 +229,38 @@ impl ContactStage {
         Ok(())
     }
 
-    /// The contact system: all candidate pairs reserved in the pattern, its own solver session.
+    /// Builds the contact system ahead of its first use, where the sweep would otherwise wait
+    /// (src/analysis_seed.rs: a seeded level waiting for the companion's): a stage that can
+    /// act (`auto`/`on`) and is not engaged builds it now, and its first engagement takes it
+    /// instead of building one — the same system and the same symbolic analysis, so the same
+    /// bits. Nothing changes for a stage that never engages but the CPU spent. A build that
+    /// fails is dropped: the engagement builds again and reports the error where it always did.
+    pub(crate) fn prepare(&mut self, scene: &Scene, model: &Model, newton: &NewtonSettings) {
+        if !self.enabled() || self.engaged.is_some() || self.prepared.is_some() {
+            return;
+        }
+        match self.build(scene, model, newton) {
+            Ok(e) => self.prepared = Some((e, newton.solver)),
+            Err(why) => tracing::debug!(%why, "the contact system built ahead failed"),
+        }
+    }
+
+    /// The contact system for its first engagement: the one [`prepare`](Self::prepare) built
+    /// (if for the same solver), else built now.
     fn engage(
+        &mut self,
+        scene: &Scene,
+        model: &Model,
+        newton: &NewtonSettings,
+    ) -> Result<Engaged, Error> {
+        match self.prepared.take() {
+            Some((e, kind)) if kind == newton.solver => Ok(e),
+            _ => self.build(scene, model, newton),
+        }
+    }
+
+    /// The contact system: all candidate pairs reserved in the pattern, its own solver session.
+    fn build(
         &self,
         scene: &Scene,
         model: &Model,

@@ -136,8 +136,10 @@ impl Visit for Fields {
     }
 }
 
-/// What receives the companion's events ([`NewtonLayer::with_companion`]).
-type CompanionSink = Box<dyn Fn(NewtonEvent) + Send + Sync>;
+/// What receives the companions' events ([`NewtonLayer::with_companion`]): the companion's
+/// depth (1: the run's companion, [`COMPANION_SPAN`]; 2: the companion's own,
+/// [`COARSER_COMPANION_SPAN`]) and the event.
+type CompanionSink = Box<dyn Fn(usize, NewtonEvent) + Send + Sync>;
 
 /// A `tracing` layer that hands every event of Newton's to `sink` as a [`NewtonEvent`]; those
 /// of the error estimate's companion run ([`COMPANION_SPAN`]) go to the companion's sink, if
@@ -156,9 +158,13 @@ impl<F: Fn(NewtonEvent) + Send + Sync + 'static> NewtonLayer<F> {
         }
     }
 
-    /// The companion run's events to `sink` (the progress bar shows them; the status files
-    /// do not hold them).
-    pub fn with_companion(mut self, sink: impl Fn(NewtonEvent) + Send + Sync + 'static) -> Self {
+    /// The companion runs' events to `sink`, with the companion's depth (1: the run's
+    /// companion; 2: the companion's own, src/analysis_seed.rs "nested companions"): the
+    /// progress bar shows them; the status files do not hold them.
+    pub fn with_companion(
+        mut self,
+        sink: impl Fn(usize, NewtonEvent) + Send + Sync + 'static,
+    ) -> Self {
         self.companion = Some(Box::new(sink));
         self
     }
@@ -169,6 +175,10 @@ impl<F: Fn(NewtonEvent) + Send + Sync + 'static> NewtonLayer<F> {
 /// were numbered as the run's levels in `status.sta`, `convergence.cvg` and the `-v` lines).
 pub const COMPANION_SPAN: &str = "companion";
 
+/// The span a companion's own companion runs in (nested companions, src/analysis_seed.rs):
+/// on another thread than the companion's, so it is told by its name, not by nesting.
+pub const COARSER_COMPANION_SPAN: &str = "coarser companion";
+
 impl<S, F> tracing_subscriber::Layer<S> for NewtonLayer<F>
 where
     S: tracing::Subscriber + for<'a> tracing_subscriber::registry::LookupSpan<'a>,
@@ -178,16 +188,23 @@ where
         if event.metadata().target() != TRACE_TARGET {
             return;
         }
-        let companion = ctx
-            .event_scope(event)
-            .is_some_and(|mut scope| scope.any(|span| span.name() == COMPANION_SPAN));
+        let depth = ctx.event_scope(event).map_or(0, |scope| {
+            scope
+                .map(|span| match span.name() {
+                    COMPANION_SPAN => 1,
+                    COARSER_COMPANION_SPAN => 2,
+                    _ => 0,
+                })
+                .max()
+                .unwrap_or(0)
+        });
         let mut fields = Fields::default();
         event.record(&mut fields);
-        match (fields.event(), companion) {
-            (Some(e), false) => (self.sink)(e),
-            (Some(e), true) => {
+        match (fields.event(), depth) {
+            (Some(e), 0) => (self.sink)(e),
+            (Some(e), depth) => {
                 if let Some(sink) = &self.companion {
-                    sink(e);
+                    sink(depth, e);
                 }
             }
             (None, _) => {}

@@ -569,7 +569,7 @@ mod tests {
         assert!(banded < plain, "{banded} against {plain} nodes");
         // Two sublaminate layers resolve the split: the companion keeps them (and two base
         // layers), so the layer band survives, halved ([3, 2] → [2, 1]), and still meshes.
-        let companion = crate::analysis::estimate::companion_scene(&scene).unwrap();
+        let companion = crate::analysis::estimate::companion_scene(&scene, 1).unwrap();
         assert_eq!(companion.mesh.layer_band, Some([2, 1]));
         assert!(build_model(&companion).is_ok());
     }

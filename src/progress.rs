@@ -152,10 +152,15 @@ impl Monitor {
         }
     }
 
-    /// One of the error estimate's companion's Newton events (its own run, first or beside
-    /// this one): on the bar and, with `-v`, printed, but neither numbered as this run's nor
-    /// written to the status files.
-    pub fn companion(&self, event: &NewtonEvent) {
+    /// One of a companion's Newton events (its own run, first or beside this one; `depth` 1
+    /// the error estimate's companion mesh, 2 the coarser one it starts from): on the bar and,
+    /// with `-v`, printed, but neither numbered as this run's nor written to the status files.
+    pub fn companion(&self, depth: usize, event: &NewtonEvent) {
+        let name = if depth > 1 {
+            "coarser companion"
+        } else {
+            "companion mesh"
+        };
         let line = match event {
             NewtonEvent::Iteration {
                 lambda,
@@ -164,22 +169,20 @@ impl Monitor {
                 ..
             } => {
                 self.bar.set_message(format!(
-                    "companion mesh: iteration {iteration} ‖r‖ {residual:.2e} N (λ {lambda:.4})"
+                    "{name}: iteration {iteration} ‖r‖ {residual:.2e} N (λ {lambda:.4})"
                 ));
-                format!("companion mesh: λ {lambda:.6} iteration {iteration}: ‖r‖ {residual:.3e} N")
+                format!("{name}: λ {lambda:.6} iteration {iteration}: ‖r‖ {residual:.3e} N")
             }
             NewtonEvent::Attempt {
                 lambda,
                 iterations,
                 termination,
                 ..
-            } => {
-                format!("companion mesh: λ {lambda:.6} {termination} after {iterations} iterations")
-            }
+            } => format!("{name}: λ {lambda:.6} {termination} after {iterations} iterations"),
             NewtonEvent::Refused {
                 lambda,
                 termination,
-            } => format!("companion mesh: λ {lambda:.6} {termination}"),
+            } => format!("{name}: λ {lambda:.6} {termination}"),
         };
         if self.verbosity == Verbosity::Verbose {
             self.bar.suspend(|| eprintln!("{line}"));
@@ -238,9 +241,9 @@ pub fn layer(
             m.newton(e);
         }
     })
-    .with_companion(move |e| {
+    .with_companion(move |depth, e| {
         if let Ok(m) = companion.lock() {
-            m.companion(&e);
+            m.companion(depth, &e);
         }
     })
 }

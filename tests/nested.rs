@@ -98,6 +98,9 @@ fn every_level_of_the_edge_delamination_is_seeded_and_lands_on_the_path() {
     let (path, nested) = both(&committed("fig_5_5_1_edge_semicircle_15mm.toml"));
     assert_same_states(&path, &nested);
     assert!(nested.levels.iter().all(|l| l.convergence.seeded));
+    // Its 1 773-DOF companion follows its own path (below `NESTED_FROM_DOFS`).
+    let seeded = nested.accuracy.as_ref().map(|a| a.companion_seeded_levels);
+    assert_eq!(seeded, Some(Some(0)));
     let closed: Vec<usize> = nested
         .levels
         .iter()
@@ -249,6 +252,63 @@ fn a_seeded_level_that_overlaps_where_the_companion_did_not_goes_on_in_the_conta
     assert!(level.convergence.seeded);
     assert_eq!(level.contact.as_ref().map(|c| c.pairs_closed), Some(3));
     assert!(companion.is_some_and(|a| a.companion_dofs == Some(6_405)));
+    // Nested companions: the 6 405-DOF companion started its level from its own (the slices
+    // halved), and the states are still the path's.
+    assert_eq!(companion.and_then(|a| a.companion_seeded_levels), Some(1));
     let (a, b) = (iterations(&path), iterations(&nested));
     assert!(3 * b < a, "nested {b} iterations against the path's {a}");
+}
+
+/// Nested companions on the default mesh, as a user runs it: `nonlin3d run` on the reference
+/// circle without mesh knobs, one level at ε = −0.004 (18 444 DOF; companion 6 405, which
+/// starts from its own companion, 4 → 2 slices). The `-v` lines name the coarser companion
+/// apart from the companion, `results.json` counts the companion's seeded level, and one and
+/// two threads give the same bits (the companions wait for each other's levels, whatever
+/// runs when).
+#[test]
+fn nested_companions_serve_the_default_mesh_with_the_same_bits_on_any_thread_count() {
+    let dir = std::env::temp_dir().join(format!("nonlin3d-nested-3-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let text = committed("reference_circle_30mm.toml").replace(
+        "strains = [-0.001, -0.002, -0.003, -0.004, -0.005]",
+        "strains = [-0.004]",
+    );
+    assert!(text.contains("strains = [-0.004]"));
+    let file = dir.join("circle.toml");
+    std::fs::write(&file, text).unwrap();
+    let run = |threads: &str| {
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_nonlin3d"))
+            .args([
+                "run",
+                file.to_str().unwrap(),
+                "-v",
+                "--threads",
+                threads,
+                "--out",
+            ])
+            .arg(dir.join(threads))
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr).to_string();
+        assert!(out.status.success(), "{stderr}");
+        let json = std::fs::read_to_string(dir.join(threads).join("results.json")).unwrap();
+        let v: serde_json::Value = serde_json::from_str(&json).unwrap();
+        (v, stderr)
+    };
+    let (two, log) = run("2");
+    let (one, _) = run("1");
+    let lines = |prefix: &str| log.lines().filter(|l| l.starts_with(prefix)).count();
+    assert!(lines("coarser companion: ") > 20, "{log}");
+    assert!(lines("companion mesh: ") > 0, "{log}");
+    assert_eq!(two["model"]["dofs"], 18_444);
+    assert_eq!(two["accuracy"]["companion_dofs"], 6_405);
+    assert_eq!(two["accuracy"]["companion_seeded_levels"], 1);
+    assert_eq!(two["levels"][0]["convergence"]["seeded"], true);
+    // The same bits: every front point's G and its estimate.
+    assert_eq!(two["levels"][0]["front"], one["levels"][0]["front"]);
+    assert_eq!(
+        two["levels"][0]["error_estimate"],
+        one["levels"][0]["error_estimate"]
+    );
+    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -36,6 +36,10 @@ pub struct AccuracyReport {
     pub companion_dofs: Option<usize>,
     /// Seconds the companion run took (null: no estimate).
     pub companion_s: Option<f64>,
+    /// Levels the companion started from its own, coarser companion's states (nested
+    /// companions: a companion of 5 000 DOF or more; 0: it followed every level itself; null:
+    /// no estimate).
+    pub companion_seeded_levels: Option<usize>,
     /// Why there is no estimate although one was asked for (the companion run failed).
     pub unavailable: Option<String>,
     /// The largest relative error estimate over the levels (null: no estimate).

@@ -86,6 +86,24 @@ impl EmbeddedParams {
     }
 }
 
+impl EmbeddedParams {
+    /// The companion's own companion (nested iteration three meshes deep, the facade's
+    /// src/analysis_seed.rs): only the slices halved (rounded up to the even count ≥ 2), the
+    /// rings, bands and layers kept, or None when the slices cannot halve. It serves the
+    /// companion's levels' starts, not an estimate, so it keeps what sets the buckled branch:
+    /// with its rings halved as well ([`Self::coarsened`] twice), the 30 × 60 mm ellipse's
+    /// coarser companion landed on another branch at ε = −0.001 and its start was dropped
+    /// (docs/PERFORMANCE.md, "Nested companions").
+    pub fn coarsened_along_front(&self) -> Option<Self> {
+        let slices = (self.slices / 2).max(2);
+        let slices = slices + slices % 2;
+        (slices < self.slices).then(|| Self {
+            slices,
+            ..self.clone()
+        })
+    }
+}
+
 impl ThroughWidthParams {
     /// The companion strip twice as coarse: elements along x inside and outside, through the
     /// sublaminate and the base halved (rounded up, at least one); the width keeps its
@@ -173,6 +191,47 @@ mod tests {
             ..p.clone()
         };
         assert_eq!(thin.coarsened().front_band, None);
+    }
+
+    #[test]
+    fn along_the_front_only_the_slices_halve() {
+        // The default mesh's companion: 4 → 12 slices in a band of 3 + 2, 4 + 3 rings.
+        let p = EmbeddedParams {
+            slices: 4,
+            radial_inside: 4,
+            radial_outside: 3,
+            sub_layers: 2,
+            base_layers: 2,
+            front_element: Some(0.2e-3),
+            front_band: Some(FrontBand {
+                inside: 3,
+                outside: 2,
+            }),
+            layer_band: Some(LayerBand {
+                inside: 2,
+                outside: 1,
+            }),
+            ..EmbeddedParams::thesis_reference()
+        };
+        let Some(c) = p.coarsened_along_front() else {
+            panic!("4 slices halve");
+        };
+        assert_eq!(c.slices, 2);
+        assert_eq!(
+            EmbeddedParams {
+                slices: 4,
+                ..c.clone()
+            },
+            p
+        );
+        assert!(super::super::embedded_delamination(&c).is_ok());
+        // 6 → 4 (even), 2 → none.
+        let six = EmbeddedParams {
+            slices: 6,
+            ..p.clone()
+        };
+        assert_eq!(six.coarsened_along_front().map(|c| c.slices), Some(4));
+        assert_eq!(c.coarsened_along_front(), None);
     }
 
     #[test]
