@@ -224,6 +224,8 @@ pub(crate) fn companion_scene(scene: &Scene, depth: usize) -> Result<Scene, Erro
                 through_width_params(scene, a_mm, length_mm, width_mm, h_mm, base_mm)?.coarsened();
             c.mesh.inside = Some(p.inside);
             c.mesh.outside = Some(p.outside);
+            c.mesh.front_grading = Some(p.front_grading);
+            c.mesh.across = Some(p.across);
             c.mesh.sub_layers = Some(p.sub_layers);
             c.mesh.base_layers = Some(p.base_layers);
         }

@@ -237,21 +237,30 @@ pub(crate) fn through_width_params(
         ));
     }
     let (c, mm) = (&scene.mesh, MM);
-    let d = ThroughWidthParams::example();
-    Ok(ThroughWidthParams {
+    let geometry = ThroughWidthParams {
         kind: element_kind(scene),
         a: a_mm * mm,
         length: length_mm * mm,
         width: width_mm * mm,
         h: h_mm * mm,
         base: base_mm * mm,
+        ..ThroughWidthParams::example()
+    };
+    // No strip knob: the default strip mesh (front element ≤ 0.6 h); any knob: the others
+    // from the generator's example, as before (docs/MESH.md, "The default mesh").
+    let knobs = [c.inside, c.outside, c.across, c.sub_layers, c.base_layers];
+    if knobs.iter().all(Option::is_none) && c.front_grading.is_none() {
+        return Ok(geometry.with_default_mesh());
+    }
+    let d = ThroughWidthParams::example();
+    Ok(ThroughWidthParams {
         inside: c.inside.unwrap_or(d.inside),
         outside: c.outside.unwrap_or(d.outside),
         front_grading: c.front_grading.unwrap_or(d.front_grading),
         across: c.across.unwrap_or(d.across),
         sub_layers: c.sub_layers.unwrap_or(d.sub_layers),
         base_layers: c.base_layers.unwrap_or(d.base_layers),
-        base_grading: d.base_grading,
+        ..geometry
     })
 }
 

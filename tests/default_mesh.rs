@@ -152,3 +152,60 @@ fn the_default_run_is_within_the_accuracy_of_issue_25() {
     assert!(errors[1].abs() <= 0.03, "{errors:?}");
     assert!(errors[2].abs() <= 0.03, "{errors:?}");
 }
+
+/// A through-width strip without mesh knobs runs the default strip mesh (graded 0.1 towards
+/// the front, whose element is at most 0.6 h: the committed scene's 16 + 10 elements on the
+/// 30 mm strip): `nonlin3d run` on it gives the committed scene's G, within issue 25's
+/// accuracy of the converged strip (docs/ACCURACY.md §2d: G_T max 244.57, G_II 243.49 J/m²;
+/// 2 and 3 %) and G_I of the right sign (converged +0.7 … 1.2 J/m²; the generator's example
+/// counts, which a knob-less strip ran before, gave −4.9).
+#[test]
+fn a_strip_without_mesh_knobs_takes_the_default_strip_mesh() {
+    let scene = committed("fig_3_2_3_through_width.toml");
+    let start = scene.find("inside = 16").unwrap();
+    let end = scene.find("across = 1").unwrap();
+    let knobless = format!("{}{}", &scene[..start], &scene[end + "across = 1".len()..]);
+    assert!(!knobless.contains("inside") && !knobless.contains("front_grading"));
+    assert_eq!(dofs(&knobless), 3_444);
+    assert!(min_scaled_jacobian(&knobless) > 0.29);
+    let one_level = knobless
+        .lines()
+        .map(|l| match l.starts_with("strains") {
+            true => "strains = [-0.004]",
+            false => l,
+        })
+        .filter(|l| !l.starts_with("           -0.001"))
+        .collect::<Vec<_>>()
+        .join("\n");
+    let dir = tmp("strip");
+    let file = dir.join("strip.toml");
+    std::fs::write(&file, &one_level).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_nonlin3d"))
+        .args(["run", file.to_str().unwrap(), "--quiet", "--out"])
+        .arg(dir.join("out"))
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let json = std::fs::read_to_string(dir.join("out").join("results.json")).unwrap();
+    let v: serde_json::Value = serde_json::from_str(&json).unwrap();
+    let front = v["levels"][0]["front"].as_array().unwrap();
+    let g = |r: &serde_json::Value, k: &str| r[k].as_f64().unwrap();
+    let g_t = front.iter().map(|r| g(r, "g_t")).fold(0.0, f64::max);
+    assert!((g_t / 244.57 - 1.0).abs() < 0.02, "G_T max {g_t}");
+    for r in front {
+        assert!(
+            (g(r, "g_ii") / 243.49 - 1.0).abs() < 0.03,
+            "G_II {}",
+            g(r, "g_ii")
+        );
+        assert!(
+            g(r, "g_i") > 0.0 && g(r, "g_i") < 0.01 * g_t,
+            "G_I {}",
+            g(r, "g_i")
+        );
+    }
+}
