@@ -292,10 +292,9 @@ fn sweep(
         perturbation = s.to_nonlinear(&perturbation)?;
     }
     let mut u = vec![0.0; problem.assembler().n()];
-    // One solver for every level: analysed once, at its first use (a sweep whose levels all
-    // start from the companion's states in the contact system never uses it); with BFGS each
-    // level starts from the factorisation its predecessor's stability test left.
-    let mut session = PathSolver::deferred(problem, strategy.solver());
+    // One solver for every level: analysed once; with BFGS each level starts from the
+    // factorisation its predecessor's stability test left.
+    let mut session = PathSolver::new(problem, strategy.solver())?;
     let mut out = Sweep {
         levels: Vec::with_capacity(factors.len()),
         force,

@@ -36,8 +36,7 @@ pub struct PathSolver {
     /// it, or one made there).
     pub(crate) pivots: Option<usize>,
     /// Symbolic analyses made over the session's life (1 from [`PathSolver::new`], one more
-    /// each time [`fit`](Self::fit) had to make it anew; 0 for a [`PathSolver::deferred`]
-    /// session not used yet).
+    /// each time [`fit`](Self::fit) had to make it anew).
     analyses: usize,
 }
 
@@ -56,22 +55,6 @@ impl PathSolver {
             pivots: None,
             analyses: 1,
         })
-    }
-
-    /// A solver of `kind` for `problem`, its symbolic analysis deferred to its first use
-    /// (a session that may never factorise: a sweep whose levels all start from a companion's
-    /// states in another system, src/analysis_seed.rs of the facade). The analysis made then
-    /// is the one [`PathSolver::new`] makes, so the bits do not change.
-    pub fn deferred(problem: &dyn NonlinearProblem, kind: SolverKind) -> Self {
-        Self {
-            kind,
-            solver: kind.build(),
-            k: SymmetricMatrix::zeros(problem.pattern()),
-            cache: TangentCache::new(),
-            state: Vec::new(),
-            pivots: None,
-            analyses: 0,
-        }
     }
 
     /// What the solver's mixed precision did since its last analysis (f32 factorisations,
@@ -123,15 +106,14 @@ impl PathSolver {
     }
 
     /// Made anew (analysis included) if `problem`'s pattern is not the one this solver was
-    /// analysed for, if `kind` differs, or if it was never analysed ([`Self::deferred`]).
+    /// analysed for, or if `kind` differs.
     pub(crate) fn fit(
         &mut self,
         problem: &dyn NonlinearProblem,
         kind: SolverKind,
     ) -> Result<(), NewtonError> {
         let pattern = problem.pattern();
-        if self.analyses == 0
-            || kind != self.kind
+        if kind != self.kind
             || !(Arc::ptr_eq(self.k.pattern(), &pattern) || **self.k.pattern() == *pattern)
         {
             let analyses = self.analyses;
@@ -174,9 +156,6 @@ impl PathSolver {
     ) -> Result<StartTangent, NewtonError> {
         if self.cache.is_factored() && self.state == u {
             return Ok(StartTangent::Kept);
-        }
-        if self.analyses == 0 {
-            self.fit(problem, self.kind)?;
         }
         self.cache.invalidate();
         let mut r = vec![0.0; problem.n()];
@@ -262,27 +241,5 @@ mod tests {
         let other = crate::problem::tests::bar_problem();
         session.fit(&other, settings.solver).unwrap();
         assert_eq!(session.analyses(), 2);
-    }
-
-    /// A deferred session analyses nothing until its first use, then once, and solves as a
-    /// session made analysed does: bitwise.
-    #[test]
-    fn a_deferred_session_analyses_at_its_first_use_and_solves_the_same() {
-        let settings = NewtonSettings::default();
-        let (mut problem, _, _) = compressed();
-        let mut late = PathSolver::deferred(&problem, settings.solver);
-        assert_eq!(late.analyses(), 0);
-        assert!(!late.is_factored());
-        let mut early = PathSolver::new(&problem, settings.solver).unwrap();
-        let (mut a, mut b) = (vec![0.0; problem.n()], vec![0.0; problem.n()]);
-        let ra = late.solve_at(&mut problem, &mut a, 0.3, &settings).unwrap();
-        let rb = early
-            .solve_at(&mut problem, &mut b, 0.3, &settings)
-            .unwrap();
-        assert_eq!(late.analyses(), 1);
-        assert!(a == b && ra.iterations == rb.iterations);
-        let mut fresh = PathSolver::deferred(&problem, settings.solver);
-        let pivots = fresh.inertia_at(&mut problem, &a, 0.3).unwrap();
-        assert_eq!((fresh.analyses(), Some(pivots)), (1, early.pivots_at(&b)));
     }
 }
