@@ -40,11 +40,11 @@ mod transfer;
 pub use error::MeshError;
 pub use front::{Front, FrontPoint};
 pub use generators::{
-    ACCURACY_TABLE, AccuracyRow, BoxParams, Centre, DEFAULT_MESH, EllipticMap, EmbeddedParams,
-    FrontBand, FrontShape, LayerBand, NonlinearRegion, Partition, PlyLayout, REFERENCE_FRONT,
-    ThroughWidthParams, edge_delamination, ellipse_distance, embedded_delamination,
-    embedded_delamination_with_front, graded_coordinates, graded_from_first, nonlinear_region,
-    quarter_front_length, structured_box, thin_film, through_width_delamination,
+    ACCURACY_TABLE, AccuracyRow, BoxParams, Centre, DEFAULT_MESH, DEFAULT_STRIP_GRADING,
+    EllipticMap, EmbeddedParams, FrontBand, FrontShape, LayerBand, NonlinearRegion, Partition,
+    PlyLayout, REFERENCE_FRONT, ThroughWidthParams, edge_delamination, ellipse_distance,
+    embedded_delamination, embedded_delamination_with_front, graded_coordinates, graded_from_first,
+    nonlinear_region, quarter_front_length, structured_box, thin_film, through_width_delamination,
 };
 pub use io::inp_read::{
     Amplitude, ContactPairs, Controls, InpModel, NodeRef, NotUsed, OutputKind, OutputRequest,

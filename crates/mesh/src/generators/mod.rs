@@ -23,4 +23,4 @@ pub use grading::{graded_coordinates, graded_from_first};
 pub(crate) use grading::{grid_index, grid_position};
 pub use partition::{FrontShape, NonlinearRegion, Partition, ellipse_distance, nonlinear_region};
 pub use structured::{BoxParams, structured_box};
-pub use through_width::{ThroughWidthParams, through_width_delamination};
+pub use through_width::{DEFAULT_STRIP_GRADING, ThroughWidthParams, through_width_delamination};
