@@ -20,8 +20,9 @@
 //! only if this one's start was close ([`KEEP_SEEDING`]).
 //!
 //! **Nested companions.** A companion of [`NESTED_FROM_DOFS`] or more starts its own levels
-//! from a coarser companion of its own in the same way (the companion's `coarsened()` mesh),
-//! which follows the path itself ([`DEEPEST`]): three meshes, each path followed on the
+//! from a coarser companion of its own in the same way (its slices halved, the rest kept:
+//! `EmbeddedParams::coarsened_along_front`, src/analysis_estimate.rs `companion_scene`),
+//! which follows the path itself ([`DEEPEST`]): three meshes, the path followed on the
 //! cheapest. The coarser companion serves the seeds only; the estimate is the companion's.
 
 use super::deflections;

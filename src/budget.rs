@@ -173,8 +173,18 @@ fn scene_counts(scene: &Scene) -> (count::Counts, u128, f64, Vec<String>) {
         v
     };
     let (counts, short_side) = match &scene.geometry {
-        Geometry::ThroughWidth { .. } => {
-            let d = ThroughWidthParams::example();
+        &Geometry::ThroughWidth {
+            a_mm,
+            length_mm,
+            width_mm,
+            h_mm,
+            base_mm,
+        } => {
+            // The strip's resolved counts (the default strip mesh without knobs), else the
+            // generator's example counts where the scene is refused anyway.
+            let d =
+                crate::model::through_width_params(scene, a_mm, length_mm, width_mm, h_mm, base_mm)
+                    .unwrap_or_else(|_| ThroughWidthParams::example());
             let inside = field("inside", c.inside, d.inside);
             let outside = field("outside", c.outside, d.outside);
             let across = field("across", c.across, d.across);

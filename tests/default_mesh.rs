@@ -168,6 +168,9 @@ fn a_strip_without_mesh_knobs_takes_the_default_strip_mesh() {
     assert!(!knobless.contains("inside") && !knobless.contains("front_grading"));
     assert_eq!(dofs(&knobless), 3_444);
     assert!(min_scaled_jacobian(&knobless) > 0.29);
+    // The size estimate (memory budget, Slurm requests) counts the same mesh.
+    let estimate = nonlin3d::budget::estimate_scene(&Scene::from_toml(&knobless).unwrap());
+    assert_eq!(estimate.dofs, 3_444);
     let one_level = knobless
         .lines()
         .map(|l| match l.starts_with("strains") {
