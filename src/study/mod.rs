@@ -146,10 +146,10 @@ impl Plan {
     }
 
     /// The scene of every case: `scene` with `[common]` and the case's tables merged in,
-    /// validated; one factorisation thread each (the cases run side by side), and no error
-    /// estimate unless the scene, `[common.mesh]` or the case names `error_estimate` (the
-    /// study measures each case's error against its family itself; the companion mesh would
-    /// add about a tenth to every case's time, docs/ACCURACY.md §4).
+    /// validated; one factorisation thread each (the cases run side by side); the error
+    /// estimate's companion only where it pays for itself ([`seeded`]) unless the scene,
+    /// `[common.mesh]` or the case names `error_estimate` (the study measures each case's
+    /// error against its family itself, docs/ACCURACY.md §4).
     pub fn scenes(&self, scene: &Scene) -> Result<Vec<Scene>, Error> {
         let base = toml::Table::try_from(scene).map_err(|e| Error::Scene(e.to_string()))?;
         let mut common = base;
@@ -168,12 +168,32 @@ impl Plan {
                 s.validate()
                     .map_err(|e| Error::Scene(format!("case '{}': {e}", c.name)))?;
                 s.analysis.threads = 1;
-                s.mesh.error_estimate =
-                    Some(s.mesh.error_estimate.unwrap_or(ErrorEstimateName::Off));
+                let estimate = match seeded(&s) {
+                    true => ErrorEstimateName::Companion,
+                    false => ErrorEstimateName::Off,
+                };
+                s.mesh.error_estimate = Some(s.mesh.error_estimate.unwrap_or(estimate));
                 Ok(s)
             })
             .collect()
     }
+}
+
+/// Whether a case's levels would start from its companion's (nested iteration: `start =
+/// "companion"`, load control, no substructure, an embedded, edge or through-width model),
+/// where the companion costs less than it saves: one thread, the reference circle on the
+/// default mesh 3.5 against 12.6 CPU s without it, the five-level 30 × 60 mm ellipse 9.3
+/// against 12.8, the thesis circle 2.5 against 3.1 (docs/ACCURACY.md §4). Elsewhere it adds
+/// 12–44 % (§3).
+fn seeded(s: &Scene) -> bool {
+    use crate::scene::{Geometry, PartitionName, PathName, StartName};
+    s.analysis.start == StartName::Companion
+        && s.analysis.path == PathName::Load
+        && s.substructure.partition == PartitionName::None
+        && matches!(
+            s.geometry,
+            Geometry::Embedded { .. } | Geometry::Edge { .. } | Geometry::ThroughWidth { .. }
+        )
 }
 
 /// The fields of `[common]` and of a `[[case]]` besides the knob tables, as their structs name

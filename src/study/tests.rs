@@ -64,38 +64,50 @@ fn knobs_merge_into_the_scene_field_by_field_case_over_common() {
 #[test]
 fn study_cases_skip_the_error_estimate_unless_asked() {
     // The scene as `nonlin3d run` reads it names no estimate (the run's default is the
-    // companion); the study's cases run without it, except a case or [common.mesh] that asks.
+    // companion); the study's cases keep it where their levels start from the companion's
+    // (it pays for itself), run without it elsewhere (a plate, arc length), and a case or
+    // [common.mesh] that names it has it its way.
     let base = Scene::thesis_reference().unwrap();
     assert_eq!(base.mesh.error_estimate, None);
+    let plan = Plan::from_toml(
+        "[[case]]\nname = \"plain\"\n\n[[case]]\nname = \"off\"\n\
+         mesh = { error_estimate = \"off\" }\n\n[[case]]\nname = \"arc\"\n\
+         analysis = { path = \"arc-length\" }\n",
+    )
+    .unwrap();
+    let scenes = plan.scenes(&base).unwrap();
+    let estimates: Vec<_> = scenes.iter().map(|s| s.mesh.error_estimate).collect();
+    assert_eq!(
+        estimates,
+        [
+            Some(ErrorEstimateName::Companion),
+            Some(ErrorEstimateName::Off),
+            Some(ErrorEstimateName::Off)
+        ]
+    );
     let plan = Plan::from_toml(
         "[[case]]\nname = \"plain\"\n\n[[case]]\nname = \"asks\"\n\
          mesh = { error_estimate = \"companion\" }\n",
     )
     .unwrap();
-    let scenes = plan.scenes(&base).unwrap();
-    assert_eq!(scenes[0].mesh.error_estimate, Some(ErrorEstimateName::Off));
-    assert_eq!(
-        scenes[1].mesh.error_estimate,
-        Some(ErrorEstimateName::Companion)
-    );
-    // A scene that names the estimate itself keeps it in every case.
+    // A scene that names the estimate itself keeps it in every case but one that names it.
     let mut named = base.clone();
-    named.mesh.error_estimate = Some(ErrorEstimateName::Companion);
+    named.mesh.error_estimate = Some(ErrorEstimateName::Off);
     let scenes = plan.scenes(&named).unwrap();
+    let estimates: Vec<_> = scenes.iter().map(|s| s.mesh.error_estimate).collect();
     assert_eq!(
-        scenes[0].mesh.error_estimate,
-        Some(ErrorEstimateName::Companion)
+        estimates,
+        [
+            Some(ErrorEstimateName::Off),
+            Some(ErrorEstimateName::Companion)
+        ]
     );
     // [common.mesh] for every case.
-    let common = Plan::from_toml(
-        "[common.mesh]\nerror_estimate = \"companion\"\n\n[[case]]\nname = \"a\"\n",
-    )
-    .unwrap();
+    let common =
+        Plan::from_toml("[common.mesh]\nerror_estimate = \"off\"\n\n[[case]]\nname = \"a\"\n")
+            .unwrap();
     let scenes = common.scenes(&base).unwrap();
-    assert_eq!(
-        scenes[0].mesh.error_estimate,
-        Some(ErrorEstimateName::Companion)
-    );
+    assert_eq!(scenes[0].mesh.error_estimate, Some(ErrorEstimateName::Off));
 }
 
 #[test]
