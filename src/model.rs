@@ -248,8 +248,7 @@ pub(crate) fn through_width_params(
     };
     // No strip knob: the default strip mesh (front element ≤ 0.6 h); any knob: the others
     // from the generator's example, as before (docs/MESH.md, "The default mesh").
-    let knobs = [c.inside, c.outside, c.across, c.sub_layers, c.base_layers];
-    if knobs.iter().all(Option::is_none) && c.front_grading.is_none() {
+    if !c.gives_strip_knobs() {
         return Ok(geometry.with_default_mesh());
     }
     let d = ThroughWidthParams::example();

@@ -369,6 +369,24 @@ pub struct MeshControls {
     pub accuracy: Option<f64>,
 }
 
+impl MeshControls {
+    /// Whether any knob of the through-width generator is given (`inside`, `outside`,
+    /// `front_grading`, `across`, `sub_layers`, `base_layers`): without one a strip runs the
+    /// default strip mesh (`nonlin3d_mesh::ThroughWidthParams::with_default_mesh`; docs/MESH.md).
+    pub fn gives_strip_knobs(&self) -> bool {
+        [
+            self.inside,
+            self.outside,
+            self.across,
+            self.sub_layers,
+            self.base_layers,
+        ]
+        .iter()
+        .any(Option::is_some)
+            || self.front_grading.is_some()
+    }
+}
+
 /// `[mesh] error_estimate` names.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "kebab-case")]
