@@ -147,9 +147,9 @@ impl Plan {
 
     /// The scene of every case: `scene` with `[common]` and the case's tables merged in,
     /// validated; one factorisation thread each (the cases run side by side); the error
-    /// estimate's companion only where it pays for itself ([`seeded`]) unless the scene,
-    /// `[common.mesh]` or the case names `error_estimate` (the study measures each case's
-    /// error against its family itself, docs/ACCURACY.md §4).
+    /// estimate's companion only where it pays for itself (where the case's levels start
+    /// from it) unless the scene, `[common.mesh]` or the case names `error_estimate` (the
+    /// study measures each case's error against its family itself, docs/ACCURACY.md §4).
     pub fn scenes(&self, scene: &Scene) -> Result<Vec<Scene>, Error> {
         let base = toml::Table::try_from(scene).map_err(|e| Error::Scene(e.to_string()))?;
         let mut common = base;
