@@ -145,8 +145,9 @@ pub(crate) fn run_at(
     // Nested iteration (src/analysis_seed.rs): the companion sends its levels as they converge
     // and the sweep starts its levels from them, the companion first on one thread.
     let (to, from) = std::sync::mpsc::channel();
+    let deeper = depth + 1;
     let mut seeds = if runs && seed::wanted(scene, &model, sub.is_some()) {
-        seeds(scene, &model, from, depth + 1)
+        seeds(scene, &model, from, deeper)
     } else {
         None
     };
@@ -154,7 +155,6 @@ pub(crate) fn run_at(
     // A companion's own companion serves its seeds only: none, no run.
     let runs = runs && (depth == 0 || sending);
     let beside = runs && asked != 1 && rayon::current_num_threads() >= 2;
-    let deeper = depth + 1;
     let mut sweep = match (beside, seeds.as_mut()) {
         (true, seeds) => rayon::in_place_scope(|s| {
             s.spawn(|_| {

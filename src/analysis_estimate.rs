@@ -12,7 +12,7 @@ use crate::results::{
 use crate::scene::{
     ElementName, ErrorEstimateName, Geometry, MeshControls, PartitionName, Scene, Shape,
 };
-use nonlin3d_mesh::{AccuracyRow, DEFAULT_MESH, EmbeddedParams};
+use nonlin3d_mesh::{AccuracyRow, DEFAULT_MESH, EmbeddedParams, ThroughWidthParams};
 use nonlin3d_vcct::estimate::{self, FrontG, Modes};
 use std::time::Instant;
 
@@ -87,26 +87,54 @@ fn set_controls(c: &mut MeshControls, p: &EmbeddedParams) {
 /// Hex8 and substructured models keep it too (the default mesh was measured on none of them).
 fn takes_default_mesh(scene: &Scene) -> bool {
     let m = &scene.mesh;
-    let knobs = [
-        m.slices.is_some(),
-        m.inside.is_some(),
-        m.outside.is_some(),
-        m.front_grading.is_some(),
-        m.front_element_mm.is_some(),
-        m.front_band.is_some(),
-        m.layer_band.is_some(),
-        m.sub_layers.is_some(),
-        m.base_layers.is_some(),
-        m.across.is_some(),
-        m.accuracy.is_some(),
-    ];
     matches!(
         scene.geometry,
         Geometry::Embedded { .. } | Geometry::Edge { .. }
-    ) && !knobs.contains(&true)
+    ) && !m.gives_mesh_knobs()
         && scene.layup.is_none()
         && scene.substructure.partition == PartitionName::None
         && matches!(m.element, None | Some(ElementName::Hex20))
+}
+
+/// The strip generator's parameters of a through-width scene (its knobs over the generator's
+/// example), or `None` for any other model, as [`embedded_of`] is for the others.
+fn strip_of(scene: &Scene) -> Option<Result<ThroughWidthParams, Error>> {
+    let Geometry::ThroughWidth {
+        a_mm,
+        length_mm,
+        width_mm,
+        h_mm,
+        base_mm,
+    } = scene.geometry
+    else {
+        return None;
+    };
+    Some(through_width_params(
+        scene, a_mm, length_mm, width_mm, h_mm, base_mm,
+    ))
+}
+
+/// A through-width scene without mesh knobs with the default strip mesh's written in
+/// (`nonlin3d_mesh::ThroughWidthParams::with_default_mesh`, docs/MESH.md "The default mesh");
+/// None for any other scene (and for a strip the build refuses: it reports why).
+fn default_strip(scene: &Scene) -> Option<Scene> {
+    if scene.mesh.gives_mesh_knobs() {
+        return None;
+    }
+    let p = strip_of(scene)?.ok()?.with_default_mesh();
+    let mut out = scene.clone();
+    set_strip_controls(&mut out.mesh, &p);
+    Some(out)
+}
+
+/// Writes a strip's knobs into mesh controls (every field the strip generator takes).
+fn set_strip_controls(c: &mut MeshControls, p: &ThroughWidthParams) {
+    c.inside = Some(p.inside);
+    c.outside = Some(p.outside);
+    c.front_grading = Some(p.front_grading);
+    c.across = Some(p.across);
+    c.sub_layers = Some(p.sub_layers);
+    c.base_layers = Some(p.base_layers);
 }
 
 /// The scene with its mesh resolved to knobs, and what was chosen: `[mesh] accuracy` by the
@@ -115,6 +143,9 @@ fn takes_default_mesh(scene: &Scene) -> bool {
 /// [`nonlin3d_mesh::DEFAULT_MESH`] scaled alike. Any other scene comes back unchanged.
 /// Through-width strips have no table: a target for one is refused.
 pub(crate) fn resolve_mesh(scene: &Scene) -> Result<(Scene, Option<MeshChoice>), Error> {
+    if let Some(strip) = default_strip(scene) {
+        return Ok((strip, None));
+    }
     if takes_default_mesh(scene)
         && let Some(p) = embedded_of(scene)
     {
@@ -210,24 +241,10 @@ pub(crate) fn companion_scene(scene: &Scene, depth: usize) -> Result<Scene, Erro
         Some(p) => set_controls(&mut c.mesh, &p.coarsened()),
         None if depth > 1 => return Err(Error::Scene("a strip has no slices to halve".into())),
         None => {
-            let Geometry::ThroughWidth {
-                a_mm,
-                length_mm,
-                width_mm,
-                h_mm,
-                base_mm,
-            } = scene.geometry
-            else {
-                return Err(Error::Scene("no mesh to coarsen".into()));
-            };
-            let p =
-                through_width_params(scene, a_mm, length_mm, width_mm, h_mm, base_mm)?.coarsened();
-            c.mesh.inside = Some(p.inside);
-            c.mesh.outside = Some(p.outside);
-            c.mesh.front_grading = Some(p.front_grading);
-            c.mesh.across = Some(p.across);
-            c.mesh.sub_layers = Some(p.sub_layers);
-            c.mesh.base_layers = Some(p.base_layers);
+            let p = strip_of(scene)
+                .ok_or_else(|| Error::Scene("no mesh to coarsen".into()))??
+                .coarsened();
+            set_strip_controls(&mut c.mesh, &p);
         }
     }
     Ok(c)

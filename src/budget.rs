@@ -173,28 +173,8 @@ fn scene_counts(scene: &Scene) -> (count::Counts, u128, f64, Vec<String>) {
         v
     };
     let (counts, short_side) = match &scene.geometry {
-        &Geometry::ThroughWidth {
-            a_mm,
-            length_mm,
-            width_mm,
-            h_mm,
-            base_mm,
-        } => {
-            // Without a strip knob the default strip mesh (its counts depend on a and h),
-            // else the generator's example counts for the knobs not given (src/model.rs).
-            let mm = 1e-3;
-            let d = match c.gives_strip_knobs() {
-                true => ThroughWidthParams::example(),
-                false => ThroughWidthParams {
-                    a: a_mm * mm,
-                    length: length_mm * mm,
-                    width: width_mm * mm,
-                    h: h_mm * mm,
-                    base: base_mm * mm,
-                    ..ThroughWidthParams::example()
-                }
-                .with_default_mesh(),
-            };
+        Geometry::ThroughWidth { .. } => {
+            let d = ThroughWidthParams::example();
             let inside = field("inside", c.inside, d.inside);
             let outside = field("outside", c.outside, d.outside);
             let across = field("across", c.across, d.across);

@@ -246,11 +246,8 @@ pub(crate) fn through_width_params(
         base: base_mm * mm,
         ..ThroughWidthParams::example()
     };
-    // No strip knob: the default strip mesh (front element ≤ 0.6 h); any knob: the others
-    // from the generator's example, as before (docs/MESH.md, "The default mesh").
-    if !c.gives_strip_knobs() {
-        return Ok(geometry.with_default_mesh());
-    }
+    // The knobs not given from the generator's example (a scene without any has the default
+    // strip mesh's knobs by now: src/analysis_estimate.rs, `resolve_mesh`).
     let d = ThroughWidthParams::example();
     Ok(ThroughWidthParams {
         inside: c.inside.unwrap_or(d.inside),

@@ -370,20 +370,25 @@ pub struct MeshControls {
 }
 
 impl MeshControls {
-    /// Whether any knob of the through-width generator is given (`inside`, `outside`,
-    /// `front_grading`, `across`, `sub_layers`, `base_layers`): without one a strip runs the
-    /// default strip mesh (`nonlin3d_mesh::ThroughWidthParams::with_default_mesh`; docs/MESH.md).
-    pub fn gives_strip_knobs(&self) -> bool {
-        [
+    /// Whether any knob that shapes the mesh or picks it is given (the counts, gradings,
+    /// bands, `across`, `accuracy`; not `element` or `error_estimate`): without one an
+    /// embedded or edge scene runs the default mesh (`nonlin3d_mesh::DEFAULT_MESH`), a strip
+    /// the default strip mesh (`ThroughWidthParams::with_default_mesh`; docs/MESH.md).
+    pub fn gives_mesh_knobs(&self) -> bool {
+        let counts = [
+            self.slices,
             self.inside,
             self.outside,
             self.across,
             self.sub_layers,
             self.base_layers,
-        ]
-        .iter()
-        .any(Option::is_some)
+        ];
+        counts.iter().any(Option::is_some)
             || self.front_grading.is_some()
+            || self.front_element_mm.is_some()
+            || self.front_band.is_some()
+            || self.layer_band.is_some()
+            || self.accuracy.is_some()
     }
 }
 

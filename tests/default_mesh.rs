@@ -3,10 +3,11 @@
 //! `nonlin3d_mesh::DEFAULT_MESH`, and the reference case run with no scene at all is within
 //! issue 25's accuracy of the mesh-converged values; any knob keeps the thesis's mesh.
 
+mod common;
+
 use nonlin3d::Scene;
 use nonlin3d::scene::{DEFAULT_SCENE, THESIS_SCENE};
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 fn tmp(name: &str) -> PathBuf {
     let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("default-mesh-{name}"));
@@ -107,19 +108,13 @@ fn a_scene_without_mesh_knobs_takes_the_default_mesh() {
 fn the_default_run_is_within_the_accuracy_of_issue_25() {
     let dir = tmp("run");
     let out = dir.join("out");
-    let o = Command::new(env!("CARGO_BIN_EXE_nonlin3d"))
-        .args(["run", "--out"])
-        .arg(&out)
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = common::nonlin3d_ok(["run".as_ref(), "--out".as_ref(), out.as_os_str()]);
     let stdout = String::from_utf8_lossy(&o.stdout);
     assert!(
         stdout.contains("mesh: the default mesh (no [mesh] knobs;"),
         "{stdout}"
     );
-    let json: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("results.json")).unwrap()).unwrap();
+    let json = common::results_json(&out);
     assert_eq!(json["model"]["dofs"].as_u64(), Some(18_444));
     let chosen = &json["accuracy"]["chosen_mesh"];
     assert_eq!(chosen["rule"].as_str(), Some("default"));
@@ -183,18 +178,16 @@ fn a_strip_without_mesh_knobs_takes_the_default_strip_mesh() {
     let dir = tmp("strip");
     let file = dir.join("strip.toml");
     std::fs::write(&file, &one_level).unwrap();
-    let out = Command::new(env!("CARGO_BIN_EXE_nonlin3d"))
-        .args(["run", file.to_str().unwrap(), "--quiet", "--out"])
-        .arg(dir.join("out"))
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let json = std::fs::read_to_string(dir.join("out").join("results.json")).unwrap();
-    let v: serde_json::Value = serde_json::from_str(&json).unwrap();
+    let out = dir.join("out");
+    let file = file.as_os_str();
+    common::nonlin3d_ok([
+        "run".as_ref(),
+        file,
+        "--quiet".as_ref(),
+        "--out".as_ref(),
+        out.as_os_str(),
+    ]);
+    let v = common::results_json(&out);
     let front = v["levels"][0]["front"].as_array().unwrap();
     let g = |r: &serde_json::Value, k: &str| r[k].as_f64().unwrap();
     let g_t = front.iter().map(|r| g(r, "g_t")).fold(0.0, f64::max);

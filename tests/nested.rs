@@ -194,17 +194,14 @@ fn the_terminal_names_the_companions_crossing_and_the_seeded_levels() {
         assert!(text.contains(&format!("start = \"{start}\"")));
         let file = dir.join(format!("{start}.toml"));
         std::fs::write(&file, text).unwrap();
-        let out = std::process::Command::new(env!("CARGO_BIN_EXE_nonlin3d"))
-            .args(["run", file.to_str().unwrap(), "--out"])
-            .arg(dir.join(start))
-            .output()
-            .unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        String::from_utf8(out.stdout).unwrap()
+        let out = dir.join(start);
+        let o = common::nonlin3d_ok([
+            "run".as_ref(),
+            file.as_os_str(),
+            "--out".as_ref(),
+            out.as_os_str(),
+        ]);
+        String::from_utf8(o.stdout).unwrap()
     };
     let nested = summary("companion");
     // status.sta holds this mesh's attempts only: the companion's (run first on one thread,
@@ -277,23 +274,20 @@ fn nested_companions_serve_the_default_mesh_with_the_same_bits_on_any_thread_cou
     let file = dir.join("circle.toml");
     std::fs::write(&file, text).unwrap();
     let run = |threads: &str| {
-        let out = std::process::Command::new(env!("CARGO_BIN_EXE_nonlin3d"))
-            .args([
-                "run",
-                file.to_str().unwrap(),
-                "-v",
-                "--threads",
-                threads,
-                "--out",
-            ])
-            .arg(dir.join(threads))
-            .output()
-            .unwrap();
-        let stderr = String::from_utf8_lossy(&out.stderr).to_string();
-        assert!(out.status.success(), "{stderr}");
-        let json = std::fs::read_to_string(dir.join(threads).join("results.json")).unwrap();
-        let v: serde_json::Value = serde_json::from_str(&json).unwrap();
-        (v, stderr)
+        let out = dir.join(threads);
+        let args = [
+            "run",
+            file.to_str().unwrap(),
+            "-v",
+            "--threads",
+            threads,
+            "--out",
+        ];
+        let o = common::nonlin3d_ok(args.iter().map(|a| a.as_ref()).chain([out.as_os_str()]));
+        (
+            common::results_json(&out),
+            String::from_utf8_lossy(&o.stderr).to_string(),
+        )
     };
     let (two, log) = run("2");
     let (one, _) = run("1");

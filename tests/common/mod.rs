@@ -172,3 +172,28 @@ pub fn tiny_scene_text(strains: &str) -> String {
             &format!("strains = {strains}"),
         )
 }
+
+/// `nonlin3d ARGS…` (the program under test), asserted to succeed with its stderr in the
+/// message: what it wrote.
+pub fn nonlin3d_ok<I, S>(args: I) -> std::process::Output
+where
+    I: IntoIterator<Item = S>,
+    S: AsRef<std::ffi::OsStr>,
+{
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_nonlin3d"))
+        .args(args)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
+/// The `results.json` a run wrote into `out`.
+pub fn results_json(out: &std::path::Path) -> serde_json::Value {
+    let text = std::fs::read_to_string(out.join("results.json")).unwrap();
+    serde_json::from_str(&text).unwrap()
+}
