@@ -7,7 +7,7 @@
 use crate::contact::ContactStage;
 pub use crate::model::{Model, ModelKind, build_model, perturbation_force, perturbation_loads};
 pub use crate::problem::{build_problem, constraints, load_factors, settings};
-use crate::scene::{ForceKinematics, PathName, Scene};
+use crate::scene::{ForceKinematics, PartitionName, PathName, Scene};
 use crate::substructure::Substructured;
 use crate::{Error, results::*};
 use nonlin3d_element::Kinematics;
@@ -124,60 +124,39 @@ pub(crate) fn run_at(
     let asked = resolved.analysis.threads;
     let scene = &resolved;
     let t_mesh = t0.elapsed().as_secs_f64();
-    let t1 = Instant::now();
-    // With `[substructure]` Newton solves the nonlinear sub-mesh and its superelement.
-    let (mut problem, mut sub) = match crate::substructure::build(scene, &model)? {
-        Some((p, s)) => (p, Some(s)),
-        None => (build_problem(scene, &model)?, None),
-    };
-    let t_setup = t1.elapsed().as_secs_f64();
-    let dofs = 3 * model.mesh.nodes.len();
-    progress(Progress::Built {
-        model: &model,
-        dofs,
-        levels: load_factors(scene).0.len(),
-    })?;
-    // With two or more threads the companion mesh of the error estimate (an independent run)
-    // goes on beside the sweep, in the same pool; sequentially it runs after it. The bits are
-    // the same either way (tests/concurrent_estimate.rs).
-    let runs = seed::companion_runs(scene, &model, sub.is_some(), depth);
-    let mut companion = None;
-    // Nested iteration (src/analysis_seed.rs): the companion sends its levels as they converge
-    // and the sweep starts its levels from them, the companion first on one thread.
-    let (to, from) = std::sync::mpsc::channel();
-    let deeper = depth + 1;
-    let mut seeds = if runs && seed::wanted(scene, &model, sub.is_some()) {
-        seeds(scene, &model, from, deeper)
-    } else {
-        None
-    };
-    let sending = seeds.is_some();
+    // Whether a companion runs (the error estimate's, or a coarser one whose levels this run
+    // starts from) is decided on the mesh alone, so that it starts before this run's setup:
+    // down a chain of companions the deepest, which the others wait for, starts first.
+    let substructured = scene.substructure.partition != PartitionName::None;
+    let runs = seed::companion_runs(scene, &model, substructured, depth);
+    let seeding = runs && seed::wanted(scene, &model, substructured);
     // A companion's own companion serves its seeds only: none, no run.
-    let runs = runs && (depth == 0 || sending);
+    let runs = runs && (depth == 0 || seeding);
     let beside = runs && asked != 1 && rayon::current_num_threads() >= 2;
-    let mut sweep = match (beside, seeds.as_mut()) {
-        (true, seeds) => rayon::in_place_scope(|s| {
+    let deeper = depth + 1;
+    // Nested iteration (src/analysis_seed.rs): the companion sends its levels as they converge
+    // and the sweep starts its levels from them.
+    let (to, from) = std::sync::mpsc::channel();
+    let from = seeding.then_some(from);
+    let mut companion = None;
+    // With two or more threads the companion (an independent run) goes on beside this one,
+    // in the same pool; sequentially it runs before the sweep when it seeds it, else after it
+    // (in the estimate). The bits are the same either way (tests/concurrent_estimate.rs).
+    let (mut sweep, sub, t_setup) = if beside {
+        rayon::in_place_scope(|s| {
             s.spawn(|_| {
-                companion = Some(match sending {
+                companion = Some(match seeding {
                     true => estimate::run_companion_sending(scene, to, deeper),
                     false => estimate::run_companion(scene, deeper),
                 })
             });
-            sweep(scene, &model, &mut problem, sub.as_mut(), progress, seeds)
-        }),
-        (false, Some(seeds)) => {
-            companion = Some(estimate::run_companion_sending(scene, to, deeper));
-            sweep(
-                scene,
-                &model,
-                &mut problem,
-                sub.as_mut(),
-                progress,
-                Some(seeds),
-            )
-        }
-        (false, None) => sweep(scene, &model, &mut problem, sub.as_mut(), progress, None),
+            set_up_and_sweep(scene, &model, from, deeper, None, progress)
+        })
+    } else {
+        let before = runs.then_some((to, &mut companion));
+        set_up_and_sweep(scene, &model, from, deeper, before, progress)
     }?;
+    let dofs = 3 * model.mesh.nodes.len();
     let critical = criterion(scene, model.kind, &mut sweep.levels)?;
     let mut results = Results {
         title: scene.title.clone(),
@@ -227,6 +206,49 @@ pub(crate) fn run_at(
     results.warnings.extend(estimated);
     results.warnings.extend(results.stability_warnings());
     Ok(results)
+}
+
+/// This run's setup (the problem, or the nonlinear sub-mesh and its superelement with
+/// `[substructure]`) and its [`sweep`], its levels started from the companion's arriving on
+/// `from` where they can be carried onto this mesh ([`seeds`]; the companion at `deeper`).
+/// `before`: the companion to run here first when it seeds the levels (one thread), its run
+/// stored beside the sender.
+/// Returns the sweep, the substructure and the setup's seconds.
+fn set_up_and_sweep(
+    scene: &Scene,
+    model: &Model,
+    from: Option<std::sync::mpsc::Receiver<seed::SeedLevel>>,
+    deeper: usize,
+    before: Option<(
+        std::sync::mpsc::Sender<seed::SeedLevel>,
+        &mut Option<estimate::CompanionRun>,
+    )>,
+    progress: &mut dyn FnMut(Progress) -> Result<(), Error>,
+) -> Result<(Sweep, Option<Substructured>, f64), Error> {
+    let t1 = Instant::now();
+    let (mut problem, mut sub) = match crate::substructure::build(scene, model)? {
+        Some((p, s)) => (p, Some(s)),
+        None => (build_problem(scene, model)?, None),
+    };
+    let t_setup = t1.elapsed().as_secs_f64();
+    progress(Progress::Built {
+        model,
+        dofs: 3 * model.mesh.nodes.len(),
+        levels: load_factors(scene).0.len(),
+    })?;
+    let mut seeds = from.and_then(|f| seeds(scene, model, f, deeper));
+    if let (Some(_), Some((to, companion))) = (&seeds, before) {
+        *companion = Some(estimate::run_companion_sending(scene, to, deeper));
+    }
+    let sweep = sweep(
+        scene,
+        model,
+        &mut problem,
+        sub.as_mut(),
+        progress,
+        seeds.as_mut(),
+    )?;
+    Ok((sweep, sub, t_setup))
 }
 
 /// The companion's levels carried onto `model` (the companion's mesh rebuilt here: the

@@ -184,8 +184,10 @@ fn centroid(mesh: &Mesh, cell: usize) -> [f64; 3] {
 }
 
 /// ξ with x(ξ) = `x` in the cell of nodes `coords` (Newton on the isoparametric map from the
-/// cell's centre, steps limited to stay within |ξ|∞ ≤ 3); None if the Jacobian is singular or
-/// Newton does not settle to 1e-12 in 30 steps (the point is far outside, or the cell folded).
+/// cell's centre, steps limited to stay within |ξ|∞ ≤ 3); None if the Jacobian is singular,
+/// if Newton pushes ξ against that limit in two successive steps (the point lies far outside
+/// the cell: the iteration could only stall there), or if it does not settle to 1e-12 in 30
+/// steps (the cell folded).
 fn inverse_map(
     kind: nonlin3d_element::ElementKind,
     coords: &[[f64; 3]],
@@ -194,6 +196,7 @@ fn inverse_map(
     let mut xi = [0.0; 3];
     let (mut n, mut dn) = ([0.0; 20], [[0.0; 3]; 20]);
     let count = kind.nodes();
+    let mut held = false;
     for _ in 0..30 {
         kind.shape_values(xi, &mut n[..count]);
         kind.shape_gradients(xi, &mut dn[..count]);
@@ -214,6 +217,11 @@ fn inverse_map(
             [j[0][2], j[1][2], j[2][2]],
         ];
         let delta = solve3(jt, r)?;
+        let beyond = (0..3).any(|k| (xi[k] + delta[k]).abs() > 3.0);
+        if beyond && held {
+            return None;
+        }
+        held = beyond;
         for k in 0..3 {
             xi[k] = (xi[k] + delta[k]).clamp(-3.0, 3.0);
         }
@@ -367,6 +375,10 @@ impl Bins {
                             let over = xi.iter().fold(0.0_f64, |m, v| m.max(v.abs() - 1.0));
                             if best.is_none_or(|(_, o)| over < o) {
                                 best = Some((c, over));
+                            }
+                            // No later cell can hold it better than inside.
+                            if over == 0.0 {
+                                return best;
                             }
                         }
                     }

@@ -18,7 +18,9 @@ pub struct NewtonSettings {
     /// and Abaqus: r_max ≤ R_n·q̄, R_n = 0.005). Default 1e-8, tight enough for energy release
     /// rates (differences of forces) to ~1e-6 relative. Invariant to the units of force.
     pub relative_tolerance: f64,
-    /// Backtracking line search on the residual norm.
+    /// Line search: a full step that raises ‖r‖∞ is shortened, on the potential energy's slope
+    /// along the step where the direction descends (Crisfield's energy line search), else by
+    /// halving until ‖r‖∞ falls.
     pub line_search: bool,
     /// Refactor the tangent every this many iterations: 1 = full Newton, more = modified Newton
     /// (the thesis's §2.1 option). With `keep_tangent` the count runs on across increments.

@@ -284,3 +284,37 @@ fn a_perturbed_level_makes_no_new_analysis() {
         wrapped.patterns.get()
     );
 }
+
+/// The removal of the perturbation past the bifurcation (the column at 1.3·ε_c, 0.5 N lifting
+/// it to ~h) is where Newton's full step may raise ‖r‖∞ on its way to the buckled branch: the
+/// energy line search (solve.rs, `line_search`) takes such a step when the potential energy
+/// still falls along it. Every iteration of the removal is a full step, and it converges (4
+/// iterations). With the residual's backtracking alone it took 10, 7 of them at α ≤ ½ (0.25,
+/// 0.25, 0.125, 0.125, 0.25, 0.25, 0.5, then 1).
+#[test]
+fn the_removal_past_the_bifurcation_takes_full_newton_steps() {
+    let (mut problem, top, h) = compressed();
+    let dof = 3 * top + 2;
+    let stepping = Stepping {
+        initial: 0.25,
+        max: 0.25,
+        ..Stepping::default()
+    };
+    let mut u = vec![0.0; problem.n()];
+    let attempts = perturbed_step(
+        &mut problem,
+        &mut u,
+        0.0,
+        1.0,
+        &[(dof, 0.5)],
+        &NewtonSettings::default(),
+        &stepping,
+    )
+    .unwrap();
+    let removal = attempts.last().unwrap();
+    assert!(removal.converged(), "{removal:?}");
+    let steps: Vec<f64> = removal.iterations.iter().map(|i| i.step).collect();
+    eprintln!("the removal's steps: {steps:?}");
+    assert!(steps.iter().all(|&a| a == 1.0), "{steps:?}");
+    assert!(u[dof] > 0.3 * h, "w/h = {}", u[dof] / h);
+}
