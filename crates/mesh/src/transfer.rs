@@ -445,6 +445,30 @@ mod tests {
         }
     }
 
+    /// The inverse map finds ξ wherever it lies within the ±3 limit (inside the cell, or
+    /// outside it as a neighbour's point may be), and gives up on a point beyond it: Newton
+    /// pushes ξ against the limit twice running there.
+    #[test]
+    fn the_inverse_map_finds_points_within_its_limit_and_gives_up_beyond_it() {
+        let m = brick();
+        let coords = coordinates(&m, 0);
+        // The brick maps ξ ∈ [−1, 1]³ onto [0, 2] × [0, 1] × [0, 1]: x = 1 + ξ₁, y = (1 + ξ₂)/2.
+        let at = |xi: [f64; 3]| [1.0 + xi[0], 0.5 * (1.0 + xi[1]), 0.5 * (1.0 + xi[2])];
+        for xi in [[0.3, -0.7, 0.9], [1.03, 0.0, -1.02], [2.5, 0.2, 0.0]] {
+            let found = inverse_map(ElementKind::Hex20, &coords, at(xi)).unwrap();
+            for k in 0..3 {
+                assert!((found[k] - xi[k]).abs() < 1e-12, "{found:?} against {xi:?}");
+            }
+        }
+        for xi in [[3.5, 0.0, 0.0], [0.0, -40.0, 0.0]] {
+            assert_eq!(
+                inverse_map(ElementKind::Hex20, &coords, at(xi)),
+                None,
+                "{xi:?}"
+            );
+        }
+    }
+
     #[test]
     fn a_node_outside_is_refused_by_name_and_a_short_field_too() {
         let source = brick();

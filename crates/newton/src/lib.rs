@@ -77,6 +77,7 @@ mod error;
 mod extrapolate;
 mod guard;
 mod level;
+mod line_search;
 mod path;
 mod perturb;
 mod predict;

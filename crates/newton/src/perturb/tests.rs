@@ -287,7 +287,7 @@ fn a_perturbed_level_makes_no_new_analysis() {
 
 /// The removal of the perturbation past the bifurcation (the column at 1.3·ε_c, 0.5 N lifting
 /// it to ~h) is where Newton's full step may raise ‖r‖∞ on its way to the buckled branch: the
-/// energy line search (solve.rs, `line_search`) takes such a step when the potential energy
+/// energy line search (line_search.rs) takes such a step when the potential energy
 /// still falls along it. Every iteration of the removal is a full step, and it converges (4
 /// iterations). With the residual's backtracking alone it took 10, 7 of them at α ≤ ½ (0.25,
 /// 0.25, 0.125, 0.125, 0.25, 0.25, 0.5, then 1).
