@@ -12,11 +12,12 @@
 //! start: the same one the path reaches (docs/PERFORMANCE.md, "Nested iteration from the
 //! companion": ten scenes, the same closed pairs and pivots at every level, G within 3.1e-5 of
 //! G_T max). A start is dropped and the level followed on this mesh as without seeding when its
-//! contact set would change at more than a quarter of the pairs at the first read or needs more
-//! than 10 passes (src/contact.rs), when it needs contact where the companion did not with
-//! another count of negative pivots than the companion's, when it does not converge, or when
-//! it converges on another branch than the companion's (a centre deflection of the other
-//! sign, or unstable where the companion is stable). After a seeded level, the next is seeded
+//! contact set would change at more than a quarter of the pairs at the first read, needs more
+//! than 10 passes, or a pass converges with negative pivots where the companion is stable
+//! (src/contact.rs, `Contact::set_stable_only`); when it needs contact where the companion did
+//! not with another count of negative pivots than the companion's, when it does not converge,
+//! or when it converges on another branch than the companion's (a centre deflection of the
+//! other sign, or unstable where the companion is stable). After a seeded level, the next is seeded
 //! only if this one's start was close ([`KEEP_SEEDING`]).
 //!
 //! **Nested companions.** A companion of [`NESTED_FROM_DOFS`] or more starts its own levels
@@ -327,7 +328,10 @@ pub(super) fn solve_seeded(
     let attempt = if level.contact {
         seeds
             .set(&level, scene.contact.tolerance() * 1e-3)
-            .and_then(|set| stage.seed(scene, model, &mut start, &set, lambda, newton))
+            .and_then(|set| {
+                let stable = level.pivots == Some(0);
+                stage.seed(scene, model, &mut start, (&set, stable), lambda, newton)
+            })
             .map(|(l, summary)| {
                 solved.attempts.extend(l.first.attempts);
                 solved.pivots = l.first.negative_pivots;

@@ -189,15 +189,17 @@ impl ContactStage {
     /// ([`Contact::settle`], at most [`SEEDED_PASSES`]); the stability as in
     /// [`solve`](Self::solve). `u` is the start and becomes the converged state. Errors
     /// ([`Error::Scene`] naming the cause, or the loop's own): the first solve did not
-    /// converge, or the set read at its state would change at more than [`SEEDED_CHANGE`] of
-    /// the pairs; the caller then puts the stage back with [`reset`](Self::reset) and follows
-    /// the level instead.
+    /// converge, the set read at its state would change at more than [`SEEDED_CHANGE`] of
+    /// the pairs, or (`stable`: the companion's state is stable there) a pass converged on a
+    /// state with negative pivots (`Contact::set_stable_only`: another equilibrium than the
+    /// companion's, which the passes did not leave on the 0.2 mm sublaminate); the caller then
+    /// puts the stage back with [`reset`](Self::reset) and follows the level instead.
     pub(crate) fn seed(
         &mut self,
         scene: &Scene,
         model: &Model,
         u: &mut Vec<f64>,
-        set: &[bool],
+        (set, stable): (&[bool], bool),
         lambda: f64,
         newton: &NewtonSettings,
     ) -> Result<(ContactLevel, ContactSummary), Error> {
@@ -205,7 +207,9 @@ impl ContactStage {
             Some(e) => e,
             None => self.engage(scene, model, newton)?,
         };
+        let before = e.contact.set_stable_only(stable);
         let result = seeded_level(&mut e, u, set, lambda, newton);
+        e.contact.set_stable_only(before);
         self.engaged = Some(e);
         let level = result?;
         let summary = summary(&level);

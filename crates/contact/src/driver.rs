@@ -171,6 +171,8 @@ pub struct Contact {
     settings: ContactSettings,
     /// The installed constraint of each pair (None: open).
     held: Vec<Option<Held>>,
+    /// Whether a re-solve that converges unstable ends the level ([`Self::set_stable_only`]).
+    stable_only: bool,
 }
 
 impl Contact {
@@ -198,6 +200,7 @@ impl Contact {
             held: vec![None; faces.len()],
             faces,
             settings,
+            stable_only: false,
         })
     }
 
@@ -232,6 +235,14 @@ impl Contact {
     /// bounds what a wrong prediction may cost, then puts the limit back.
     pub fn set_max_passes(&mut self, passes: usize) -> usize {
         std::mem::replace(&mut self.settings.max_passes, passes)
+    }
+
+    /// Sets whether a pass's re-solve that converges on a state with negative pivots ends the
+    /// level with [`ContactError::Unstable`] (default off) and returns the previous setting: a
+    /// caller that starts a level from a state predicted on a stable branch (nested iteration)
+    /// drops the prediction as soon as the passes leave that branch, then puts it back.
+    pub fn set_stable_only(&mut self, stable_only: bool) -> bool {
+        std::mem::replace(&mut self.stable_only, stable_only)
     }
 
     /// Whether each pair is closed.

@@ -91,6 +91,18 @@ pub enum ContactError {
         /// Newton's termination.
         why: String,
     },
+    /// A re-solve converged on a state whose tangent has negative pivots where the caller asked
+    /// for stable states only ([`Contact::set_stable_only`](crate::Contact::set_stable_only):
+    /// a level started from a state predicted on a stable branch).
+    #[error(
+        "contact at λ = {lambda}: a pass converged on a state with {pivots} negative pivots where a stable one was asked for"
+    )]
+    Unstable {
+        /// The load factor.
+        lambda: f64,
+        /// Negative pivots of the tangent there.
+        pivots: usize,
+    },
     /// Holding the same set again with the current normals (refresh passes) does not remove
     /// the overlap.
     #[error(

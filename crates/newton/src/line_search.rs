@@ -2,9 +2,16 @@
 //! when it lowers ‖r‖∞; else, far from convergence, Crisfield's energy line search on the
 //! slope of the potential energy along the step; then halving on ‖r‖∞.
 
-use crate::solve::norm_inf;
 use crate::{NewtonError, NewtonSettings, NonlinearProblem};
 use nonlin3d_solver::SymmetricMatrix;
+
+/// ‖v‖∞, NaN if any entry is: the residual norm the iteration and its line search test.
+pub(crate) fn norm_inf(v: &[f64]) -> f64 {
+    v.iter().fold(
+        0.0f64,
+        |a, x| if x.is_nan() { f64::NAN } else { a.max(x.abs()) },
+    )
+}
 
 /// The energy line search's acceptance (Crisfield 1991, Vol. 1 §9.3.2; Abaqus's s_tol): a step
 /// α is taken once the slope of the potential energy along the Newton direction has fallen to

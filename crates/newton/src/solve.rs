@@ -2,7 +2,7 @@
 //! modified (a tangent kept for several iterations or increments) and quasi-Newton (BFGS
 //! updates of a kept tangent, Matthies & Strang 1979).
 
-use crate::line_search::line_search;
+use crate::line_search::{line_search, norm_inf};
 use crate::{NewtonError, NewtonSettings, NonlinearProblem, TangentCache};
 use nonlin3d_solver::{LinearSolver, SolverKind, SymmetricMatrix};
 
@@ -164,13 +164,6 @@ impl IncrementReport {
     pub fn negative_pivots(&self) -> Option<usize> {
         self.iterations.iter().rev().find_map(|r| r.negative_pivots)
     }
-}
-
-pub(crate) fn norm_inf(v: &[f64]) -> f64 {
-    v.iter().fold(
-        0.0f64,
-        |a, x| if x.is_nan() { f64::NAN } else { a.max(x.abs()) },
-    )
 }
 
 /// Negative pivots of the tangent at (u, λ), from one assembly and one factorisation with a

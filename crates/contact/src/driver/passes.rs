@@ -427,6 +427,7 @@ impl Contact {
         inexact.pending = false;
         match (&report.termination, report.iterations.last()) {
             (Termination::Converged, _) => {
+                self.check_stable(solve.to, report.negative_pivots())?;
                 *u = trial;
                 Ok(Some((iterations, false)))
             }
@@ -442,6 +443,22 @@ impl Contact {
             _ => Ok(self
                 .resolve(problem, u, solve)?
                 .map(|(more, redone)| (iterations + more, redone))),
+        }
+    }
+
+    /// With [`set_stable_only`](Self::set_stable_only): a re-solve at λ = `lambda` converged
+    /// with negative `pivots` (those of its last factorisation) ends the level
+    /// ([`ContactError::Unstable`]).
+    pub(super) fn check_stable(
+        &self,
+        lambda: f64,
+        pivots: Option<usize>,
+    ) -> Result<(), ContactError> {
+        match pivots {
+            Some(p) if self.stable_only && p > 0 => {
+                Err(ContactError::Unstable { lambda, pivots: p })
+            }
+            _ => Ok(()),
         }
     }
 
@@ -530,6 +547,7 @@ impl Contact {
         let report = session.solve_at(problem, &mut trial, to, &rest)?;
         let mut iterations = report.iterations.len();
         if report.converged() {
+            self.check_stable(solve.to, report.negative_pivots())?;
             *u = trial;
             return Ok(Some((iterations, false)));
         }

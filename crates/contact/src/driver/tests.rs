@@ -85,3 +85,35 @@ fn a_repeated_set_is_a_cycle_naming_the_flipping_pairs() {
         Err(ContactError::Passes { passes: 3, .. })
     ));
 }
+
+/// With `set_stable_only` a re-solve converged with negative pivots ends the level, naming the
+/// load factor and the pivots; without it (the default) it does not, nor a stable state or
+/// one whose inertia is unknown; the setter returns the previous setting.
+#[test]
+fn stable_only_refuses_a_converged_state_with_negative_pivots() {
+    let (mesh, up, lo) = stacked();
+    let faces = CrackFaces::from_sets(&mesh, &up, &lo).unwrap();
+    let mut contact = Contact::with_faces(faces, ContactSettings::default()).unwrap();
+    assert!(contact.check_stable(0.5, Some(2)).is_ok());
+    assert!(!contact.set_stable_only(true));
+    let e = contact.check_stable(0.5, Some(2)).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            ContactError::Unstable {
+                lambda: 0.5,
+                pivots: 2
+            }
+        ),
+        "{e}"
+    );
+    assert_eq!(
+        e.to_string(),
+        "contact at λ = 0.5: a pass converged on a state with 2 negative pivots where a stable \
+         one was asked for"
+    );
+    assert!(contact.check_stable(0.5, Some(0)).is_ok());
+    assert!(contact.check_stable(0.5, None).is_ok());
+    assert!(contact.set_stable_only(false));
+    assert!(contact.check_stable(0.5, Some(2)).is_ok());
+}
