@@ -269,7 +269,8 @@ fn nearly_incompressible_hex20() {
 /// converges, after 18 contact passes, to an unstable equilibrium (one negative pivot):
 /// the centre pushed 0.056 mm into the base and G_T max ≈ 620 J/m², fifty times the
 /// sublaminate's stored energy per unit area ½·C₁₁·ε²·h ≈ 12 J/m². Until the energy line
-/// search (docs/PERFORMANCE.md, "Energy line search") it stopped with a located error instead:
+/// search (docs/PERFORMANCE.md, "The companion chain started first, and the energy line
+/// search") it stopped with a located error instead:
 /// a contact pass at λ = 0.75 did not converge and its fallback could not take a 1e-4 step.
 /// Reproducer: tests/hard_cases/thin_0p1mm_60mm.toml; docs/VALIDATION.md "Hard cases".
 #[test]

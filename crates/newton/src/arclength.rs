@@ -31,6 +31,7 @@
 //! the last increment took, s ← s·√(I_d/I) (Crisfield 1981, eq. 17), and is cut back on failure.
 
 use crate::error::sig6;
+use crate::vector::dot;
 use crate::{IterationRecord, NewtonError, NewtonSettings, NonlinearProblem};
 
 mod attempt;
@@ -275,17 +276,6 @@ impl<P: NonlinearProblem + ?Sized> Work<'_, P> {
         }
         Ok(t)
     }
-}
-
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
-}
-
-fn norm_inf(v: &[f64]) -> f64 {
-    v.iter().fold(
-        0.0f64,
-        |a, x| if x.is_nan() { f64::NAN } else { a.max(x.abs()) },
-    )
 }
 
 /// The converged state an increment starts from.

@@ -2,6 +2,7 @@
 //! (modified and quasi-Newton, thesis §2.1's option of keeping K_T; Matthies & Strang 1979).
 
 use crate::NewtonSettings;
+use crate::vector::dot;
 use nonlin3d_solver::LinearSolver;
 use std::collections::VecDeque;
 
@@ -85,10 +86,6 @@ impl TangentCache {
         }
         Ok(q)
     }
-}
-
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
 fn axpy(a: f64, x: &[f64], y: &mut [f64]) {

@@ -85,6 +85,7 @@ mod problem;
 mod session;
 mod settings;
 mod solve;
+mod vector;
 
 pub use arclength::{
     ArcConstraint, ArcIncrement, ArcLength, ArcReport, ArcStop, SignRule, follow_arc_length,

@@ -2,16 +2,9 @@
 //! when it lowers ‖r‖∞; else, far from convergence, Crisfield's energy line search on the
 //! slope of the potential energy along the step; then halving on ‖r‖∞.
 
+use crate::vector::{dot, norm_inf};
 use crate::{NewtonError, NewtonSettings, NonlinearProblem};
 use nonlin3d_solver::SymmetricMatrix;
-
-/// ‖v‖∞, NaN if any entry is: the residual norm the iteration and its line search test.
-pub(crate) fn norm_inf(v: &[f64]) -> f64 {
-    v.iter().fold(
-        0.0f64,
-        |a, x| if x.is_nan() { f64::NAN } else { a.max(x.abs()) },
-    )
-}
 
 /// The energy line search's acceptance (Crisfield 1991, Vol. 1 §9.3.2; Abaqus's s_tol): a step
 /// α is taken once the slope of the potential energy along the Newton direction has fallen to
@@ -32,16 +25,16 @@ const ENERGY_ABOVE: f64 = 1e3;
 /// `norm`, the attempt's `tolerance`): the full step when `settings.line_search` is off or it
 /// lowers ‖r‖∞; otherwise
 /// 1. on the potential energy ([`energy_search`]) while ‖r‖∞ > [`ENERGY_ABOVE`]·`tolerance`,
-///    where `du` descends: r is the gradient of the
-///    energy Π (elastic solid, dead loads, linear constraints), so s(α) = duᵀ·r(u + α·du) =
-///    dΠ/dα along the step, s(0) = −rᵀK⁻¹r < 0 for a positive definite tangent;
+///    where `du` descends: r is the gradient of the energy Π (elastic solid, dead loads,
+///    linear constraints), so s(α) = duᵀ·r(u + α·du) = dΠ/dα along the step, s(0) =
+///    −rᵀK⁻¹r < 0 for a positive definite tangent;
 /// 2. then on the residual: α = ½, ¼, … until ‖r(u + α·du)‖∞ < `norm` ([`TRIALS`] in all),
 ///    else the full step anyway (the residual of a buckling problem may rise before it falls).
 ///
 /// The energy comes before the residual's backtracking because the residual's norm may rise
 /// on the way to the minimum: removing the §3.2 perturbation just past the bifurcation, the
 /// backtracking took α = 1/8 in 16 of 19 iterations, the energy full steps in 5
-/// (docs/PERFORMANCE.md, "Energy line search"). A full step that lowers the residual is
+/// (docs/PERFORMANCE.md, "The companion chain started first, and the energy line search"). A full step that lowers the residual is
 /// taken as before, so near a solution Newton stays quadratic. The accepted state and its
 /// residual are left in `trial`, the tangent there in `k` when given. Returns α and the force
 /// scale at the accepted state.
@@ -87,10 +80,6 @@ fn step_to(trial_u: &mut [f64], u: &[f64], du: &[f64], alpha: f64) {
     for ((t, &x), &d) in trial_u.iter_mut().zip(u).zip(du) {
         *t = x + alpha * d;
     }
-}
-
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
 /// The energy line search (Crisfield 1991, Vol. 1 §9.3) after a full step that raised the

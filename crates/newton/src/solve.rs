@@ -2,7 +2,8 @@
 //! modified (a tangent kept for several iterations or increments) and quasi-Newton (BFGS
 //! updates of a kept tangent, Matthies & Strang 1979).
 
-use crate::line_search::{line_search, norm_inf};
+use crate::line_search::line_search;
+use crate::vector::norm_inf;
 use crate::{NewtonError, NewtonSettings, NonlinearProblem, TangentCache};
 use nonlin3d_solver::{LinearSolver, SolverKind, SymmetricMatrix};
 

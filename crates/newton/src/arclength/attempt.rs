@@ -2,7 +2,8 @@
 //! previous direction, then corrector iterations on the constraint's quadratic, traced as
 //! Newton's load-controlled attempts are.
 
-use super::{Start, Work, dot, norm_inf};
+use super::{Start, Work};
+use crate::vector::{dot, norm_inf};
 use crate::{IterationRecord, NewtonError, NewtonSettings, NonlinearProblem, residual_tolerance};
 
 /// The converged end of an attempt: state, load factor, the iterations, the initial ‖r‖∞, the
