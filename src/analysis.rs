@@ -316,7 +316,7 @@ fn sweep(
     let mut u = vec![0.0; problem.assembler().n()];
     // One solver for every level: analysed once; with BFGS each level starts from the
     // factorisation its predecessor's stability test left.
-    let mut session = PathSolver::new(problem, strategy.solver())?;
+    let mut session = PathSolver::deferred(problem, strategy.solver());
     let mut out = Sweep {
         levels: Vec::with_capacity(factors.len()),
         force,

@@ -228,6 +228,18 @@ pub fn write_level_vtu(
     level: &LevelResult,
     k: usize,
 ) -> Result<(), Error> {
+    write_model_vtu(dir, model, level, k)?;
+    write_front_vtu(dir, model, level, k)
+}
+
+/// Writes level `k`'s `model_K.vtu` ([`state_vtu`] of its displacements, mm, MPa, N) into
+/// `dir` (the stresses recovered at the nodes; 4.6 MB of text at 18 k DOF).
+pub fn write_model_vtu(
+    dir: &Path,
+    model: &Model,
+    level: &LevelResult,
+    k: usize,
+) -> Result<(), Error> {
     let rules = StressRules {
         materials: &model.materials,
         coupling: ShearCoupling::Exact,
@@ -242,7 +254,17 @@ pub fn write_level_vtu(
         None,
         Units::MM_MPA_N,
     )?;
-    write_atomic(&dir.join(format!("model_{k}.vtu")), text.as_bytes())?;
+    write_atomic(&dir.join(format!("model_{k}.vtu")), text.as_bytes())
+}
+
+/// Writes level `k`'s `front_K.vtu` ([`front_vtu`]: the front with its energy release rates)
+/// into `dir`; nothing for a level without a front.
+pub fn write_front_vtu(
+    dir: &Path,
+    model: &Model,
+    level: &LevelResult,
+    k: usize,
+) -> Result<(), Error> {
     if level.front.is_empty() {
         return Ok(());
     }

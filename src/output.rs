@@ -335,7 +335,25 @@ impl RunOutput {
         // Under the lock the signal handler takes, so that its exit cannot cut a file short; a
         // signal meanwhile waits, then finds the run finished and writes nothing.
         let mut pending = self.pending.lock().map_err(|_| Error::OutputLock)?;
-        crate::report::write_all(results, &self.dir)?;
+        // A level's model VTU, written when it converged, is current if the final results
+        // hold the same state on the same model (they do, unless the caller changed them).
+        let same_model = match (&self.model, &results.model_data) {
+            (Some(a), Some(b)) => {
+                a.mesh == b.mesh && a.materials == b.materials && a.rule == b.rule
+            }
+            _ => false,
+        };
+        let current: Vec<bool> = (results.levels.iter().enumerate())
+            .map(|(k, l)| {
+                same_model
+                    && self.snapshot.levels.get(k).is_some_and(|w| {
+                        w.displacements.len() == l.displacements.len()
+                            && (w.displacements.iter().zip(&l.displacements))
+                                .all(|(a, b)| a.to_bits() == b.to_bits())
+                    })
+            })
+            .collect();
+        crate::report::write_all_but(results, &self.dir, |k| current[k])?;
         pending.stopped_json = None;
         self.manifest.write()
     }

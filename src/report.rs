@@ -166,6 +166,17 @@ pub fn levels_csv(results: &Results) -> String {
 /// ([`crate::output::write_atomic`]) and `results.json` last, and records the time in
 /// `results.timings.output_s`.
 pub fn write_all(results: &mut Results, dir: &Path) -> Result<(), Error> {
+    write_all_but(results, dir, |_| false)
+}
+
+/// [`write_all`], except the `model_K.vtu` of the levels `current` says are already in `dir`
+/// as they would be written (a run's output folder, written level by level: the state of a
+/// converged level does not change after it).
+pub(crate) fn write_all_but(
+    results: &mut Results,
+    dir: &Path,
+    current: impl Fn(usize) -> bool,
+) -> Result<(), Error> {
     use crate::atomic::{atomically, write_atomic};
     let t = Instant::now();
     std::fs::create_dir_all(dir).map_err(io(dir))?;
@@ -176,7 +187,10 @@ pub fn write_all(results: &mut Results, dir: &Path) -> Result<(), Error> {
     }
     if let Some(model) = &results.model_data {
         for (k, l) in results.levels.iter().enumerate() {
-            crate::fields::write_level_vtu(dir, model, l, k)?;
+            if !current(k) {
+                crate::fields::write_model_vtu(dir, model, l, k)?;
+            }
+            crate::fields::write_front_vtu(dir, model, l, k)?;
         }
         crate::fields::write_pvds(dir, &results.levels)?;
     }

@@ -351,3 +351,54 @@ fn run_writes_fields_and_the_front_matches_results() {
     }
     assert!(out.join("front_0.vtu").exists());
 }
+
+/// At the end of a run the output folder keeps each level's `model_K.vtu` as written when the
+/// level converged (the file is not made again: same inode) when the final results hold the
+/// same state, and its bytes are those `report::write_all` writes; a level whose state changed
+/// after it was written is written anew.
+#[test]
+fn the_end_of_a_run_keeps_the_model_files_its_levels_wrote() {
+    use std::os::unix::fs::MetadataExt;
+    let dir = tmp("fields-finish");
+    let text = nonlin3d::scene::THESIS_SCENE
+        .replace("slices = 8", "slices = 4")
+        .replace(
+            "strains = [-0.001, -0.002, -0.003, -0.004, -0.005]",
+            "strains = [-0.001, -0.002]",
+        );
+    let scene = nonlin3d::Scene::from_toml(&text).unwrap();
+    let results = nonlin3d::analysis::run(&scene, &mut |_| Ok(())).unwrap();
+    let model = results.model_data.clone().unwrap();
+    let inode = |p: &Path| std::fs::metadata(p).unwrap().ino();
+    let write = |name: &str, changed: bool| {
+        let out = dir.join(name);
+        let mut o = nonlin3d::output::RunOutput::create(&out, &scene.title, "strain").unwrap();
+        o.built(&model, results.model.dofs).unwrap();
+        for l in &results.levels {
+            o.level(l).unwrap();
+        }
+        let before = [0, 1].map(|k| inode(&out.join(format!("model_{k}.vtu"))));
+        let mut fin = results.clone();
+        if changed {
+            fin.levels[1].displacements[7] += 1e-9;
+        }
+        o.finish(&mut fin).unwrap();
+        let after = [0, 1].map(|k| inode(&out.join(format!("model_{k}.vtu"))));
+        (out, before, after)
+    };
+    let (kept, before, after) = write("kept", false);
+    assert_eq!(before, after, "rewritten although unchanged");
+    let fresh = dir.join("fresh");
+    nonlin3d::report::write_all(&mut results.clone(), &fresh).unwrap();
+    for k in 0..2 {
+        let f = format!("model_{k}.vtu");
+        assert!(std::fs::read(kept.join(&f)).unwrap() == std::fs::read(fresh.join(&f)).unwrap());
+    }
+    let (changed, before, after) = write("changed", true);
+    assert_eq!(before[0], after[0]);
+    assert_ne!(before[1], after[1], "a changed state must be written anew");
+    assert!(
+        std::fs::read(changed.join("model_1.vtu")).unwrap()
+            != std::fs::read(fresh.join("model_1.vtu")).unwrap()
+    );
+}

@@ -38,6 +38,9 @@ pub struct PathSolver {
     /// Symbolic analyses made over the session's life (1 from [`PathSolver::new`], one more
     /// each time [`fit`](Self::fit) had to make it anew).
     analyses: usize,
+    /// Whether `solver` is analysed for `k`'s pattern ([`PathSolver::deferred`]: not until
+    /// the first call needs it).
+    analysed: bool,
 }
 
 impl PathSolver {
@@ -54,7 +57,26 @@ impl PathSolver {
             state: Vec::new(),
             pivots: None,
             analyses: 1,
+            analysed: true,
         })
+    }
+
+    /// A solver of `kind` for `problem`'s pattern whose symbolic analysis (ordering, symbolic
+    /// factor, the split's halves) waits for the first call that factorises: a session that
+    /// may never be used (a sweep whose levels all start in another system, the contact
+    /// loop's) costs no analysis. An analysis error (e.g. the factor refused by the memory
+    /// budget) then comes from that first call.
+    pub fn deferred(problem: &dyn NonlinearProblem, kind: SolverKind) -> Self {
+        Self {
+            kind,
+            solver: kind.build(),
+            k: SymmetricMatrix::zeros(problem.pattern()),
+            cache: TangentCache::new(),
+            state: Vec::new(),
+            pivots: None,
+            analyses: 0,
+            analysed: false,
+        }
     }
 
     /// What the solver's mixed precision did since its last analysis (f32 factorisations,
@@ -119,6 +141,10 @@ impl PathSolver {
             let analyses = self.analyses;
             *self = Self::new(problem, kind)?;
             self.analyses = analyses + 1;
+        } else if !self.analysed {
+            self.solver.analyze(&pattern)?;
+            self.analysed = true;
+            self.analyses += 1;
         }
         Ok(())
     }
@@ -241,5 +267,29 @@ mod tests {
         let other = crate::problem::tests::bar_problem();
         session.fit(&other, settings.solver).unwrap();
         assert_eq!(session.analyses(), 2);
+    }
+
+    /// A deferred session analyses nothing until a call needs a factorisation, then once, and
+    /// gives the eager session's iterates bit for bit.
+    #[test]
+    fn a_deferred_session_analyses_at_its_first_use_only() {
+        let settings = NewtonSettings::default();
+        let (mut problem, _, _) = compressed();
+        let mut lazy = PathSolver::deferred(&problem, settings.solver);
+        assert_eq!(lazy.analyses(), 0);
+        assert!(!lazy.is_factored());
+        let mut eager = PathSolver::new(&problem, settings.solver).unwrap();
+        let (mut a, mut b) = (vec![0.0; problem.n()], vec![0.0; problem.n()]);
+        for lambda in [0.3, 0.6] {
+            let ra = lazy
+                .solve_at(&mut problem, &mut a, lambda, &settings)
+                .unwrap();
+            let rb = eager
+                .solve_at(&mut problem, &mut b, lambda, &settings)
+                .unwrap();
+            assert!(ra.converged() && ra.iterations == rb.iterations);
+            assert!(a.iter().zip(&b).all(|(x, y)| x.to_bits() == y.to_bits()));
+        }
+        assert_eq!(lazy.analyses(), 1);
     }
 }
