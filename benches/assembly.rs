@@ -189,5 +189,40 @@ fn bench_assembly(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, bench_assembly);
+/// The pattern of the 89 k plate from its cells' DOF lists: the node path (every list whole
+/// nodes, the generators' case) against the DOF path the same lists take when one more list
+/// holds a lone DOF (`SymmetricPattern::from_dof_lists`; the patterns differ only by that
+/// DOF's column).
+fn bench_pattern(c: &mut Criterion) {
+    let mut group = c.benchmark_group("pattern");
+    group.sample_size(10);
+    let p = EmbeddedParams {
+        slices: 24,
+        radial_inside: 10,
+        radial_outside: 12,
+        sub_layers: 3,
+        base_layers: 6,
+        ..EmbeddedParams::thesis_reference()
+    };
+    let mesh = embedded_delamination(&p).unwrap_or_else(|e| panic!("{e}"));
+    let n = 3 * mesh.nodes.len();
+    let lists = mesh.cell_dofs();
+    let mut loose = lists.clone();
+    loose.push(vec![n - 1]);
+    for (label, l) in [
+        ("plate_89k_node_path", &lists),
+        ("plate_89k_dof_path", &loose),
+    ] {
+        group.bench_function(label, |b| {
+            b.iter(|| {
+                let p = nonlin3d::solver::SymmetricPattern::from_dof_lists(n, l)
+                    .unwrap_or_else(|e| panic!("{e}"));
+                black_box(p.nnz_lower())
+            })
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, bench_assembly, bench_pattern);
 criterion_main!(benches);

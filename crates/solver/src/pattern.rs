@@ -22,7 +22,23 @@ impl SymmetricPattern {
     ///
     /// Two passes over a DOF → elements index with a marker array: memory O(nnz), no sorting of
     /// duplicates, so a 150 000-DOF Hex20 model (~18 M entries) builds in a fraction of a second.
+    ///
+    /// When every list is made of whole nodes (the generators' cells and the ties' couplings),
+    /// the pattern is built on the node graph and written out three columns a node
+    /// ([`from_node_lists`](Self::from_node_lists)): the same pattern, in about a third of
+    /// the time.
     pub fn from_dof_lists<L: AsRef<[usize]>>(n: usize, lists: &[L]) -> Result<Self, SolverError> {
+        match Self::from_node_lists(n, lists)? {
+            Some(p) => Ok(p),
+            None => Self::from_dof_lists_by_dof(n, lists),
+        }
+    }
+
+    /// [`from_dof_lists`](Self::from_dof_lists) on the DOF graph (any lists).
+    fn from_dof_lists_by_dof<L: AsRef<[usize]>>(
+        n: usize,
+        lists: &[L],
+    ) -> Result<Self, SolverError> {
         // DOF → lists containing it (CSR).
         let mut count = try_filled(n + 1, 0usize, "the pattern's DOF index")?;
         for (list, dofs) in lists.iter().enumerate() {
@@ -80,6 +96,100 @@ impl SymmetricPattern {
             col_ptr,
             row_idx,
         })
+    }
+
+    /// The pattern of [`from_dof_lists`](Self::from_dof_lists) when n = 3·nodes and every list
+    /// is made of whole nodes (DOFs 3a, 3a + 1, 3a + 2 in a row, a < nodes); None otherwise.
+    /// Node b's neighbours c > b are gathered once with a marker (a ninth of the DOF path's
+    /// checks, a third of its sorts), and its three DOF columns 3b + k are then
+    /// {3b + k, …, 3b + 2} ∪ {3c, 3c + 1, 3c + 2 : c} (the diagonal alone for a node in no
+    /// list): the rows a list shares with DOF 3b + k are exactly those of the nodes it shares
+    /// with b.
+    fn from_node_lists<L: AsRef<[usize]>>(
+        n: usize,
+        lists: &[L],
+    ) -> Result<Option<Self>, SolverError> {
+        let blocked = |d: &[usize]| {
+            d.len().is_multiple_of(3)
+                && d.chunks_exact(3)
+                    .all(|t| t[0] % 3 == 0 && t[0] < n && t[1] == t[0] + 1 && t[2] == t[0] + 2)
+        };
+        if !n.is_multiple_of(3) || !lists.iter().all(|l| blocked(l.as_ref())) {
+            return Ok(None);
+        }
+        let nodes = n / 3;
+        // Node → lists containing it (CSR).
+        let mut count = try_filled(nodes + 1, 0usize, "the pattern's node index")?;
+        for dofs in lists {
+            for t in dofs.as_ref().chunks_exact(3) {
+                count[t[0] / 3 + 1] += 1;
+            }
+        }
+        for b in 0..nodes {
+            count[b + 1] += count[b];
+        }
+        let mut fill = count.clone();
+        let mut lists_of = try_filled(count[nodes], 0usize, "the pattern's node index")?;
+        for (list, dofs) in lists.iter().enumerate() {
+            for t in dofs.as_ref().chunks_exact(3) {
+                lists_of[fill[t[0] / 3]] = list;
+                fill[t[0] / 3] += 1;
+            }
+        }
+        drop(fill);
+        // Neighbours c > b of each node b, sorted (CSR).
+        let mut marker = try_filled(nodes, usize::MAX, "the pattern's markers")?;
+        let mut next_ptr = try_filled(nodes + 1, 0usize, "the pattern's node columns")?;
+        let mut next: Vec<usize> = Vec::new();
+        for b in 0..nodes {
+            let start = next.len();
+            marker[b] = b;
+            for &list in &lists_of[count[b]..count[b + 1]] {
+                for t in lists[list].as_ref().chunks_exact(3) {
+                    let c = t[0] / 3;
+                    if c > b && marker[c] != b {
+                        marker[c] = b;
+                        if next.len() == next.capacity() {
+                            let grow = 64.max(next.len() / 2);
+                            try_room(&mut next, grow, "the pattern's node columns")?;
+                        }
+                        next.push(c);
+                    }
+                }
+            }
+            next[start..].sort_unstable();
+            next_ptr[b + 1] = next.len();
+        }
+        drop((lists_of, marker));
+        // Each node column written out as its three DOF columns.
+        let mut col_ptr = Vec::new();
+        try_room(&mut col_ptr, n + 1, "the pattern's column pointers")?;
+        let mut row_idx: Vec<usize> = Vec::new();
+        try_room(
+            &mut row_idx,
+            6 * nodes + 9 * next.len(),
+            "the pattern's row indices",
+        )?;
+        col_ptr.push(0);
+        for b in 0..nodes {
+            // A node in no list keeps its three diagonals only.
+            let listed = count[b + 1] > count[b];
+            for k in 0..3 {
+                row_idx.push(3 * b + k);
+                if listed {
+                    row_idx.extend(3 * b + k + 1..3 * b + 3);
+                }
+                for &c in &next[next_ptr[b]..next_ptr[b + 1]] {
+                    row_idx.extend([3 * c, 3 * c + 1, 3 * c + 2]);
+                }
+                col_ptr.push(row_idx.len());
+            }
+        }
+        Ok(Some(Self {
+            n,
+            col_ptr,
+            row_idx,
+        }))
     }
 
     /// A pattern from explicit lower-triangle columns (rows ≥ j; the diagonal is added if
@@ -215,6 +325,36 @@ mod tests {
                 n: 3
             })
         ));
+    }
+
+    proptest::proptest! {
+        /// Lists of whole nodes (some repeated, some nodes in no list) give the DOF path's
+        /// pattern on the node path; one loose DOF sends them back to the DOF path.
+        #[test]
+        fn node_lists_give_the_dof_path_pattern(
+            nodes in 1usize..40,
+            raw in proptest::collection::vec(proptest::collection::vec(0usize..1000, 1..9), 0..30),
+            loose in proptest::bool::ANY,
+        ) {
+            let mut lists: Vec<Vec<usize>> = raw
+                .iter()
+                .map(|l| l.iter().flat_map(|&a| {
+                    let b = a % nodes;
+                    [3 * b, 3 * b + 1, 3 * b + 2]
+                }).collect())
+                .collect();
+            if loose {
+                lists.push(vec![3 * nodes - 1]);
+            }
+            let n = 3 * nodes;
+            let by_dof = SymmetricPattern::from_dof_lists_by_dof(n, &lists).unwrap();
+            let by_node = SymmetricPattern::from_node_lists(n, &lists).unwrap();
+            proptest::prop_assert_eq!(by_node.is_none(), loose);
+            if let Some(p) = by_node {
+                proptest::prop_assert_eq!(&p, &by_dof);
+            }
+            proptest::prop_assert_eq!(SymmetricPattern::from_dof_lists(n, &lists).unwrap(), by_dof);
+        }
     }
 
     #[test]
