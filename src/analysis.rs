@@ -315,8 +315,14 @@ fn sweep(
     }
     let mut u = vec![0.0; problem.assembler().n()];
     // One solver for every level: analysed once; with BFGS each level starts from the
-    // factorisation its predecessor's stability test left.
-    let mut session = PathSolver::deferred(problem, strategy.solver());
+    // factorisation its predecessor's stability test left. Analysed at its first use where
+    // memory leaves room (a seeded one-level run may never use it: its levels start in the
+    // contact system); else now, where the factor's size is checked against the limit.
+    let mut session = if crate::budget::analysis_may_wait(scene, &crate::budget::limit()) {
+        PathSolver::deferred(problem, strategy.solver())
+    } else {
+        PathSolver::new(problem, strategy.solver())?
+    };
     let mut out = Sweep {
         levels: Vec::with_capacity(factors.len()),
         force,

@@ -367,6 +367,23 @@ pub fn check_scene(scene: &Scene, limit: &Limit) -> Result<Estimate, Error> {
     refuse("the analysis", e, needed, limit, fields.join(", "))
 }
 
+/// How many times the estimated run must fit in what the memory limit leaves for its solver
+/// analyses to wait for their first use ([`analysis_may_wait`]): the run, its companions
+/// (together no larger than the run: each coarser mesh about a third of the one above) and
+/// the estimate's own error (its factor 0.75–1.2 of faer's above 2 M entries).
+const ROOM_TO_WAIT: u64 = 4;
+
+/// Whether `scene`'s solver analyses may wait for their first factorisation
+/// (`nonlin3d_newton::PathSolver::deferred`): the analysis is where the factor's exact size is
+/// checked against the limit, so it is made first unless the estimated run fits
+/// [`ROOM_TO_WAIT`] times in what the limit leaves. (Deferred near the limit, a 33 k-node scene
+/// under 1 GiB of address space went on to build its contact system while its companions
+/// grew, and died in an allocation inside faer instead of being refused.)
+pub fn analysis_may_wait(scene: &Scene, limit: &Limit) -> bool {
+    let needed = estimate_scene(scene).bytes.saturating_mul(ROOM_TO_WAIT);
+    limit.tightest().is_none_or(|b| needed <= b.left())
+}
+
 /// Refuses `scene` if building its mesh alone (what `export` does) could not fit under `limit`.
 pub fn check_mesh(scene: &Scene, limit: &Limit) -> Result<Estimate, Error> {
     let e = estimate_scene(scene);

@@ -269,6 +269,28 @@ fn scenes_too_large_are_refused_with_their_fields() {
     assert!(check_mesh(&s, &bound(e.mesh_bytes - 1)).is_err());
 }
 
+/// A run's solver analyses wait for their first use only where the estimated run fits
+/// `ROOM_TO_WAIT` times in what the limit leaves: the 33 k-node scene of
+/// tests/memory_limits.rs is analysed first under 1 GiB, and may wait under 24 GiB or no limit.
+#[test]
+fn analyses_wait_only_where_memory_leaves_room() {
+    let s = scene("slices = 40\ninside = 16\noutside = 10", None);
+    let e = estimate_scene(&s);
+    let bound = |cap: u64| Limit {
+        bounds: vec![Bound {
+            kind: LimitKind::AddressSpace,
+            cap,
+            in_use: 0,
+            reserve: 0,
+        }],
+    };
+    assert!(!analysis_may_wait(&s, &bound(GIB)));
+    assert!(analysis_may_wait(&s, &bound(24 * GIB)));
+    assert!(analysis_may_wait(&s, &bound(ROOM_TO_WAIT * e.bytes)));
+    assert!(!analysis_may_wait(&s, &bound(ROOM_TO_WAIT * e.bytes - 1)));
+    assert!(analysis_may_wait(&s, &Limit::none()));
+}
+
 /// The largest counts the scene checks allow give an estimate, not an overflow, and are
 /// refused under any real limit.
 #[test]
