@@ -14,7 +14,9 @@
 //!   reached the tolerance in [`MAX_REFINEMENT_STEPS`]: A is too ill-conditioned for f32
 //!   (cond(A)·ε₃₂ ≳ 0.5);
 //! - f32 was refused for one of the conditioning reasons above before any f32 factor served
-//!   since the analysis, or [`REFUSALS_BEFORE_F64`] times in a row: f64 until the next one.
+//!   since the analysis, or [`REFUSALS_BEFORE_F64`] times in a row: f64 for the next
+//!   [`RETRY_F32_AFTER`] factorisations, then f32 is tried once more (the wait doubled each
+//!   time the retry is refused, reset when an f32 factor serves).
 //!
 //! With [`super::FaerSplit::Halves`] the f32 factor is the split one (f32 halves, S in f64)
 //! and the same rules hold; the f64 fallback is then the f64 split.
@@ -36,12 +38,23 @@ pub const MAX_REFINEMENT_STEPS: usize = 20;
 
 /// f32 attempts refused in a row for the matrix's conditioning (any reason but a change of
 /// the negative pivot count: an entry beyond f32, an f32 zero pivot, a pivot below the floor,
-/// refinement stalling) after which the solver factorises in f64 until its next analysis: a
-/// tangent too ill-conditioned for f32 stays so over a path, and each refused attempt costs an
+/// refinement stalling) after which the solver factorises in f64 for a while
+/// ([`RETRY_F32_AFTER`]): a tangent too ill-conditioned for f32 stays so over a path, and each refused attempt costs an
 /// f32 factorisation (and refinement steps) on top of the f64 one (the thin laminate: 1.6–1.7×
 /// the f64 cost, docs/PERFORMANCE.md). One refusal after f32 has served (a small pivot near a
 /// bifurcation) does not give f32 up; a refusal before any f32 factor has served does.
 pub const REFUSALS_BEFORE_F64: usize = 2;
+
+/// f64 factorisations after f32 was given up ([`REFUSALS_BEFORE_F64`]) before f32 is tried
+/// again; doubled after each retry that is refused, so a tangent that stays too
+/// ill-conditioned for f32 (the thin laminate) pays one f32 attempt (about half an f64
+/// factorisation) after 8, 16, 32, … f64 ones, and one refused early (a small pivot at the
+/// first state past a bifurcation) does not keep a whole run in f64: the 60 mm circle on the
+/// default mesh, refused at its first factorisation, factored 68 times in f64 before.
+pub const RETRY_F32_AFTER: usize = 8;
+
+/// The reason an f64 factorisation is made while f32 is given up.
+const GIVEN_UP: &str = "f32 refused before it served, or twice in a row: f64 for a while";
 
 /// The default refinement target for the normwise backward error
 /// ‖b − A x‖∞ / (‖A‖∞‖x‖∞ + ‖b‖∞). The f64 factor gives 2e-19–3e-16 on the bench's Hex20
@@ -111,6 +124,10 @@ pub(super) struct MixedState {
     refused_in_a_row: usize,
     /// Whether an f32 factor has served a converged refinement since the analysis.
     served: bool,
+    /// f64 factorisations since f32 was given up or last retried.
+    given_up_for: usize,
+    /// f64 factorisations to wait before the next retry (0: [`RETRY_F32_AFTER`]).
+    wait: usize,
     stats: MixedStats,
 }
 
@@ -137,6 +154,32 @@ impl MixedState {
             true => self.refused_in_a_row + 1,
             false => REFUSALS_BEFORE_F64,
         };
+    }
+
+    /// While f32 is given up: whether this factorisation retries it ([`RETRY_F32_AFTER`],
+    /// the wait doubling at each retry), else counts it as one more in f64.
+    fn retry_now(&mut self) -> bool {
+        let wait = if self.wait == 0 {
+            RETRY_F32_AFTER
+        } else {
+            self.wait
+        };
+        if self.given_up_for < wait {
+            self.given_up_for += 1;
+            return false;
+        }
+        self.given_up_for = 0;
+        self.wait = 2 * wait;
+        true
+    }
+
+    /// An f32 factor served: f32 is in use again, and a later give-up waits
+    /// [`RETRY_F32_AFTER`] afresh.
+    fn served_now(&mut self) {
+        self.refused_in_a_row = 0;
+        self.served = true;
+        self.given_up_for = 0;
+        self.wait = 0;
     }
 }
 
@@ -190,12 +233,9 @@ impl FaerSolver {
         a: &SymmetricMatrix,
     ) -> Result<Factorization, SolverError> {
         self.mixed.single = false;
-        if self.mixed.refused_in_a_row >= REFUSALS_BEFORE_F64 {
-            // f64 from here on: no copy of A for refinement is needed.
-            return self.fall_back(
-                a,
-                "f32 refused before it served, or twice in a row: f64 until the next analysis",
-            );
+        if self.mixed.refused_in_a_row >= REFUSALS_BEFORE_F64 && !self.mixed.retry_now() {
+            // f64 for now: no copy of A for refinement is needed.
+            return self.fall_back(a, GIVEN_UP);
         }
         match &mut self.mixed.a {
             Some(m) if std::sync::Arc::ptr_eq(m.pattern(), a.pattern()) => {
@@ -347,8 +387,7 @@ impl FaerSolver {
             }
         }
         if !stalled {
-            self.mixed.refused_in_a_row = 0;
-            self.mixed.served = true;
+            self.mixed.served_now();
         } else {
             self.mixed.refuse();
             let Some(a) = self.mixed.a.take() else {

@@ -169,13 +169,13 @@ fn a_changed_negative_pivot_count_is_confirmed_in_f64() {
 }
 
 /// A stall (a tolerance refinement cannot reach) before any f32 factor has served gives
-/// f32 up at once: the second factorisation goes straight to f64, until the next analysis.
-/// After f32 has served, it takes two refusals in a row; a change of the pivot count alone
-/// does not count (the test above keeps f32 after one).
+/// f32 up at once: the second factorisation goes straight to f64. After f32 has served, it
+/// takes two refusals in a row; a change of the pivot count alone does not count (the test
+/// above keeps f32 after one). A new analysis tries f32 again.
 #[test]
-fn f32_refused_before_it_served_or_twice_in_a_row_stays_f64_until_the_next_analysis() {
+fn f32_refused_before_it_served_or_twice_in_a_row_goes_to_f64() {
     const GIVEN_UP: Option<&str> =
-        Some("f32 refused before it served, or twice in a row: f64 until the next analysis");
+        Some("f32 refused before it served, or twice in a row: f64 for a while");
     let a = chain(300, 1.0, 0.0);
     let mut s = solver(FaerPrecision::Mixed {
         tolerance: 1e-30,
@@ -249,4 +249,50 @@ fn entries_beyond_f32_go_to_f64() {
         Some("an entry does not fit f32")
     );
     assert_eq!(x, x64);
+}
+
+/// Given up, f32 is tried again after `RETRY_F32_AFTER` f64 factorisations, the wait doubling
+/// after each refused retry: a matrix f32 can never serve (a 1e-30 refinement target) makes
+/// 1 + 3 f32 attempts in 1 + 8 + 1 + 16 + 1 + 32 + 1 factorisations; one that was refused
+/// only at first (a stall, then a matrix f32 serves) is back in f32 at the first retry and
+/// stays there.
+#[test]
+fn f32_given_up_is_retried_after_a_doubling_wait() {
+    let a = chain(300, 1.0, 0.0);
+    let never = FaerPrecision::Mixed {
+        tolerance: 1e-30,
+        pivot_floor: SINGLE_PIVOT_FLOOR,
+    };
+    let mut s = solver(never);
+    s.analyze(a.pattern()).unwrap();
+    let mut b = vec![1.0; a.n()];
+    let total = 1 + RETRY_F32_AFTER + 1 + 2 * RETRY_F32_AFTER + 1 + 4 * RETRY_F32_AFTER + 1;
+    let mut singles = Vec::new();
+    for k in 0..total {
+        let before = s.mixed_stats().single_factorizations;
+        s.factorize(&a).unwrap();
+        s.solve_in_place(&mut b, 1).unwrap();
+        if s.mixed_stats().single_factorizations > before {
+            singles.push(k);
+        }
+    }
+    let r = RETRY_F32_AFTER;
+    assert_eq!(singles, [0, r + 1, 3 * r + 2, 7 * r + 3]);
+    assert_eq!(s.mixed_stats().double_factorizations, total);
+    // Refused at first only: the stall, then the default target f32 reaches.
+    let mut s = solver(never);
+    s.analyze(a.pattern()).unwrap();
+    s.factorize(&a).unwrap();
+    s.solve_in_place(&mut b, 1).unwrap();
+    s.precision = FaerPrecision::mixed();
+    for _ in 0..2 * r {
+        s.factorize(&a).unwrap();
+        s.solve_in_place(&mut b, 1).unwrap();
+    }
+    let m = s.mixed_stats();
+    assert_eq!(
+        (m.single_factorizations, m.double_factorizations),
+        (1 + r, 1 + r),
+        "{m:?}"
+    );
 }
