@@ -376,9 +376,9 @@ const ROOM_TO_WAIT: u64 = 4;
 /// Whether `scene`'s solver analyses may wait for their first factorisation
 /// (`nonlin3d_newton::PathSolver::deferred`): the analysis is where the factor's exact size is
 /// checked against the limit, so it is made first unless the estimated run fits
-/// [`ROOM_TO_WAIT`] times in what the limit leaves. (Deferred near the limit, a 33 k-node scene
-/// under 1 GiB of address space went on to build its contact system while its companions
-/// grew, and died in an allocation inside faer instead of being refused.)
+/// `ROOM_TO_WAIT` (4) times in what the limit leaves. (Deferred near the limit, a 33 k-node
+/// scene under 1 GiB of address space went on to build its contact system while its
+/// companions grew, and died in an allocation inside faer instead of being refused.)
 pub fn analysis_may_wait(scene: &Scene, limit: &Limit) -> bool {
     let needed = estimate_scene(scene).bytes.saturating_mul(ROOM_TO_WAIT);
     limit.tightest().is_none_or(|b| needed <= b.left())

@@ -24,9 +24,8 @@ impl SymmetricPattern {
     /// duplicates, so a 150 000-DOF Hex20 model (~18 M entries) builds in a fraction of a second.
     ///
     /// When every list is made of whole nodes (the generators' cells and the ties' couplings),
-    /// the pattern is built on the node graph and written out three columns a node
-    /// ([`from_node_lists`](Self::from_node_lists)): the same pattern, in about a third of
-    /// the time.
+    /// the pattern is built on the node graph and written out three columns a node: the same
+    /// pattern, in about a third of the time.
     pub fn from_dof_lists<L: AsRef<[usize]>>(n: usize, lists: &[L]) -> Result<Self, SolverError> {
         match Self::from_node_lists(n, lists)? {
             Some(p) => Ok(p),

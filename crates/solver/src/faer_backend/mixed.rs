@@ -39,9 +39,9 @@ pub const MAX_REFINEMENT_STEPS: usize = 20;
 /// f32 attempts refused in a row for the matrix's conditioning (any reason but a change of
 /// the negative pivot count: an entry beyond f32, an f32 zero pivot, a pivot below the floor,
 /// refinement stalling) after which the solver factorises in f64 for a while
-/// ([`RETRY_F32_AFTER`]): a tangent too ill-conditioned for f32 stays so over a path, and each refused attempt costs an
-/// f32 factorisation (and refinement steps) on top of the f64 one (the thin laminate: 1.6–1.7×
-/// the f64 cost, docs/PERFORMANCE.md). One refusal after f32 has served (a small pivot near a
+/// ([`RETRY_F32_AFTER`]): a tangent too ill-conditioned for f32 stays so over a path, and each
+/// refused attempt costs an f32 factorisation (and refinement steps) on top of the f64 one
+/// (the thin laminate: 1.6–1.7× the f64 cost, docs/PERFORMANCE.md). One refusal after f32 has served (a small pivot near a
 /// bifurcation) does not give f32 up; a refusal before any f32 factor has served does.
 pub const REFUSALS_BEFORE_F64: usize = 2;
 
