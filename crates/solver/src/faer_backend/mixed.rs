@@ -41,8 +41,9 @@ pub const MAX_REFINEMENT_STEPS: usize = 20;
 /// refinement stalling) after which the solver factorises in f64 for a while
 /// ([`RETRY_F32_AFTER`]): a tangent too ill-conditioned for f32 stays so over a path, and each
 /// refused attempt costs an f32 factorisation (and refinement steps) on top of the f64 one
-/// (the thin laminate: 1.6–1.7× the f64 cost, docs/PERFORMANCE.md). One refusal after f32 has served (a small pivot near a
-/// bifurcation) does not give f32 up; a refusal before any f32 factor has served does.
+/// (the thin laminate: 1.6–1.7× the f64 cost, docs/PERFORMANCE.md). One refusal after f32
+/// has served (a small pivot near a bifurcation) does not give f32 up; a refusal before any
+/// f32 factor has served does.
 pub const REFUSALS_BEFORE_F64: usize = 2;
 
 /// f64 factorisations after f32 was given up ([`REFUSALS_BEFORE_F64`]) before f32 is tried
