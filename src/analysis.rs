@@ -376,6 +376,7 @@ fn sweep(
                 }
                 .is_ok_and(|peak| peak < -0.01 * model.h)
         };
+        let mut companion_set = false;
         let seeded = match seeds.as_deref_mut() {
             Some(seeds) => seed::solve_seeded(
                 seeds,
@@ -399,6 +400,18 @@ fn sweep(
                 (s.solved, s.contact, Some((s.perturbed, crossing)))
             }
             None => {
+                // Followed here after seeding stopped paying: the companion's set at this
+                // level, where it predicts this mesh's (src/analysis_seed.rs).
+                let set = match seeds.as_deref_mut() {
+                    Some(s) if stage.active() => {
+                        s.followed_set(k, scene.contact.tolerance() * 1e-3)
+                    }
+                    _ => None,
+                };
+                companion_set = set.is_some();
+                if set.is_some() {
+                    stage.reset(set, &u).map_err(level_error)?;
+                }
                 let (solved, contact) = follow_level(
                     &mut stage,
                     (scene, model),
@@ -434,6 +447,7 @@ fn sweep(
             level.convergence.seeded = true;
             level.convergence.bifurcation = crossing;
         }
+        level.convergence.companion_set = companion_set;
         push_level(&mut out, progress, (k, value, vcct_s), level)?;
         from = lambda;
     }

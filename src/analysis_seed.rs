@@ -18,7 +18,9 @@
 //! not with another count of negative pivots than the companion's, when it does not converge,
 //! or when it converges on another branch than the companion's (a centre deflection of the
 //! other sign, or unstable where the companion is stable). After a seeded level, the next is seeded
-//! only if this one's start was close ([`KEEP_SEEDING`]).
+//! only if this one's start was close ([`KEEP_SEEDING`]); a level this mesh then follows
+//! itself starts from the companion's contact set at that level where the companion is fine
+//! enough to predict it ([`Seeds::followed_set`], [`SET_FROM_DOFS`]).
 //!
 //! **Nested companions.** A companion of [`NESTED_FROM_DOFS`] or more starts its own levels
 //! from a coarser companion of its own in the same way (its slices halved, the rest kept:
@@ -47,6 +49,15 @@ use std::time::Instant;
 /// level, 305 seeding the buckling level only and 502 following the path (docs/PERFORMANCE.md,
 /// "Nested iteration from the companion"). Speed only: every choice reaches the same states.
 const KEEP_SEEDING: f64 = 0.15;
+
+/// Companion DOFs from which a level this mesh follows itself starts from the companion's
+/// contact set ([`Seeds::followed_set`]): the size from which a companion is nested itself
+/// (the default mesh's, 6 405 DOF on the reference circle, with the front band). Measured over
+/// eleven scenes (docs/PERFORMANCE.md, "The companion's contact set, kept for fine
+/// companions"): the companions of 6 405 DOF took the reference scene from 33 to 26 of this
+/// mesh's iterations and the 60 mm circle from 58 to 54, or left them unchanged; those of
+/// 1 773 DOF and less (2–4 coarse slices) cost 2–8 more.
+const SET_FROM_DOFS: usize = NESTED_FROM_DOFS;
 
 /// One converged level of the companion, as the sweep needs it.
 #[derive(Debug, Clone)]
@@ -146,6 +157,8 @@ pub(crate) struct Seeds {
     weighted: bool,
     /// Whether the next level is seeded ([`KEEP_SEEDING`]; true until a level is seeded).
     pays: bool,
+    /// The companion's DOFs.
+    coarse_dofs: usize,
 }
 
 impl Seeds {
@@ -170,7 +183,23 @@ impl Seeds {
             from,
             weighted: scene.contact.mode == ContactModeName::TwoBody,
             pays: true,
+            coarse_dofs: 3 * coarse.mesh.nodes.len(),
         })
+    }
+
+    /// The contact set to start level `k` with when this mesh follows it itself (seeding has
+    /// stopped paying): the companion's at the same level, mapped onto this mesh's pairs, if
+    /// that level has arrived (no wait), the companion acted there and it is fine enough to
+    /// predict this mesh's set ([`SET_FROM_DOFS`]); None otherwise.
+    pub(crate) fn followed_set(&mut self, k: usize, tolerance: f64) -> Option<Vec<bool>> {
+        if self.pays || self.coarse_dofs < SET_FROM_DOFS || !self.arrived(k) {
+            return None;
+        }
+        let level = self.received.get(k)?;
+        if !level.contact {
+            return None;
+        }
+        self.set(level, tolerance).ok()
     }
 
     /// Whether the companion's level `k` has arrived (those that have are taken in).

@@ -371,6 +371,19 @@ pub fn table(results: &Results) -> String {
             seeded.join(", ")
         );
     }
+    let followed: Vec<String> = results
+        .levels
+        .iter()
+        .filter(|l| l.convergence.companion_set)
+        .map(|l| format!("{}", l.value))
+        .collect();
+    if !followed.is_empty() {
+        let _ = writeln!(
+            s,
+            "levels followed from the companion mesh's contact set: {what} {}",
+            followed.join(", ")
+        );
+    }
     for w in &results.warnings {
         let _ = writeln!(s, "warning: {w}");
     }

@@ -162,6 +162,10 @@ pub struct Convergence {
     /// same level (nested iteration, `[analysis] start = "companion"`): its iterations are
     /// this mesh's from that start, and its `bifurcation` is the one the companion crossed.
     pub seeded: bool,
+    /// The level was followed on this mesh from its previous state with the companion's
+    /// contact set at the same level installed first (nested iteration past the seeded levels,
+    /// src/analysis_seed.rs `Seeds::followed_set`).
+    pub companion_set: bool,
 }
 
 /// Where the path crossed a bifurcation: between `from` and `to` (strain, or load N) the
@@ -240,6 +244,7 @@ impl LevelResult {
                     .count(),
                 perturbed: false,
                 seeded: false,
+                companion_set: false,
             },
             front: front.iter().map(FrontRow::new).collect(),
             contact: None,

@@ -306,3 +306,28 @@ fn nested_companions_serve_the_default_mesh_with_the_same_bits_on_any_thread_cou
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Past the seeded levels, a level the default mesh follows itself starts from its
+/// companion's contact set at that level (the companion has 6 405 DOF: fine enough,
+/// src/analysis_seed.rs `Seeds::followed_set`): the reference circle at ε = −0.002 (seeded)
+/// and −0.003 (followed, the companion's set installed first) reaches the path's states —
+/// the same closed pairs, pivots, G and deflections — in fewer of this mesh's iterations.
+#[test]
+fn a_followed_level_of_the_default_mesh_starts_from_the_companions_set() {
+    let text = committed("reference_circle_30mm.toml").replace(
+        "strains = [-0.001, -0.002, -0.003, -0.004, -0.005]",
+        "strains = [-0.002, -0.003]",
+    );
+    assert!(text.contains("strains = [-0.002, -0.003]"));
+    let (path, nested) = both(&text);
+    assert_same_states(&path, &nested);
+    let flags: Vec<(bool, bool)> = nested
+        .levels
+        .iter()
+        .map(|l| (l.convergence.seeded, l.convergence.companion_set))
+        .collect();
+    assert_eq!(flags, [(true, false), (false, true)]);
+    assert!(path.levels.iter().all(|l| !l.convergence.companion_set));
+    let (a, b) = (iterations(&path), iterations(&nested));
+    assert!(b < a, "nested {b} iterations against the path's {a}");
+}
