@@ -189,17 +189,19 @@ impl Seeds {
 
     /// The contact set to start level `k` with when this mesh follows it itself (seeding has
     /// stopped paying): the companion's at the same level, mapped onto this mesh's pairs, if
-    /// that level has arrived (no wait), the companion acted there and it is fine enough to
-    /// predict this mesh's set ([`SET_FROM_DOFS`]); None otherwise.
+    /// the companion is fine enough to predict this mesh's set ([`SET_FROM_DOFS`]) and acted
+    /// at that level; None otherwise. Waits for the companion's level (it is usually ahead:
+    /// about a third of this mesh's size): whether the set is used must not depend on which
+    /// run got there first, or the bits would depend on timing.
     pub(crate) fn followed_set(&mut self, k: usize, tolerance: f64) -> Option<Vec<bool>> {
-        if self.pays || self.coarse_dofs < SET_FROM_DOFS || !self.arrived(k) {
+        if self.pays || self.coarse_dofs < SET_FROM_DOFS {
             return None;
         }
-        let level = self.received.get(k)?;
+        let level = self.level(k)?.clone();
         if !level.contact {
             return None;
         }
-        self.set(level, tolerance).ok()
+        self.set(&level, tolerance).ok()
     }
 
     /// Whether the companion's level `k` has arrived (those that have are taken in).

@@ -311,7 +311,8 @@ fn nested_companions_serve_the_default_mesh_with_the_same_bits_on_any_thread_cou
 /// companion's contact set at that level (the companion has 6 405 DOF: fine enough,
 /// src/analysis_seed.rs `Seeds::followed_set`): the reference circle at ε = −0.002 (seeded)
 /// and −0.003 (followed, the companion's set installed first) reaches the path's states —
-/// the same closed pairs, pivots, G and deflections — in fewer of this mesh's iterations.
+/// the same closed pairs, pivots, G and deflections — in fewer of this mesh's iterations, and
+/// on two threads (the companion beside the sweep) gives the one-thread bits.
 #[test]
 fn a_followed_level_of_the_default_mesh_starts_from_the_companions_set() {
     let text = committed("reference_circle_30mm.toml").replace(
@@ -330,4 +331,11 @@ fn a_followed_level_of_the_default_mesh_starts_from_the_companions_set() {
     assert!(path.levels.iter().all(|l| !l.convergence.companion_set));
     let (a, b) = (iterations(&path), iterations(&nested));
     assert!(b < a, "nested {b} iterations against the path's {a}");
+    let mut s = Scene::from_toml(&text).unwrap();
+    s.analysis.threads = 2;
+    let two = Analysis::new(s).unwrap().run().unwrap();
+    for (x, y) in nested.levels.iter().zip(&two.levels) {
+        assert_eq!(x.front, y.front, "level {}", x.value);
+        assert_eq!(x.convergence.companion_set, y.convergence.companion_set);
+    }
 }
