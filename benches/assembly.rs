@@ -22,6 +22,18 @@ use nonlin3d::mesh::{EmbeddedParams, embedded_delamination};
 use std::hint::black_box;
 use std::time::Duration;
 
+/// The thesis's plate model at about 89 k DOF (24 slices, 10 + 12 rings, 3 + 6 layers).
+fn plate_89k() -> EmbeddedParams {
+    EmbeddedParams {
+        slices: 24,
+        radial_inside: 10,
+        radial_outside: 12,
+        sub_layers: 3,
+        base_layers: 6,
+        ..EmbeddedParams::thesis_reference()
+    }
+}
+
 fn bench_assembly(c: &mut Criterion) {
     let mut group = c.benchmark_group("assembly");
     group
@@ -36,17 +48,7 @@ fn bench_assembly(c: &mut Criterion) {
                 ..EmbeddedParams::thesis_reference()
             },
         ),
-        (
-            "plate_89k",
-            EmbeddedParams {
-                slices: 24,
-                radial_inside: 10,
-                radial_outside: 12,
-                sub_layers: 3,
-                base_layers: 6,
-                ..EmbeddedParams::thesis_reference()
-            },
-        ),
+        ("plate_89k", plate_89k()),
     ];
     let steel = materials::steel()
         .stiffness()
@@ -196,15 +198,7 @@ fn bench_assembly(c: &mut Criterion) {
 fn bench_pattern(c: &mut Criterion) {
     let mut group = c.benchmark_group("pattern");
     group.sample_size(10);
-    let p = EmbeddedParams {
-        slices: 24,
-        radial_inside: 10,
-        radial_outside: 12,
-        sub_layers: 3,
-        base_layers: 6,
-        ..EmbeddedParams::thesis_reference()
-    };
-    let mesh = embedded_delamination(&p).unwrap_or_else(|e| panic!("{e}"));
+    let mesh = embedded_delamination(&plate_89k()).unwrap_or_else(|e| panic!("{e}"));
     let n = 3 * mesh.nodes.len();
     let lists = mesh.cell_dofs();
     let mut loose = lists.clone();

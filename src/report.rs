@@ -357,12 +357,14 @@ pub fn table(results: &Results) -> String {
             companion(seeded)
         );
     }
-    let seeded: Vec<String> = results
-        .levels
-        .iter()
-        .filter(|l| l.convergence.seeded)
-        .map(|l| format!("{}", l.value))
-        .collect();
+    // The values of the levels whose convergence record says `flag`.
+    let levels_where = |flag: fn(&crate::results::Convergence) -> bool| -> Vec<String> {
+        (results.levels.iter())
+            .filter(|l| flag(&l.convergence))
+            .map(|l| format!("{}", l.value))
+            .collect()
+    };
+    let seeded = levels_where(|c| c.seeded);
     if !seeded.is_empty() {
         let _ = writeln!(
             s,
@@ -371,12 +373,7 @@ pub fn table(results: &Results) -> String {
             seeded.join(", ")
         );
     }
-    let followed: Vec<String> = results
-        .levels
-        .iter()
-        .filter(|l| l.convergence.companion_set)
-        .map(|l| format!("{}", l.value))
-        .collect();
+    let followed = levels_where(|c| c.companion_set);
     if !followed.is_empty() {
         let _ = writeln!(
             s,

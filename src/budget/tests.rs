@@ -232,20 +232,24 @@ fn estimates_match_built_models() {
 
 /// A scene that cannot fit is refused before meshing with the estimate, the limit and the
 /// fields that set the size; with room, or no limit, it passes; export-only checks the mesh.
-#[test]
-fn scenes_too_large_are_refused_with_their_fields() {
-    let s = scene("slices = 40\ninside = 16\noutside = 10", None);
-    let e = estimate_scene(&s);
-    assert_eq!(e.nodes, 32_341);
-    let bound = |cap: u64| Limit {
+/// A limit of `cap` bytes of address space, nothing in use or kept.
+fn address_space(cap: u64) -> Limit {
+    Limit {
         bounds: vec![Bound {
             kind: LimitKind::AddressSpace,
             cap,
             in_use: 0,
             reserve: 0,
         }],
-    };
-    let err = check_scene(&s, &bound(e.bytes_at_least - 1)).unwrap_err();
+    }
+}
+
+#[test]
+fn scenes_too_large_are_refused_with_their_fields() {
+    let s = scene("slices = 40\ninside = 16\noutside = 10", None);
+    let e = estimate_scene(&s);
+    assert_eq!(e.nodes, 32_341);
+    let err = check_scene(&s, &address_space(e.bytes_at_least - 1)).unwrap_err();
     let Error::TooLarge(r) = &err else {
         panic!("{err}")
     };
@@ -262,11 +266,11 @@ fn scenes_too_large_are_refused_with_their_fields() {
     ] {
         assert!(text.contains(part), "{part}: {text}");
     }
-    assert!(check_scene(&s, &bound(e.bytes_at_least)).is_ok());
+    assert!(check_scene(&s, &address_space(e.bytes_at_least)).is_ok());
     assert!(check_scene(&s, &Limit::none()).is_ok());
     // Exporting needs the mesh only.
-    assert!(check_mesh(&s, &bound(e.bytes_at_least - 1)).is_ok());
-    assert!(check_mesh(&s, &bound(e.mesh_bytes - 1)).is_err());
+    assert!(check_mesh(&s, &address_space(e.bytes_at_least - 1)).is_ok());
+    assert!(check_mesh(&s, &address_space(e.mesh_bytes - 1)).is_err());
 }
 
 /// A run's solver analyses wait for their first use only where the estimated run fits
@@ -276,18 +280,16 @@ fn scenes_too_large_are_refused_with_their_fields() {
 fn analyses_wait_only_where_memory_leaves_room() {
     let s = scene("slices = 40\ninside = 16\noutside = 10", None);
     let e = estimate_scene(&s);
-    let bound = |cap: u64| Limit {
-        bounds: vec![Bound {
-            kind: LimitKind::AddressSpace,
-            cap,
-            in_use: 0,
-            reserve: 0,
-        }],
-    };
-    assert!(!analysis_may_wait(&s, &bound(GIB)));
-    assert!(analysis_may_wait(&s, &bound(24 * GIB)));
-    assert!(analysis_may_wait(&s, &bound(ROOM_TO_WAIT * e.bytes)));
-    assert!(!analysis_may_wait(&s, &bound(ROOM_TO_WAIT * e.bytes - 1)));
+    assert!(!analysis_may_wait(&s, &address_space(GIB)));
+    assert!(analysis_may_wait(&s, &address_space(24 * GIB)));
+    assert!(analysis_may_wait(
+        &s,
+        &address_space(ROOM_TO_WAIT * e.bytes)
+    ));
+    assert!(!analysis_may_wait(
+        &s,
+        &address_space(ROOM_TO_WAIT * e.bytes - 1)
+    ));
     assert!(analysis_may_wait(&s, &Limit::none()));
 }
 
