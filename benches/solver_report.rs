@@ -11,7 +11,9 @@
 //! with an f32 factor refined in f64, `-- split` to add faer ND split at the top separator
 //! (`FaerSplit::Halves`, halves on two threads), `-- splitmixed` to add the split with f32
 //! halves refined in f64, `-- metis` to add faer with METIS's order (and the `split`,
-//! `mixed` and `splitmixed` rows on METIS's order beside ND's; `nond` leaves ND's out),
+//! `mixed` and `splitmixed` rows on METIS's order beside ND's; `nond` leaves ND's out;
+//! `nowhole` keeps only those rows, not the unsplit METIS ones; `two` keeps only their
+//! two-thread rows),
 //! `-- directions` to add faer (ND, and METIS's order with `metis`) keeping an f32 copy of each f64 factor
 //! for direction solves (`FaerDirections::Single`: its numeric time includes the copy, its
 //! solve and backward error are those of `solve_direction_in_place`),
@@ -354,7 +356,7 @@ fn main() {
             let skip = match ordering {
                 FaerOrdering::Amd => has("noamd"),
                 FaerOrdering::NestedDissection => has("nond"),
-                _ => !has("metis"),
+                _ => !has("metis") || has("nowhole"),
             };
             if skip {
                 continue;
@@ -408,6 +410,9 @@ fn main() {
             }
             for &(ordering, oname) in &split_orderings {
                 for threads in [1, 2] {
+                    if has("two") && threads == 1 {
+                        continue;
+                    }
                     let mut s = whole(ordering, threads);
                     s.precision = precision;
                     s.split = split;

@@ -158,8 +158,8 @@ pub enum Error {
         /// What the plotting library said.
         reason: String,
     },
-    /// The SIGINT/SIGTERM handlers could not be installed.
-    #[error("installing the signal handler: {0}")]
+    /// SIGINT and SIGTERM could not be blocked, or their thread not started.
+    #[error("setting up SIGINT/SIGTERM: {0}")]
     Signal(std::io::Error),
     /// A parametric study (`[sweep]`, `nonlin3d sweep`): its table, plan or cases, in words
     /// that name the field, the case and its values.

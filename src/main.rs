@@ -29,6 +29,7 @@
 //! (summary.json for `solve`).
 
 mod progress;
+mod signals;
 mod solve_command;
 mod study_command;
 
@@ -194,49 +195,6 @@ impl Failure {
     }
 }
 
-/// On the first SIGINT or SIGTERM: write the run's results.json as it stands with
-/// `"stopped": "interrupted by …"` (every converged level is already on disk) and exit 130
-/// (SIGINT) or 143 (SIGTERM). A second signal exits at once.
-#[cfg(unix)]
-fn stop_on_signals(handle: nonlin3d::output::InterruptHandle) -> Result<(), nonlin3d::Error> {
-    use signal_hook::consts::{SIGINT, SIGTERM};
-    use std::sync::Arc;
-    use std::sync::atomic::AtomicBool;
-    let err = nonlin3d::Error::Signal;
-    let armed = Arc::new(AtomicBool::new(false));
-    for (sig, code) in [(SIGINT, 130), (SIGTERM, 143)] {
-        // The shutdown goes first: it fires only once the flag is set by an earlier signal.
-        signal_hook::flag::register_conditional_shutdown(sig, code, armed.clone()).map_err(err)?;
-        signal_hook::flag::register(sig, armed.clone()).map_err(err)?;
-    }
-    let mut signals = signal_hook::iterator::Signals::new([SIGINT, SIGTERM]).map_err(err)?;
-    std::thread::spawn(move || {
-        if let Some(sig) = signals.forever().next() {
-            let (name, code) = if sig == SIGINT {
-                ("SIGINT", 130)
-            } else {
-                ("SIGTERM", 143)
-            };
-            let kept = handle.stop(name);
-            eprintln!(
-                "\nnonlin3d: interrupted by {name}{}",
-                if kept {
-                    "; the levels converged so far are kept (results.json: \"complete\": false)"
-                } else {
-                    ""
-                }
-            );
-            std::process::exit(code);
-        }
-    });
-    Ok(())
-}
-
-#[cfg(not(unix))]
-fn stop_on_signals(_: nonlin3d::output::InterruptHandle) -> Result<(), nonlin3d::Error> {
-    Ok(())
-}
-
 fn run(
     path: Option<&Path>,
     out: &Path,
@@ -279,7 +237,7 @@ fn run(
     );
     provenance.stage("read", t0.elapsed().as_secs_f64());
     output.set_provenance(provenance).map_err(Failure::Run)?;
-    stop_on_signals(output.interrupt_handle()).map_err(Failure::Run)?;
+    signals::stop_on(output.interrupt_handle());
     let monitor = watch(verbosity, "level", output.status_files());
     lock(&monitor).say(&scene.title);
     for w in scene.warnings() {
@@ -369,6 +327,11 @@ fn export(
 }
 
 fn main() -> ExitCode {
+    // Before any thread exists: SIGINT and SIGTERM go to one thread only (src/signals.rs).
+    if let Err(e) = signals::block() {
+        eprintln!("nonlin3d: {e}");
+        return ExitCode::from(1);
+    }
     let cli = Cli::parse();
     // One rayon pool for assembly and the solver; 0 or none: all cores.
     if let Some(n) = cli.threads.filter(|&n| n > 0)

@@ -3,7 +3,7 @@
 //! ([`nonlin3d::deck`] does the work).
 
 use crate::progress::Verbosity;
-use crate::{Failure, lock, stop_on_signals, watch};
+use crate::{Failure, lock, signals, watch};
 use nonlin3d::newton::NewtonSettings;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -134,7 +134,7 @@ pub(crate) fn solve(
     provenance.stage("read_and_check", t0.elapsed().as_secs_f64());
     let mut output = nonlin3d::deck::DeckOutput::create(out, &model).map_err(Failure::Input)?;
     output.set_provenance(provenance).map_err(Failure::Run)?;
-    stop_on_signals(output.interrupt_handle()).map_err(Failure::Run)?;
+    signals::stop_on(output.interrupt_handle());
     let monitor = watch(verbosity, "step", output.status_files());
     let steps = model.steps.len();
     lock(&monitor).units(steps);

@@ -193,3 +193,65 @@ fn bad_input_exits_2_before_anything_runs() {
         "found only after the analysis"
     );
 }
+
+/// Whether SIGTERM (15) is in a /proc status mask line (`SigCgt:`, `SigBlk:`) of `status`.
+#[cfg(target_os = "linux")]
+fn mask_has(status: &str, line: &str, sig: u32) -> bool {
+    status
+        .lines()
+        .find_map(|l| l.strip_prefix(line))
+        .and_then(|m| u64::from_str_radix(m.trim(), 16).ok())
+        .is_some_and(|m| m >> (sig - 1) & 1 == 1)
+}
+
+/// A SIGTERM while METIS orders stops the run as at any other moment (src/signals.rs, and
+/// crates/solver/src/metis.rs "Signals"). METIS's GKlib installs its own SIGTERM handler for
+/// the length of each call, which jumps back into the call on the thread it runs on; a
+/// SIGTERM taken by another thread then crashed the program (SIGSEGV, seen on thesis
+/// model 6: no `"stopped"` written). The program catches neither signal itself (every thread
+/// blocks them, one takes them with sigwait), so /proc shows SIGTERM caught exactly while a
+/// METIS call runs: the test sends it in such a window, three runs, and checks that every
+/// thread but the one that takes them blocks SIGINT and SIGTERM.
+#[cfg(target_os = "linux")]
+#[test]
+fn sigterm_while_metis_orders_stops_the_run_as_at_any_other_moment() {
+    for run in 0..3 {
+        let dir = tmp(&format!("signal-in-metis-{run}"));
+        // The thesis mesh (METIS on each system of the run and its companions).
+        let mut child = start(&dir, THESIS_SCENE);
+        let status_file = format!("/proc/{}/status", child.id());
+        let t = Instant::now();
+        let mut in_metis = false;
+        while !in_metis {
+            assert!(
+                child.try_wait().unwrap().is_none() && t.elapsed() < Duration::from_secs(60),
+                "no METIS call seen in run {run}"
+            );
+            let status = std::fs::read_to_string(&status_file).unwrap_or_default();
+            in_metis = mask_has(&status, "SigCgt:", 15);
+            if !in_metis {
+                std::thread::sleep(Duration::from_micros(200));
+            }
+        }
+        // SAFETY: kill(2) on our own live child with a standard signal.
+        assert_eq!(unsafe { libc::kill(child.id() as i32, libc::SIGTERM) }, 0);
+        let tasks = std::fs::read_dir(format!("/proc/{}/task", child.id()));
+        for task in tasks.into_iter().flatten().flatten() {
+            // The `signals` thread itself waits in sigwait(2), which unblocks them meanwhile.
+            if let Ok(status) = std::fs::read_to_string(task.path().join("status"))
+                && !status.starts_with("Name:\tsignals")
+            {
+                assert!(
+                    mask_has(&status, "SigBlk:", 15) && mask_has(&status, "SigBlk:", 2),
+                    "a thread of the program takes SIGINT or SIGTERM: {status}"
+                );
+            }
+        }
+        let status = child.wait().unwrap();
+        assert_eq!(status.code(), Some(143), "run {run}: {status:?}");
+        let v = results(&dir);
+        assert_eq!(v["complete"], false);
+        assert_eq!(v["stopped"], "interrupted by SIGTERM");
+        all_files_whole(&dir);
+    }
+}

@@ -13,14 +13,20 @@
 //! Signals: every METIS entry point installs GKlib's own SIGABRT/SIGTERM handlers (its error
 //! exit) for the length of the call and puts back the previous ones with `signal()`, which
 //! loses their flags; the handlers in force before the call are saved and restored here with
-//! `sigaction`. A SIGTERM arriving *during* the call is taken by GKlib's handler, which
-//! unwinds METIS to `METIS_ERROR` (the same code GKlib's own error exit gives, which raises the
-//! same signal); the signal would then be lost and the run would go on to the end (seen once in
-//! `tests/deck_reliability.rs`: a SIGTERM sent as `solve` ordered a step's pattern exited 0).
-//! So after the handlers are put back a `METIS_ERROR` passes SIGTERM on to the process: the
-//! program's own handler stops the run with the converged results kept (exit 143), as for a
-//! SIGTERM at any other moment. Still open: a SIGTERM delivered to *another* thread during the
-//! call runs GKlib's handler there, whose jump buffer is thread-local and unset (undefined).
+//! `sigaction`. GKlib's handler longjmps to the start of the call *on the thread it runs on*
+//! (its jump buffers are thread-local). So a SIGTERM handled during the call
+//!
+//! - on another thread jumps through an unset buffer: the process crashed (SIGSEGV, shown by
+//!   a process-directed SIGTERM while another thread ordered);
+//! - on the calling thread jumps out of whatever METIS was doing, malloc included, and can
+//!   leave a lock held (a hang, seen once in this crate's signal test).
+//!
+//! The calling thread therefore blocks SIGTERM for the length of the call (a signal sent to
+//! it waits, and reaches the caller's handler once the mask is back), and a program that
+//! handles SIGTERM with more than one thread must keep it blocked in all of them and take it
+//! with sigwait(2), as the `nonlin3d` program does (its src/signals.rs): a blocked signal is
+//! delivered to no thread, whatever disposition GKlib has set meanwhile. SIGABRT is left as it
+//! is (GKlib raises it on its own thread for its error exit).
 
 use crate::nested::compress;
 use crate::{Permutation, SolverError, SymmetricPattern};
@@ -63,6 +69,7 @@ pub fn metis_nested_dissection(pattern: &SymmetricPattern) -> Result<Permutation
         // A poisoned lock only means another METIS call panicked: the state it guards is
         // re-seeded by every call.
         let _guard = METIS_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+        let _blocked = SigtermBlocked::block();
         let signals = SavedHandlers::save();
         // SAFETY: the arrays have the lengths METIS_NodeND reads and writes (xadj nv + 1,
         // adjncy xadj[nv], vwgt/perm/iperm nv, options METIS_NOPTIONS); indices were checked
@@ -81,10 +88,8 @@ pub fn metis_nested_dissection(pattern: &SymmetricPattern) -> Result<Permutation
                 iperm.as_mut_ptr(),
             )
         };
+        // GKlib's handlers out first, then SIGTERM unblocked (`_blocked`'s drop).
         drop(signals);
-        if status == ffi::rstatus_et_METIS_ERROR {
-            pass_on_sigterm();
-        }
         status
     };
     match status {
@@ -112,13 +117,40 @@ pub fn metis_nested_dissection(pattern: &SymmetricPattern) -> Result<Permutation
     Permutation::from_forward(forward)
 }
 
-/// Sends SIGTERM to this process again, now that the handlers in force before the METIS call
-/// are back: `METIS_ERROR` is how GKlib reports the SIGTERM its handler took during the call.
-fn pass_on_sigterm() {
+/// SIGTERM blocked in this thread while it lives, the thread's previous mask put back on drop.
+struct SigtermBlocked {
     #[cfg(unix)]
-    // SAFETY: kill(2) on our own pid with a standard signal; no memory is touched.
-    unsafe {
-        libc::kill(libc::getpid(), libc::SIGTERM);
+    previous: Option<libc::sigset_t>,
+}
+
+impl SigtermBlocked {
+    fn block() -> Self {
+        #[cfg(unix)]
+        // SAFETY: a set initialised by sigemptyset, and this thread's own mask.
+        unsafe {
+            let mut set: libc::sigset_t = std::mem::zeroed();
+            libc::sigemptyset(&mut set);
+            libc::sigaddset(&mut set, libc::SIGTERM);
+            let mut previous: libc::sigset_t = std::mem::zeroed();
+            let ok = libc::pthread_sigmask(libc::SIG_BLOCK, &set, &mut previous) == 0;
+            Self {
+                previous: ok.then_some(previous),
+            }
+        }
+        #[cfg(not(unix))]
+        Self {}
+    }
+}
+
+impl Drop for SigtermBlocked {
+    fn drop(&mut self) {
+        #[cfg(unix)]
+        if let Some(previous) = &self.previous {
+            // SAFETY: restoring the mask pthread_sigmask gave back above.
+            unsafe {
+                libc::pthread_sigmask(libc::SIG_SETMASK, previous, std::ptr::null_mut());
+            }
+        }
     }
 }
 
