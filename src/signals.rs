@@ -91,19 +91,25 @@ fn wait(set: libc::sigset_t) {
             std::process::exit(code);
         };
         stopping = true;
-        // The state is written on its own thread, so that this one can take a second signal.
-        std::thread::spawn(move || {
-            let kept = handle.stop(name);
-            eprintln!(
-                "\nnonlin3d: interrupted by {name}{}",
-                if kept {
-                    "; the levels converged so far are kept (results.json: \"complete\": false)"
-                } else {
-                    ""
-                }
-            );
+        // The state is written on its own thread, so that this one can take a second signal
+        // (a thread that cannot be started: exit now, as a second signal would).
+        let writer = std::thread::Builder::new()
+            .name("stop".into())
+            .spawn(move || {
+                let kept = handle.stop(name);
+                eprintln!(
+                    "\nnonlin3d: interrupted by {name}{}",
+                    if kept {
+                        "; the levels converged so far are kept (results.json: \"complete\": false)"
+                    } else {
+                        ""
+                    }
+                );
+                std::process::exit(code);
+            });
+        if writer.is_err() {
             std::process::exit(code);
-        });
+        }
     }
 }
 
