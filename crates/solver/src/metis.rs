@@ -26,7 +26,10 @@
 //! handles SIGTERM with more than one thread must keep it blocked in all of them and take it
 //! with sigwait(2), as the `nonlin3d` program does (its src/signals.rs): a blocked signal is
 //! delivered to no thread, whatever disposition GKlib has set meanwhile. SIGABRT is left as it
-//! is (GKlib raises it on its own thread for its error exit).
+//! is: GKlib raises it on its own thread when an allocation fails (`gk_malloc`), which METIS
+//! turns into `METIS_ERROR_MEMORY`. GKlib's error exits that raise SIGTERM instead are reached
+//! only through options this wrapper leaves at METIS's defaults (unknown coarsening or
+//! initial-partition types, graphs stored on disk), never by a graph.
 
 use crate::nested::compress;
 use crate::{Permutation, SolverError, SymmetricPattern};
