@@ -11,6 +11,10 @@
 //!   `"stopped": "interrupted by …"` and exits 130 (SIGINT) or 143 (SIGTERM); a second one
 //!   while that is written exits at once.
 //!
+//! A child inherits the mask, and std does not reset it. So the Slurm commands the sweep
+//! runs (`squeue`, `sacct`, `sbatch`) are started with an empty mask
+//! (src/sweep/cluster.rs, `command`).
+//!
 //! Why not handlers: METIS's GKlib installs its own SIGTERM and SIGABRT handlers for the
 //! length of every METIS call, and its handler longjmps to the call's start on the thread it
 //! runs on. A SIGTERM delivered during an ordering to any other thread crashed the program

@@ -157,9 +157,32 @@ impl Queue {
     }
 }
 
+/// `program` to run with no signal blocked in the child. The `nonlin3d` program blocks SIGINT
+/// and SIGTERM in all its threads (its src/signals.rs), and a child inherits the mask (std
+/// does not reset it): `squeue` or `sbatch` would otherwise ignore Ctrl-C and SIGTERM.
+fn command(program: &str) -> Command {
+    #[allow(unused_mut)]
+    let mut c = Command::new(program);
+    #[cfg(unix)]
+    {
+        use std::os::unix::process::CommandExt;
+        // SAFETY: the closure runs in the child between fork and exec, and calls only
+        // sigemptyset and pthread_sigmask (async-signal-safe) on a set on its stack.
+        unsafe {
+            c.pre_exec(|| {
+                let mut none: libc::sigset_t = std::mem::zeroed();
+                libc::sigemptyset(&mut none);
+                libc::pthread_sigmask(libc::SIG_SETMASK, &none, std::ptr::null_mut());
+                Ok(())
+            });
+        }
+    }
+    c
+}
+
 /// Stdout of `program args` when it runs and succeeds.
 fn output(program: &str, args: &[&str]) -> Option<String> {
-    let o = Command::new(program).args(args).output().ok()?;
+    let o = command(program).args(args).output().ok()?;
     o.status
         .success()
         .then(|| String::from_utf8_lossy(&o.stdout).into_owned())
@@ -372,7 +395,7 @@ fn writable(folder: &Path) -> Result<(), Error> {
 
 /// `sbatch --parsable ARRAY slurm/sweep.sbatch` in `dir`: the job id.
 fn sbatch(dir: &Path, array: &str) -> Result<String, Error> {
-    let o = Command::new("sbatch")
+    let o = command("sbatch")
         .args(["--parsable", array, SCRIPT])
         .current_dir(dir)
         .output()
@@ -416,4 +439,44 @@ pub(crate) fn summary(counts: &std::collections::BTreeMap<&str, usize>) -> Strin
         .map(|(k, n)| format!("{n} {k}"))
         .collect::<Vec<_>>()
         .join(", ")
+}
+
+#[cfg(all(test, target_os = "linux"))]
+mod tests {
+    use super::*;
+
+    /// Whether `sig` is in the `SigBlk:` mask of a /proc status text.
+    fn blocks(status: &str, sig: i32) -> bool {
+        status
+            .lines()
+            .find_map(|l| l.strip_prefix("SigBlk:"))
+            .and_then(|m| u64::from_str_radix(m.trim(), 16).ok())
+            .is_some_and(|m| m >> (sig - 1) & 1 == 1)
+    }
+
+    /// A child started while this thread blocks SIGTERM (as every thread of the program does)
+    /// blocks nothing; started by `Command` alone, it blocks SIGTERM too (std keeps the mask).
+    #[test]
+    fn children_start_with_no_signal_blocked() {
+        // SAFETY: this test thread's own mask, put back at the end.
+        let previous = unsafe {
+            let mut set: libc::sigset_t = std::mem::zeroed();
+            libc::sigemptyset(&mut set);
+            libc::sigaddset(&mut set, libc::SIGTERM);
+            let mut previous: libc::sigset_t = std::mem::zeroed();
+            libc::pthread_sigmask(libc::SIG_BLOCK, &set, &mut previous);
+            previous
+        };
+        let child = |mut c: Command| {
+            let o = c.args(["SigBlk", "/proc/self/status"]).output();
+            o.map(|o| String::from_utf8_lossy(&o.stdout).into_owned())
+        };
+        let ours = child(command("grep"));
+        let plain = child(Command::new("grep"));
+        // SAFETY: restoring the mask pthread_sigmask gave back above.
+        unsafe { libc::pthread_sigmask(libc::SIG_SETMASK, &previous, std::ptr::null_mut()) };
+        let (ours, plain) = (ours.expect("grep runs"), plain.expect("grep runs"));
+        assert!(!blocks(&ours, libc::SIGTERM), "{ours}");
+        assert!(blocks(&plain, libc::SIGTERM), "{plain}");
+    }
 }
