@@ -442,6 +442,7 @@ pub(crate) fn summary(counts: &std::collections::BTreeMap<&str, usize>) -> Strin
 }
 
 #[cfg(all(test, target_os = "linux"))]
+#[allow(clippy::unwrap_used)]
 mod tests {
     use super::*;
 
@@ -475,7 +476,7 @@ mod tests {
         let plain = child(Command::new("grep"));
         // SAFETY: restoring the mask pthread_sigmask gave back above.
         unsafe { libc::pthread_sigmask(libc::SIG_SETMASK, &previous, std::ptr::null_mut()) };
-        let (ours, plain) = (ours.expect("grep runs"), plain.expect("grep runs"));
+        let (ours, plain) = (ours.unwrap(), plain.unwrap());
         assert!(!blocks(&ours, libc::SIGTERM), "{ours}");
         assert!(blocks(&plain, libc::SIGTERM), "{plain}");
     }
