@@ -22,17 +22,9 @@ use nonlin3d::mesh::{EmbeddedParams, embedded_delamination};
 use std::hint::black_box;
 use std::time::Duration;
 
-/// The thesis's plate model at about 89 k DOF (24 slices, 10 + 12 rings, 3 + 6 layers).
-fn plate_89k() -> EmbeddedParams {
-    EmbeddedParams {
-        slices: 24,
-        radial_inside: 10,
-        radial_outside: 12,
-        sub_layers: 3,
-        base_layers: 6,
-        ..EmbeddedParams::thesis_reference()
-    }
-}
+#[path = "shared/plates.rs"]
+mod plates;
+use plates::plate_89k;
 
 fn bench_assembly(c: &mut Criterion) {
     let mut group = c.benchmark_group("assembly");

@@ -18,6 +18,9 @@ use nonlin3d::newton::{NewtonSettings, Stepping, StructuralProblem, follow_path}
 use nonlin3d::solver::SolverKind;
 use std::time::Instant;
 
+#[path = "shared/plates.rs"]
+mod plates;
+
 fn best<T>(reps: usize, mut f: impl FnMut() -> T) -> (f64, T) {
     let mut t_best = f64::INFINITY;
     let mut out = None;
@@ -75,14 +78,7 @@ fn main() {
         ),
         (
             "plate ~100 k DOF (24 slices, 10 + 12 radial, 3 + 6 layers)",
-            EmbeddedParams {
-                slices: 24,
-                radial_inside: 10,
-                radial_outside: 12,
-                sub_layers: 3,
-                base_layers: 6,
-                ..EmbeddedParams::thesis_reference()
-            },
+            plates::plate_89k(),
         ),
     ];
     println!(

@@ -26,6 +26,8 @@
 
 #[path = "../tests/common/mod.rs"]
 mod common;
+#[path = "shared/plates.rs"]
+mod plates;
 
 use nonlin3d::element::IntegrationRule;
 use nonlin3d::laminate::materials;
@@ -330,14 +332,7 @@ fn main() {
     if !quick {
         cases.push((
             "plate, embedded delamination, 24 slices (~89 k)".into(),
-            Source::Plate(EmbeddedParams {
-                slices: 24,
-                radial_inside: 10,
-                radial_outside: 12,
-                sub_layers: 3,
-                base_layers: 6,
-                ..EmbeddedParams::thesis_reference()
-            }),
+            Source::Plate(plates::plate_89k()),
         ));
     }
     // `only=TEXT` keeps the cases whose name contains TEXT.
