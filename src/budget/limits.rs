@@ -94,7 +94,7 @@ pub struct Readings {
     /// Worker threads that allocate (rayon's pool).
     pub threads: usize,
     /// The packing buffer faer's dense kernels (private-gemm on x86-64) allocate, without a way
-    /// to fail, in each thread that factors: twice the L3 cache, bytes.
+    /// to fail, in each thread that factors: twice the L3 cache as sysfs reads it, bytes.
     pub gemm_buffer: u64,
 }
 
@@ -220,9 +220,12 @@ impl Limit {
 
     /// The limits from `readings` and `--max-memory`. Under RLIMIT_AS the address space that
     /// will be reserved without being used is kept in reserve: the malloc arenas of the worker
-    /// threads (64 MiB each, glibc; the main thread allocates from the brk heap) and one dense
-    /// packing buffer ([`Readings::gemm_buffer`]), less what of them is already there (taken as
-    /// the address space not resident, VmSize − VmRSS).
+    /// threads (64 MiB each, glibc; the main thread allocates from the brk heap) and a dense
+    /// packing buffer for each of them ([`Readings::gemm_buffer`]: the split's halves factor on
+    /// two threads at once, each with its own), less what of them is already there (taken as
+    /// the address space not resident, VmSize − VmRSS). One buffer was counted before: on a
+    /// machine whose L3 reads 260 MiB (520 MiB a buffer) the thesis mesh under a 1 GiB limit
+    /// passed the check and died with SIGABRT in the second half's kernel.
     pub fn from_readings(max_memory: Option<u64>, r: &Readings) -> Self {
         let mut bounds = Vec::new();
         let bound = |kind, cap, in_use, reserve| Bound {
@@ -238,7 +241,7 @@ impl Limit {
             bounds.push(bound(LimitKind::Available, cap, 0, 0));
         }
         if let Some(cap) = r.address_space {
-            let arenas = ARENA * r.threads as u64 + r.gemm_buffer;
+            let arenas = (ARENA + r.gemm_buffer) * r.threads.max(1) as u64;
             let reserved = r.vm_size.saturating_sub(r.vm_rss);
             bounds.push(bound(
                 LimitKind::AddressSpace,

@@ -105,18 +105,18 @@ fn readings() -> Readings {
 #[test]
 fn the_limit_is_the_smallest_of_its_sources() {
     let r = readings();
-    // Address space: 4 GiB − 300 MiB in use − (2 arenas and a packing buffer − 200 MiB not
-    // resident, ≥ 0) − the slack; with 4 threads, 120 MiB are still to come.
+    // Address space: 4 GiB − 300 MiB in use − (2 arenas and 2 packing buffers, one a thread,
+    // − 200 MiB not resident, ≥ 0) − the slack; with 4 threads, 4 of each.
     let l = Limit::from_readings(None, &r);
     let t = l.tightest().unwrap();
     assert_eq!(t.kind, LimitKind::AddressSpace);
-    let arenas = (ARENA * 2 + 64 * MIB).saturating_sub(200 * MIB);
+    let arenas = ((ARENA + 64 * MIB) * 2).saturating_sub(200 * MIB);
     assert_eq!(t.left(), 4 * GIB - 300 * MIB - arenas - SLACK);
     let four = Readings {
         threads: 4,
         ..r.clone()
     };
-    let arenas = (ARENA * 4 + 64 * MIB).saturating_sub(200 * MIB);
+    let arenas = ((ARENA + 64 * MIB) * 4).saturating_sub(200 * MIB);
     assert_eq!(
         Limit::from_readings(None, &four).left(),
         Some(4 * GIB - 300 * MIB - arenas - SLACK)
