@@ -12,7 +12,7 @@ use crate::results::{
 use crate::scene::{
     ElementName, ErrorEstimateName, Geometry, MeshControls, PartitionName, Scene, Shape,
 };
-use nonlin3d_mesh::{AccuracyRow, DEFAULT_MESH, EmbeddedParams, ThroughWidthParams};
+use nonlin3d_mesh::{AccuracyRow, CompanionKind, DEFAULT_MESH, EmbeddedParams, ThroughWidthParams};
 use nonlin3d_vcct::estimate::{self, FrontG, Modes};
 use std::time::Instant;
 
@@ -411,8 +411,9 @@ pub(crate) fn attach(
         let (run, seconds) = companion.unwrap_or_else(|| run_companion(scene, 1));
         match run {
             Ok(c) if c.levels.len() == results.levels.len() => {
-                let keeps = embedded_of(scene).is_some_and(|p| p.resolves_the_split());
-                let rule = estimate::Rule::for_companion(keeps);
+                let kind =
+                    embedded_of(scene).map_or(CompanionKind::AllHalved, |p| p.companion_kind());
+                let rule = estimate::Rule::for_companion(kind);
                 for (level, cl) in results.levels.iter_mut().zip(&c.levels) {
                     fill_level(level, cl, rule)?;
                 }

@@ -8,7 +8,7 @@
 //! | [`edge_delamination`], [`thin_film`] | the edge (§5.5) and thin-film (§5.3) variants |
 //! | [`ThroughWidthParams`], [`through_width_delamination`] | the through-width (plane strain) delamination model, Fig. 3.2.3 |
 //! | [`Partition`], [`nonlinear_region`], [`FrontShape`] | the nonlinear and linear substructures of §2.6 / Fig. 3.2.2: the sublaminate ℓ inside the front, or the whole sublaminate |
-//! | [`AccuracyRow`], [`ACCURACY_TABLE`], [`DEFAULT_MESH`] | a target accuracy of G → front-resolving knobs; the default mesh of a scene without knobs (measured on the reference circle, scaled by h and the front length); `coarsened()` on the parameters gives the error estimate's companion mesh |
+//! | [`AccuracyRow`], [`ACCURACY_TABLE`], [`DEFAULT_MESH`] | a target accuracy of G → front-resolving knobs; the default mesh of a scene without knobs (measured on the reference circle, scaled by h and the front length); `coarsened()` on the parameters gives the error estimate's companion mesh, [`CompanionKind`] what it keeps |
 //! | [`Front`], [`FrontPoint`] | delamination-front descriptor for VCCT (§2.8, Fig. 2.8.1): c, a/a′, b/b′, d, cells, Δa, θ, S |
 //! | [`quality`], [`CellQuality`] | minimum scaled Jacobian and aspect ratio per cell |
 //! | [`Transfer`] | nodal fields carried from one mesh onto another's nodes (isoparametric interpolation, crack faces kept apart): a coarse state as a fine mesh's start |
@@ -40,11 +40,12 @@ mod transfer;
 pub use error::MeshError;
 pub use front::{Front, FrontPoint};
 pub use generators::{
-    ACCURACY_TABLE, AccuracyRow, BoxParams, Centre, DEFAULT_MESH, DEFAULT_STRIP_GRADING,
-    EllipticMap, EmbeddedParams, FrontBand, FrontShape, LayerBand, NonlinearRegion, Partition,
-    PlyLayout, REFERENCE_FRONT, ThroughWidthParams, edge_delamination, ellipse_distance,
-    embedded_delamination, embedded_delamination_with_front, graded_coordinates, graded_from_first,
-    nonlinear_region, quarter_front_length, structured_box, thin_film, through_width_delamination,
+    ACCURACY_TABLE, AccuracyRow, BoxParams, Centre, CompanionKind, DEFAULT_MESH,
+    DEFAULT_STRIP_GRADING, EllipticMap, EmbeddedParams, FrontBand, FrontShape, LayerBand,
+    NonlinearRegion, Partition, PlyLayout, REFERENCE_FRONT, ThroughWidthParams, edge_delamination,
+    ellipse_distance, embedded_delamination, embedded_delamination_with_front, graded_coordinates,
+    graded_from_first, nonlinear_region, quarter_front_length, structured_box, thin_film,
+    through_width_delamination,
 };
 pub use io::inp_read::{
     Amplitude, ContactPairs, Controls, InpModel, NodeRef, NotUsed, OutputKind, OutputRequest,

@@ -12,12 +12,32 @@
 //! pessimistic on the band meshes Q and R). With one sublaminate layer the split is the
 //! mesh's largest error (G_II at S = 0 −12 … −26 %), and only a companion that coarsens it
 //! too (e doubled, base layers halved) shows it: every count is halved.
+//!
+//! A mesh with a front band (the default mesh and the band meshes) resolves the front with the
+//! band, and its rings outside the band only carry the far field. Its companion keeps those
+//! rings and halves the band's: halving them too changed G at S = 0 by about 7× the mesh's own
+//! error on the circle and the edge and cancelled the layers' effect on the ellipse
+//! (docs/ACCURACY.md §2f, §3b) — the difference then measured the far field, not the front.
 
 use super::{EmbeddedParams, FrontBand, LayerBand, ThroughWidthParams};
 
 /// ⌈n/2⌉, at least 1: a count halved.
 fn half(n: usize) -> usize {
     n.div_ceil(2).max(1)
+}
+
+/// What a run's companion mesh coarsens ([`EmbeddedParams::coarsened`]): the error estimate's
+/// factors are measured per kind (the vcct crate's `estimate::Rule`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CompanionKind {
+    /// One sublaminate layer (or a through-width strip): every count halved, e doubled.
+    AllHalved,
+    /// Two or more sublaminate layers, no front band or fewer than six slices: the layers at
+    /// the front and e kept; slices, rings and base layers halved.
+    SplitKept,
+    /// Two or more sublaminate layers, a front band and six or more slices: as
+    /// [`Self::SplitKept`], with the rings outside the band kept (the band's rings halved).
+    FarFieldKept,
 }
 
 impl EmbeddedParams {
@@ -28,9 +48,23 @@ impl EmbeddedParams {
         self.sub_layers >= 2 && self.plies.is_none()
     }
 
+    /// What [`Self::coarsened`] keeps, which sets the estimate's factors: the far field where
+    /// the mesh resolves the split, has a front band and six or more slices (its companion
+    /// four or more: a two-slice companion is far from the asymptotic range — band mesh Q's
+    /// was 7× too pessimistic with the far field kept — and with its rings kept the 30 × 60 mm
+    /// ellipse's had an inverted cell).
+    pub fn companion_kind(&self) -> CompanionKind {
+        match (self.resolves_the_split(), self.front_band.is_some()) {
+            (true, true) if self.slices >= 6 => CompanionKind::FarFieldKept,
+            (true, _) => CompanionKind::SplitKept,
+            (false, _) => CompanionKind::AllHalved,
+        }
+    }
+
     /// The companion mesh: slices halved (rounded up to the even count ≥ 2, the generator's
-    /// rule), rings and band rings halved (rounded up; a band that no longer fits inside the
-    /// halved rings loses its extra rings, and is dropped when none is left). Where the mesh
+    /// rule), band rings halved (rounded up; a band that no longer fits inside the rings loses
+    /// its extra rings, and is dropped when none is left) and the rings halved too unless the
+    /// mesh has a front band and resolves the split ([`CompanionKind::FarFieldKept`]). Where the mesh
     /// resolves the split ([`Self::resolves_the_split`]) the sublaminate layers and the front
     /// element are kept and the base layers halved to no fewer than two; otherwise the layers
     /// are halved and the front element doubled (falling back to the thesis grading, `None`,
@@ -39,7 +73,10 @@ impl EmbeddedParams {
     pub fn coarsened(&self) -> Self {
         let slices = (self.slices / 2).max(2);
         let slices = slices + slices % 2;
-        let (inside, outside) = (half(self.radial_inside), half(self.radial_outside));
+        let (inside, outside) = match self.companion_kind() {
+            CompanionKind::FarFieldKept => (self.radial_inside, self.radial_outside),
+            _ => (half(self.radial_inside), half(self.radial_outside)),
+        };
         let front_band = self.front_band.and_then(|b| {
             let band = FrontBand {
                 inside: half(b.inside).min(inside.saturating_sub(1)),
@@ -93,12 +130,27 @@ impl EmbeddedParams {
     /// companion's levels' starts, not an estimate, so it keeps what sets the buckled branch:
     /// with its rings halved as well ([`Self::coarsened`] twice), the 30 × 60 mm ellipse's
     /// coarser companion landed on another branch at ε = −0.001 and its start was dropped
-    /// (docs/PERFORMANCE.md, "Nested companions").
+    /// (docs/PERFORMANCE.md, "Nested companions"). One exception: two slices under the rings of
+    /// a kept far field ([`CompanionKind::FarFieldKept`]: 7 + 6 rings on the default mesh)
+    /// make inverted cells on the 30 × 60 mm ellipse, so where the slices fall to two the rings
+    /// halve too, as long as the front band and the layer band still fit inside them (the
+    /// default mesh's chain then ends on the mesh its companion's companion was before).
     pub fn coarsened_along_front(&self) -> Option<Self> {
         let slices = (self.slices / 2).max(2);
         let slices = slices + slices % 2;
-        (slices < self.slices).then(|| Self {
+        if slices >= self.slices {
+            return None;
+        }
+        let (inside, outside) = (half(self.radial_inside), half(self.radial_outside));
+        let fits = |b: Option<(usize, usize)>| b.is_none_or(|(i, o)| i < inside && o < outside);
+        let halve = slices == 2
+            && self.front_band.is_some()
+            && fits(self.front_band.map(|b| (b.inside, b.outside)))
+            && fits(self.layer_band.map(|b| (b.inside, b.outside)));
+        Some(Self {
             slices,
+            radial_inside: if halve { inside } else { self.radial_inside },
+            radial_outside: if halve { outside } else { self.radial_outside },
             ..self.clone()
         })
     }
@@ -191,6 +243,76 @@ mod tests {
             ..p.clone()
         };
         assert_eq!(thin.coarsened().front_band, None);
+    }
+
+    #[test]
+    fn the_default_meshs_companion_keeps_the_far_field() {
+        // Mesh S (docs/MESH.md): 6 → 18 slices in a band of 5 + 3, 7 + 6 rings, 2 + 4
+        // layers, e = 0.2 mm, layer band 3 + 2. Its companion keeps the rings outside the
+        // band and halves the rest: 4 → 12 slices, band 3 + 2, 7 + 6 rings, 2 + 2 layers,
+        // layer band 2 + 1 (7 581 DOF on the reference circle).
+        let p = EmbeddedParams::thesis_reference().with_accuracy_row(&super::super::DEFAULT_MESH);
+        assert_eq!((p.slices, p.radial_inside, p.radial_outside), (6, 7, 6));
+        assert_eq!((p.sub_layers, p.base_layers), (2, 4));
+        assert_eq!(p.companion_kind(), CompanionKind::FarFieldKept);
+        let c = p.coarsened();
+        assert_eq!((c.slices, c.radial_inside, c.radial_outside), (4, 7, 6));
+        assert_eq!((c.sub_layers, c.base_layers), (2, 2));
+        assert_eq!(c.front_element, Some(0.2e-3));
+        assert_eq!(
+            (c.front_band, c.layer_band),
+            (
+                Some(FrontBand {
+                    inside: 3,
+                    outside: 2
+                }),
+                Some(LayerBand {
+                    inside: 2,
+                    outside: 1
+                })
+            )
+        );
+        // Its cells are valid on the circle and on the 30 × 60 mm ellipse (b/a = 2); with two
+        // slices and the rings kept, the ellipse's are not (why four slices are needed).
+        let valid = |q: &EmbeddedParams| {
+            super::super::embedded_delamination(q).is_ok_and(|m| crate::quality(&m).is_ok())
+        };
+        let ellipse = EmbeddedParams {
+            b: 2.0 * p.a,
+            ..c.clone()
+        };
+        assert!(valid(&c) && valid(&ellipse));
+        let two = EmbeddedParams {
+            slices: 2,
+            front_element: Some(0.3e-3),
+            ..ellipse.clone()
+        };
+        assert!(!valid(&two));
+        // The companion's own companion: two slices, the rings halved with them (the band and
+        // the layer band still fit): 2 → 6 slices, 4 + 3 rings, valid on the ellipse.
+        let Some(cc) = ellipse.coarsened_along_front() else {
+            panic!("4 slices halve");
+        };
+        assert_eq!((cc.slices, cc.radial_inside, cc.radial_outside), (2, 4, 3));
+        assert_eq!((cc.front_band, cc.layer_band), (c.front_band, c.layer_band));
+        assert!(valid(&cc));
+        // Four slices (band mesh Q) or no band: the rings halve as well.
+        let q = EmbeddedParams {
+            slices: 4,
+            ..p.clone()
+        };
+        assert_eq!(q.companion_kind(), CompanionKind::SplitKept);
+        assert_eq!(
+            (q.coarsened().radial_inside, q.coarsened().radial_outside),
+            (4, 3)
+        );
+        let no_band = EmbeddedParams {
+            front_band: None,
+            layer_band: None,
+            ..p.clone()
+        };
+        assert_eq!(no_band.companion_kind(), CompanionKind::SplitKept);
+        assert_eq!(no_band.coarsened().radial_inside, 4);
     }
 
     #[test]

@@ -6,6 +6,7 @@
 
 mod accuracy;
 mod coarse;
+pub use coarse::CompanionKind;
 mod embedded;
 mod grading;
 mod partition;
