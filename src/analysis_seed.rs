@@ -24,9 +24,9 @@
 //!
 //! **Nested companions.** A companion of [`NESTED_FROM_DOFS`] or more starts its own levels
 //! from a coarser companion of its own in the same way (its slices halved, the rest kept but
-//! for the rings where the slices fall to two: `EmbeddedParams::coarsened_along_front`, src/analysis_estimate.rs `companion_scene`),
-//! which follows the path itself ([`DEEPEST`]): three meshes, the path followed on the
-//! cheapest. The coarser companion serves the seeds only; the estimate is the companion's.
+//! for the rings where the slices fall to two: `EmbeddedParams::coarsened_along_front`,
+//! src/analysis_estimate.rs `companion_scene`), which follows the path itself ([`DEEPEST`]):
+//! three meshes, the path followed on the cheapest. The coarser companion serves the seeds only; the estimate is the companion's.
 
 use super::deflections;
 use super::level::{Solved, engage_contact};
@@ -54,9 +54,9 @@ const KEEP_SEEDING: f64 = 0.15;
 /// contact set ([`Seeds::followed_set`]): the size from which a companion is nested itself
 /// (the default mesh's, 7 581 DOF on the reference circle, with the front band; 6 405 when
 /// this was measured). Measured over eleven scenes (docs/PERFORMANCE.md, "The companion's
-/// contact set, kept for fine companions"): the companions of 6 405 DOF took the reference scene from 33 to 26 of this
-/// mesh's iterations and the 60 mm circle from 58 to 54, or left them unchanged; those of
-/// 1 773 DOF and less (2–4 coarse slices) cost 2–8 more.
+/// contact set, kept for fine companions"): the companions of 6 405 DOF took the reference
+/// scene from 33 to 26 of this mesh's iterations and the 60 mm circle from 58 to 54, or left
+/// them unchanged; those of 1 773 DOF and less (2–4 coarse slices) cost 2–8 more.
 const SET_FROM_DOFS: usize = NESTED_FROM_DOFS;
 
 /// One converged level of the companion, as the sweep needs it.

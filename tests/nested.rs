@@ -258,10 +258,10 @@ fn a_seeded_level_that_overlaps_where_the_companion_did_not_goes_on_in_the_conta
 
 /// Nested companions on the default mesh, as a user runs it: `nonlin3d run` on the reference
 /// circle without mesh knobs, one level at ε = −0.004 (18 444 DOF; companion 7 581, which
-/// starts from its own companion, 4 → 2 slices and 7 + 6 → 4 + 3 rings). The `-v` lines name the coarser companion
-/// apart from the companion, `results.json` counts the companion's seeded level, and one and
-/// two threads give the same bits (the companions wait for each other's levels, whatever
-/// runs when).
+/// starts from its own companion, 4 → 2 slices and 7 + 6 → 4 + 3 rings). The `-v` lines name
+/// the coarser companion apart from the companion, `results.json` counts the companion's
+/// seeded level, and one and two threads give the same bits (the companions wait for each
+/// other's levels, whatever runs when).
 #[test]
 fn nested_companions_serve_the_default_mesh_with_the_same_bits_on_any_thread_count() {
     let dir = std::env::temp_dir().join(format!("nonlin3d-nested-3-{}", std::process::id()));

@@ -63,8 +63,8 @@ impl EmbeddedParams {
 
     /// The companion mesh: slices halved (rounded up to the even count ≥ 2, the generator's
     /// rule), band rings halved (rounded up; a band that no longer fits inside the rings loses
-    /// its extra rings, and is dropped when none is left) and the rings halved too unless the
-    /// mesh has a front band and resolves the split ([`CompanionKind::FarFieldKept`]). Where the mesh
+    /// its extra rings, and is dropped when none is left) and the rings halved too, except for
+    /// a [`CompanionKind::FarFieldKept`] mesh, whose rings are kept. Where the mesh
     /// resolves the split ([`Self::resolves_the_split`]) the sublaminate layers and the front
     /// element are kept and the base layers halved to no fewer than two; otherwise the layers
     /// are halved and the front element doubled (falling back to the thesis grading, `None`,
