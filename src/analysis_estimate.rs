@@ -227,7 +227,7 @@ pub(crate) fn resolve_mesh(scene: &Scene) -> Result<(Scene, Option<MeshChoice>),
 /// companion's own, whose `scene` is the companion's, src/analysis_seed.rs "Nested
 /// companions"): the same scene on the companion mesh — at depth 1 `coarsened()` of the mesh
 /// crate (in-plane counts halved, the front's through-thickness mesh kept where it resolves
-/// the mode split), deeper `coarsened_along_front()` (the slices halved, an error when they
+/// the mode split, the rings outside a front band kept: `companion_kind()`), deeper `coarsened_along_front()` (the slices halved, an error when they
 /// cannot; a strip has none) — without an estimate or target of its own.
 pub(crate) fn companion_scene(scene: &Scene, depth: usize) -> Result<Scene, Error> {
     let mut c = scene.clone();

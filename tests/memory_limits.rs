@@ -105,35 +105,12 @@ fn max_memory_refuses_what_does_not_fit() {
     assert!(stderr.contains("entries"), "{stderr}");
 }
 
-/// The address space faer's dense kernels reserve in each thread that factors (private-gemm's
-/// packing buffer: twice the L3 cache as sysfs reads it; 32 MiB where it cannot be read),
-/// bytes; 0 off x86-64.
-fn gemm_buffer() -> u64 {
-    if !cfg!(target_arch = "x86_64") {
-        return 0;
-    }
-    let l3 = std::fs::read_to_string("/sys/devices/system/cpu/cpu0/cache/index3/size")
-        .ok()
-        .and_then(|t| {
-            let t = t.trim();
-            let (num, scale) = match t.strip_suffix('K') {
-                Some(n) => (n, 1024),
-                None => match t.strip_suffix('M') {
-                    Some(n) => (n, 1024 * 1024),
-                    None => (t, 1),
-                },
-            };
-            num.parse::<u64>().ok().map(|n| n * scale)
-        })
-        .unwrap_or(32 << 20);
-    2 * l3
-}
-
 /// A model that fits is not refused: the reference scene runs under `--max-memory 2GiB` and
 /// under an address-space limit of 1 GiB plus the two factoring threads' packing buffers (it
 /// needs about 250 MiB of address space besides, most of it thread arenas). The buffers are
-/// the machine's: 64 MiB where the L3 reads 16 MiB, 1 040 MiB where it reads 260 MiB (where
-/// the run under 1 GiB alone was refused, and before that aborted).
+/// the machine's, as the program reads them (`budget::Readings`: twice the L3 each): 64 MiB
+/// where the L3 reads 16 MiB, 1 040 MiB where it reads 260 MiB (where the run under 1 GiB
+/// alone was refused, and before that aborted).
 #[test]
 fn models_that_fit_run() {
     let dir = tmp("memory-fits");
@@ -145,7 +122,11 @@ fn models_that_fit_run() {
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let o = run_under_address_space_limit((1 << 30) + 2 * gemm_buffer(), &scene, &dir.join("b"));
+    let o = run_under_address_space_limit(
+        (1 << 30) + 2 * nonlin3d::budget::Readings::read().gemm_buffer,
+        &scene,
+        &dir.join("b"),
+    );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert!(dir.join("b").join("results.json").exists());
 }
