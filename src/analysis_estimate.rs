@@ -12,7 +12,9 @@ use crate::results::{
 use crate::scene::{
     ElementName, ErrorEstimateName, Geometry, MeshControls, PartitionName, Scene, Shape,
 };
-use nonlin3d_mesh::{AccuracyRow, CompanionKind, DEFAULT_MESH, EmbeddedParams, ThroughWidthParams};
+use nonlin3d_mesh::{
+    AccuracyRow, CompanionKind, DEFAULT_MESH, EmbeddedParams, MidEdges, ThroughWidthParams,
+};
 use nonlin3d_vcct::estimate::{self, FrontG, Modes};
 use std::time::Instant;
 
@@ -78,6 +80,17 @@ fn set_controls(c: &mut MeshControls, p: &EmbeddedParams) {
     c.front_element_mm = p.front_element.map(|e| e / MM);
     c.front_band = p.front_band.map(|b| [b.inside, b.outside]);
     c.layer_band = p.layer_band.map(|b| [b.inside, b.outside]);
+    c.curved_edges = Some(p.mid_edges == MidEdges::Mapped);
+}
+
+/// `p` with the scene's own `curved_edges`, where it gives one, over the table row's.
+fn with_scene_edges(p: EmbeddedParams, scene: &Scene) -> EmbeddedParams {
+    let mid_edges = match scene.mesh.curved_edges {
+        Some(true) => MidEdges::Mapped,
+        Some(false) => MidEdges::Chords,
+        None => p.mid_edges,
+    };
+    EmbeddedParams { mid_edges, ..p }
 }
 
 /// Whether a scene takes the default mesh ([`nonlin3d_mesh::DEFAULT_MESH`]): an embedded or
@@ -149,7 +162,7 @@ pub(crate) fn resolve_mesh(scene: &Scene) -> Result<(Scene, Option<MeshChoice>),
     if takes_default_mesh(scene)
         && let Some(p) = embedded_of(scene)
     {
-        let chosen = p.with_accuracy_row(&DEFAULT_MESH);
+        let chosen = with_scene_edges(p.with_accuracy_row(&DEFAULT_MESH), scene);
         let mut out = scene.clone();
         set_controls(&mut out.mesh, &chosen);
         let choice = MeshChoice::of(&chosen, &DEFAULT_MESH, true, MeshRule::Default, Vec::new());
@@ -162,6 +175,7 @@ pub(crate) fn resolve_mesh(scene: &Scene) -> Result<(Scene, Option<MeshChoice>),
     plain.mesh = MeshControls {
         element: scene.mesh.element,
         elliptic_map: scene.mesh.elliptic_map,
+        curved_edges: scene.mesh.curved_edges,
         ..MeshControls::default()
     };
     let Some(p) = embedded_of(&plain) else {
@@ -171,7 +185,7 @@ pub(crate) fn resolve_mesh(scene: &Scene) -> Result<(Scene, Option<MeshChoice>),
         )));
     };
     let (row, meets) = AccuracyRow::for_target(target);
-    let chosen = p.with_accuracy_row(&row);
+    let chosen = with_scene_edges(p.with_accuracy_row(&row), scene);
     let given = &scene.mesh;
     let overridden: Vec<String> = [
         ("slices", given.slices.is_some()),
@@ -199,6 +213,7 @@ pub(crate) fn resolve_mesh(scene: &Scene) -> Result<(Scene, Option<MeshChoice>),
     m.base_layers = given.base_layers.or(c.base_layers);
     m.front_element_mm = given.front_element_mm.or(c.front_element_mm);
     m.front_band = given.front_band.or(c.front_band);
+    m.curved_edges = c.curved_edges;
     // A band the explicit ring counts no longer hold is dropped.
     if let (Some([bi, bo]), Some(i), Some(o)) = (m.front_band, m.inside, m.outside)
         && (bi >= i || bo >= o)
@@ -218,6 +233,7 @@ pub(crate) fn resolve_mesh(scene: &Scene) -> Result<(Scene, Option<MeshChoice>),
         front_element_mm: m.front_element_mm,
         front_band: m.front_band,
         layer_band: m.layer_band,
+        curved_edges: chosen.mid_edges == MidEdges::Mapped,
         overridden,
     };
     Ok((out, Some(choice)))

@@ -5,7 +5,7 @@
 //! [`Scene::warnings`] live here.
 
 use crate::Error;
-use crate::scene::{Geometry, MaterialSpec, PartitionName, Scene, Shape};
+use crate::scene::{ElementName, Geometry, MaterialSpec, PartitionName, Scene, Shape};
 use nonlin3d_mesh::EmbeddedParams;
 
 /// Element counts above this along one mesh axis are refused before anything is allocated
@@ -293,6 +293,13 @@ fn mesh_controls(s: &Scene) -> Result<(), Error> {
         return bad(
             "mesh.elliptic_map: only elliptic embedded and edge delaminations are mapped (the \
              plate is circular, rectangles and through-width fronts are not elliptic)"
+                .into(),
+        );
+    }
+    if c.curved_edges == Some(true) && (through || c.element == Some(ElementName::Hex8)) {
+        return bad(
+            "mesh.curved_edges = true: curved edges are built for Hex20 meshes of embedded, edge \
+             and plate models (a Hex8 has no mid-edge nodes, a through-width front is straight)"
                 .into(),
         );
     }

@@ -9,8 +9,8 @@ use crate::scene::{Geometry, MapName, Scene, Shape};
 use nonlin3d_laminate::Stiffness;
 use nonlin3d_mesh::names::{BONDED, CENTER_TOP, CRACK_LOWER, X0, X1, Y_HOLD, Y0, Y1, Z0};
 use nonlin3d_mesh::{
-    EllipticMap, EmbeddedParams, Front, FrontBand, Imperfection, LayerBand, Mesh, PlyLayout,
-    ThroughWidthParams, embedded_delamination_with_front, through_width_delamination,
+    EllipticMap, EmbeddedParams, Front, FrontBand, Imperfection, LayerBand, Mesh, MidEdges,
+    PlyLayout, ThroughWidthParams, embedded_delamination_with_front, through_width_delamination,
 };
 
 /// Which boundary conditions a model gets (thesis §3.2).
@@ -216,6 +216,11 @@ pub(crate) fn embedded_params(
             Shape::Rectangle => EllipticMap::Rectangle,
         },
         plies,
+        mid_edges: if c.curved_edges == Some(true) {
+            MidEdges::Mapped
+        } else {
+            MidEdges::Chords
+        },
         ..d
     }
 }

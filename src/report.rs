@@ -461,8 +461,13 @@ fn mesh_line(m: &crate::results::MeshChoice, dofs: usize) -> String {
         }
         crate::results::MeshRule::Target => "picked by [mesh] accuracy",
     };
+    let curved = match (m.curved_edges, m.front_band) {
+        (true, Some(_)) => ", the band's rings curved",
+        (true, None) => ", the rings curved",
+        (false, _) => "",
+    };
     format!(
-        "mesh: {why}: {} slices{band}, {} + {} rings{element}, {layers}; {dofs} DOFs",
+        "mesh: {why}: {} slices{band}, {} + {} rings{element}, {layers}{curved}; {dofs} DOFs",
         m.slices, m.inside, m.outside
     )
 }

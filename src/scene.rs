@@ -356,6 +356,13 @@ pub struct MeshControls {
     /// aspect ratio).
     #[serde(default)]
     pub elliptic_map: Option<MapName>,
+    /// Hex20 mid-edge nodes on the mesh's curves (embedded and edge delaminations): `true` puts
+    /// every ring's mid-edge nodes on the ring as the planform map draws it, so the front's
+    /// nodes all lie on the ellipse and VCCT measures the widths along the curved edges;
+    /// `false` (default) keeps them at the midpoints of their corners, as the thesis does
+    /// (§3.1: straight edges, the front the polygon through its corners).
+    #[serde(default)]
+    pub curved_edges: Option<bool>,
     /// The discretisation-error estimate reported with every G (docs/ACCURACY.md §3):
     /// `companion` (default: the same levels on a coarser companion mesh — in-plane counts
     /// halved, the sublaminate layers kept where there are two or more — about 12–30 % of the

@@ -98,12 +98,34 @@ fn a_scene_without_mesh_knobs_takes_the_default_mesh() {
     );
 }
 
+/// The default mesh curves its front band's rings (docs/MESH.md, `curved_edges`): every node of
+/// the front set, mid-edge nodes included, lies on the 15 mm circle; `curved_edges = false`
+/// keeps the same mesh with straight edges (the front's mid-edge nodes inside the circle by
+/// their sagitta, up to 0.014 mm at the band's 5° arcs), and so does any mesh knob.
+#[test]
+fn the_default_mesh_curves_its_band_and_a_scene_can_straighten_it() {
+    let off_circle = |text: &str| {
+        let scene = Scene::from_toml(text).unwrap();
+        let mesh = nonlin3d::analysis::build_model(&scene).unwrap().mesh;
+        mesh.node_sets["front"]
+            .iter()
+            .map(|&n| (mesh.nodes[n][0].hypot(mesh.nodes[n][1]) - 15e-3).abs())
+            .fold(0.0, f64::max)
+    };
+    let curved = off_circle(DEFAULT_SCENE);
+    let straight = off_circle(&DEFAULT_SCENE.replace("[mesh]\n", "[mesh]\ncurved_edges = false\n"));
+    let thesis = off_circle(THESIS_SCENE);
+    eprintln!("largest distance off the circle, m: {curved:e} {straight:e} {thesis:e}");
+    assert!(curved < 1e-15, "{curved}");
+    assert!(straight > 1e-5 && thesis > 1e-5, "{straight} {thesis}");
+}
+
 /// `nonlin3d run` with no scene runs the reference case on the default mesh, says so on the
 /// terminal, reports the choice in results.json, and at ε = −0.004 is within issue 25's acceptance of the
 /// mesh-converged values with contact (docs/ACCURACY.md §2: Richardson over the
 /// front-resolving family, G_T max 221.0, G_I(0) 135.1, G_II(0) 86.84 J/m², uncertain by
-/// about 1 %): G_T max within 2 %, G_I and G_II at S = 0 within 3 % (measured −1.33, −2.23,
-/// −1.02 %). The thesis's mesh is −6.4, +5.5 and −26 % off there.
+/// about 1 %): G_T max within 2 %, G_I and G_II at S = 0 within 3 % (measured −1.10, −1.99,
+/// −0.80 %, with its front band curved). The thesis's mesh is −6.4, +5.5 and −26 % off there.
 #[test]
 fn the_default_run_is_within_the_accuracy_of_issue_25() {
     let dir = tmp("run");
@@ -114,12 +136,17 @@ fn the_default_run_is_within_the_accuracy_of_issue_25() {
         stdout.contains("mesh: the default mesh (no [mesh] knobs;"),
         "{stdout}"
     );
+    assert!(
+        stdout.contains("the band's rings curved; 18444 DOFs"),
+        "{stdout}"
+    );
     let json = common::results_json(&out);
     assert_eq!(json["model"]["dofs"].as_u64(), Some(18_444));
     let chosen = &json["accuracy"]["chosen_mesh"];
     assert_eq!(chosen["rule"].as_str(), Some("default"));
     assert_eq!(chosen["slices"].as_u64(), Some(6));
     assert_eq!(chosen["layer_band"], serde_json::json!([3, 2]));
+    assert_eq!(chosen["curved_edges"].as_bool(), Some(true));
     assert!(json["accuracy"]["target"].is_null());
     let level = json["levels"]
         .as_array()

@@ -145,3 +145,29 @@ fn controls_and_loads_the_model_would_ignore_are_refused() {
     s.loads.transverse_n = vec![10.0];
     assert!(message(&s).contains("loads.transverse_n"));
 }
+
+#[test]
+fn curved_edges_are_refused_where_there_are_no_curves_to_follow() {
+    let mut s = reference();
+    s.mesh.curved_edges = Some(true);
+    assert!(s.validate().is_ok());
+    s.mesh.element = Some(crate::scene::ElementName::Hex8);
+    let m = message(&s);
+    assert!(
+        m.contains("mesh.curved_edges = true") && m.contains("Hex8"),
+        "{m}"
+    );
+    s.mesh.element = None;
+    s.mesh.slices = None;
+    s.geometry = crate::scene::Geometry::ThroughWidth {
+        a_mm: 15.0,
+        length_mm: 60.0,
+        width_mm: 5.0,
+        h_mm: 0.4,
+        base_mm: 4.0,
+    };
+    let m = message(&s);
+    assert!(m.contains("through-width"), "{m}");
+    s.mesh.curved_edges = Some(false);
+    assert!(s.validate().is_ok(), "{}", message(&s));
+}

@@ -88,6 +88,8 @@ pub struct MeshChoice {
     pub front_band: Option<[usize; 2]>,
     /// Layer band `[inside, outside]` (null: none).
     pub layer_band: Option<[usize; 2]>,
+    /// Whether the rings' mid-edge nodes sit on the mapped curves (`[mesh] curved_edges`).
+    pub curved_edges: bool,
     /// The knobs the scene gave explicitly, which override the table's.
     pub overridden: Vec<String>,
 }
@@ -114,6 +116,7 @@ impl MeshChoice {
             front_element_mm: chosen.front_element.map(|e| e * 1e3),
             front_band: chosen.front_band.map(|b| [b.inside, b.outside]),
             layer_band: chosen.layer_band.map(|b| [b.inside, b.outside]),
+            curved_edges: chosen.mid_edges == nonlin3d_mesh::MidEdges::Mapped,
             overridden,
         }
     }

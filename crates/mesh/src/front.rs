@@ -116,6 +116,22 @@ impl CellsTouching {
 pub struct Front {
     /// Front nodes from the y axis (S = 0) to the x axis.
     pub points: Vec<FrontPoint>,
+    /// How VCCT measures the length of front a corner point closes (eq. 2.8.1).
+    pub widths: FrontWidths,
+}
+
+/// How the virtual crack closure measures the width of front a Hex20 corner point closes
+/// (thesis eq. 2.8.1: G = Ē / (Δa · width)).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum FrontWidths {
+    /// The chord between the midside nodes on either side (§2.8: "Δa times the distance
+    /// between the midside nodes"), for fronts of straight edges.
+    #[default]
+    Chords,
+    /// The length along the quadratic edges from the midside node on one side through the
+    /// corner to the midside node on the other, for fronts whose midside nodes lie on the curve
+    /// ([`MidEdges::Mapped`](crate::MidEdges::Mapped)).
+    AlongEdges,
 }
 
 impl Front {

@@ -38,10 +38,10 @@ mod quality;
 mod transfer;
 
 pub use error::MeshError;
-pub use front::{Front, FrontPoint};
+pub use front::{Front, FrontPoint, FrontWidths};
 pub use generators::{
     ACCURACY_TABLE, AccuracyRow, BoxParams, Centre, CompanionKind, DEFAULT_MESH,
-    DEFAULT_STRIP_GRADING, EllipticMap, EmbeddedParams, FrontBand, FrontShape, LayerBand,
+    DEFAULT_STRIP_GRADING, EllipticMap, EmbeddedParams, FrontBand, FrontShape, LayerBand, MidEdges,
     NonlinearRegion, Partition, PlyLayout, REFERENCE_FRONT, ThroughWidthParams, edge_delamination,
     ellipse_distance, embedded_delamination, embedded_delamination_with_front, graded_coordinates,
     graded_from_first, nonlinear_region, quarter_front_length, structured_box, thin_film,

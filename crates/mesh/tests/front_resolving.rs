@@ -12,6 +12,8 @@ use nonlin3d_mesh::{
     EllipticMap, EmbeddedParams, Mesh, MeshError, embedded_delamination_with_front, quality,
 };
 
+#[path = "front_resolving/curved.rs"]
+mod curved;
 #[path = "front_resolving/front_band.rs"]
 mod front_band;
 #[path = "front_resolving/layer_band.rs"]

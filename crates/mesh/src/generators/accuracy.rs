@@ -3,7 +3,7 @@
 //! §2b), scaled to a model by its sublaminate thickness h (the front element) and its front
 //! length (the slices).
 
-use super::{EmbeddedParams, FrontBand, LayerBand};
+use super::{EmbeddedParams, FrontBand, LayerBand, MidEdges};
 
 /// One measured mesh of the reference circle and the worst error of G it gave.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -33,6 +33,8 @@ pub struct AccuracyRow {
     pub front: f64,
     /// The fewest slices the row gives a model of a shorter front.
     pub min_slices: usize,
+    /// Where the Hex20 mid-edge nodes sit, as the row was measured.
+    pub mid_edges: MidEdges,
 }
 
 /// The quarter front length of the table's circle (a = b = 15 mm), m.
@@ -54,6 +56,7 @@ pub const ACCURACY_TABLE: [AccuracyRow; 3] = [
         layer_band: None,
         front: REFERENCE_FRONT,
         min_slices: 2,
+        mid_edges: MidEdges::Chords,
     },
     // Q: 4 → 12, 7, 6, 2, 2, e = 0.75 h, band 5 + 3: −2.1 %, −1.2 %, −1.3 %.
     AccuracyRow {
@@ -68,6 +71,7 @@ pub const ACCURACY_TABLE: [AccuracyRow; 3] = [
         layer_band: None,
         front: REFERENCE_FRONT,
         min_slices: 2,
+        mid_edges: MidEdges::Chords,
     },
     // R: 6 → 18, 7, 6, 2, 2, e = 0.75 h, band 5 + 3: −0.7 %, −0.2 %, −0.9 %.
     AccuracyRow {
@@ -82,6 +86,7 @@ pub const ACCURACY_TABLE: [AccuracyRow; 3] = [
         layer_band: None,
         front: REFERENCE_FRONT,
         min_slices: 2,
+        mid_edges: MidEdges::Chords,
     },
 ];
 
@@ -93,7 +98,10 @@ pub const ACCURACY_TABLE: [AccuracyRow; 3] = [
 /// −1.1 / −1.31 %, G_II(0) −1.02 / −0.68 / −1.36 % on the 30 mm circle, the 30 × 60 mm ellipse
 /// and the 15 mm edge delamination; the worst, as the table counts it (over G_T max), 1.4 %.
 /// Six slices met that on quarter fronts of 23.6 mm (circle, edge) and 36.3 mm (ellipse):
-/// longer fronts get proportionally more, shorter ones keep six.
+/// longer fronts get proportionally more, shorter ones keep six. The band's rings are curved
+/// ([`MidEdges::Mapped`]): at no cost, G_T max −1.09 / −0.73 / −0.81 % and G_T(0) −1.09 /
+/// −0.76 / −0.81 % instead of −1.33 / −0.75 / −0.99 and −1.33 / −1.13 / −0.99 %
+/// (docs/ACCURACY.md §3c).
 pub const DEFAULT_MESH: AccuracyRow = AccuracyRow {
     worst: 0.014,
     slices: 6,
@@ -106,6 +114,7 @@ pub const DEFAULT_MESH: AccuracyRow = AccuracyRow {
     layer_band: Some([3, 2]),
     front: 36.33e-3,
     min_slices: 6,
+    mid_edges: MidEdges::Mapped,
 };
 
 /// The quarter perimeter of the ellipse with semi-axes a, b (Ramanujan's second
@@ -132,6 +141,7 @@ impl EmbeddedParams {
     /// times h; the slices times the front length over the row's (to the nearest even count,
     /// at least `min_slices`); rings times ⌈a/b⌉ when the delamination is longer along the
     /// load (as [`EmbeddedParams::radial_inside_for`]). Rectangles use the ellipse's length.
+    /// The mid-edge nodes sit as the row's did.
     pub fn with_accuracy_row(&self, row: &AccuracyRow) -> Self {
         let scale = quarter_front_length(self.a, self.b) / row.front;
         let slices =
@@ -155,6 +165,7 @@ impl EmbeddedParams {
                 inside: (i * stretch).min(inside - 1),
                 outside: o,
             }),
+            mid_edges: row.mid_edges,
             ..self.clone()
         }
     }

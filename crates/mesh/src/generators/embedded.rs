@@ -20,7 +20,9 @@
 //!    transition then blend into the square, so the boundary stays the square while the region
 //!    around the front keeps the exact map (and its orthogonality).
 //! 4. The section is swept through the thickness stations; Hex20 mid-edge nodes sit at the
-//!    midpoints of their corners (the thesis's re-centring after the map).
+//!    midpoints of their corners (the thesis's re-centring after the map), or with
+//!    [`MidEdges::Mapped`] at the map of the circular mesh's mid-edge points, so the rings are
+//!    curved as the map curves them (issue 25).
 //! 5. Corner nodes on z = H strictly inside the front are duplicated (lower copy for base cells,
 //!    upper for sublaminate cells); mid-edge nodes are keyed by their two corner nodes, so exactly
 //!    the mid-edge nodes between duplicated corners, or between a duplicated corner and the
@@ -42,7 +44,7 @@ mod planform;
 mod sets;
 
 pub use maps::EllipticMap;
-pub use params::{Centre, EmbeddedParams, FrontBand, LayerBand, PlyLayout};
+pub use params::{Centre, EmbeddedParams, FrontBand, LayerBand, MidEdges, PlyLayout};
 
 use crate::MeshError;
 use crate::front::Front;

@@ -17,8 +17,8 @@ pub use accuracy::{
     ACCURACY_TABLE, AccuracyRow, DEFAULT_MESH, REFERENCE_FRONT, quarter_front_length,
 };
 pub use embedded::{
-    Centre, EllipticMap, EmbeddedParams, FrontBand, LayerBand, PlyLayout, edge_delamination,
-    embedded_delamination, embedded_delamination_with_front, thin_film,
+    Centre, EllipticMap, EmbeddedParams, FrontBand, LayerBand, MidEdges, PlyLayout,
+    edge_delamination, embedded_delamination, embedded_delamination_with_front, thin_film,
 };
 pub use grading::{graded_coordinates, graded_from_first};
 pub(crate) use grading::{grid_index, grid_position};

@@ -4,7 +4,7 @@
 //! y = 0 and y = W it responds in plane strain (§3.2).
 
 use crate::MeshError;
-use crate::front::{CellsTouching, Front, FrontPoint, missing_node as missing};
+use crate::front::{CellsTouching, Front, FrontPoint, FrontWidths, missing_node as missing};
 use crate::generators::{graded_coordinates, graded_from_first, grid_index, grid_position};
 use crate::model::{Cell, Mesh};
 use crate::names;
@@ -171,7 +171,11 @@ pub fn through_width_delamination(p: &ThroughWidthParams) -> Result<(Mesh, Front
         .insert(names::ALL.into(), (0..mesh.cells.len()).collect());
     mesh.validate()?;
     mesh.check_geometry()?;
-    let front = Front { points }.finish_straight(&mesh.nodes, [0.0, -1.0]);
+    let front = Front {
+        points,
+        widths: FrontWidths::Chords,
+    }
+    .finish_straight(&mesh.nodes, [0.0, -1.0]);
     Ok((mesh, front))
 }
 

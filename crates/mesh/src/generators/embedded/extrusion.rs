@@ -1,7 +1,8 @@
 //! The through-thickness extrusion of thesis §3.1–3.2 (Fig. 3.2.1): the planform section swept
 //! through the thickness stations (base graded towards z = H, sublaminate or ply layers above),
 //! corner nodes on z = H inside the front duplicated, Hex20 mid-edge nodes at the midpoints of
-//! their corners (the thesis's re-centring after the map of eq. 3.1.1–3.1.2).
+//! their corners (the thesis's re-centring after the map of eq. 3.1.1–3.1.2) or, in the
+//! planform, where the section puts them ([`MidEdges::Mapped`](super::MidEdges::Mapped)).
 
 use super::EmbeddedParams;
 use super::layers::{LayerTransition, mid_parity, template};
@@ -30,6 +31,8 @@ pub(super) struct Solid {
     parity: usize,
     /// Hex20 mid-edge nodes keyed by their two corner nodes (smaller index first).
     pub(super) mid: HashMap<(usize, usize), usize>,
+    /// The section vertex of each corner node (mid-edge nodes are not listed).
+    vertex: Vec<usize>,
     /// Cells below z = H (the base laminate).
     pub(super) base_cells: Vec<usize>,
     /// Cells above z = H (the sublaminate).
@@ -71,6 +74,7 @@ fn corner_nodes(s: &Section, z: &[f64], zh: usize, parity: usize) -> Solid {
     let mut mesh = Mesh::default();
     let mut corner = vec![vec![None; nv]; z.len()];
     let mut lower = vec![None; nv];
+    let mut vertex = Vec::new();
     for (l, &zl) in z.iter().enumerate() {
         for (v, pt) in s.points.iter().enumerate() {
             if !s.column[v].has_station(l, parity) {
@@ -78,9 +82,11 @@ fn corner_nodes(s: &Section, z: &[f64], zh: usize, parity: usize) -> Solid {
             }
             corner[l][v] = Some(mesh.nodes.len());
             mesh.nodes.push([pt[0], pt[1], zl]);
+            vertex.push(v);
             if l == zh && s.inside[v] {
                 lower[v] = Some(mesh.nodes.len());
                 mesh.nodes.push([pt[0], pt[1], zl]);
+                vertex.push(v);
             }
         }
     }
@@ -91,6 +97,7 @@ fn corner_nodes(s: &Section, z: &[f64], zh: usize, parity: usize) -> Solid {
         zh,
         parity,
         mid: HashMap::new(),
+        vertex,
         base_cells: Vec::new(),
         sub_cells: Vec::new(),
     }
@@ -155,11 +162,11 @@ impl Solid {
             {
                 nodes.push(self.node(station, v, below)?);
             }
-            self.cell(kind, nodes, props, below);
+            self.cell(s, kind, nodes, props, below);
         }
         if l.is_multiple_of(2) {
             for t in &s.layer_transitions {
-                self.transition_cells(kind, t, l / 2, props, below)?;
+                self.transition_cells(s, kind, t, l / 2, props, below)?;
             }
         }
         Ok(())
@@ -171,6 +178,7 @@ impl Solid {
     /// points out of or into the centre).
     fn transition_cells(
         &mut self,
+        s: &Section,
         kind: ElementKind,
         t: &LayerTransition,
         j: usize,
@@ -188,7 +196,7 @@ impl Solid {
             if !self.right_handed(&nodes) {
                 nodes.rotate_left(4);
             }
-            self.cell(kind, nodes, props, below);
+            self.cell(s, kind, nodes, props, below);
         }
         Ok(())
     }
@@ -212,10 +220,17 @@ impl Solid {
 
     /// Adds a cell on corner nodes `nodes` (and, for Hex20, its mid-edge nodes), in the base
     /// or the sublaminate set.
-    fn cell(&mut self, kind: ElementKind, mut nodes: Vec<usize>, props: (usize, f64), below: bool) {
+    fn cell(
+        &mut self,
+        s: &Section,
+        kind: ElementKind,
+        mut nodes: Vec<usize>,
+        props: (usize, f64),
+        below: bool,
+    ) {
         if kind == ElementKind::Hex20 {
             for &(a, b) in nonlin3d_element::HEX20_EDGES.iter() {
-                let id = self.mid_edge_node(nodes[a], nodes[b]);
+                let id = self.mid_edge_node(s, nodes[a], nodes[b]);
                 nodes.push(id);
             }
         }
@@ -234,18 +249,22 @@ impl Solid {
         }
     }
 
-    /// The mid-edge node between corner nodes na and nb, at their midpoint, made on first use:
-    /// keyed by the corner pair, so exactly the edges between duplicated corners (or a
-    /// duplicated corner and the front) get duplicated mid-edge nodes.
-    fn mid_edge_node(&mut self, na: usize, nb: usize) -> usize {
+    /// The mid-edge node between corner nodes na and nb, made on first use: on an edge in a
+    /// thickness station where the section puts it ([`Section::mid_point`]), on any other edge
+    /// at the corners' midpoint. Keyed by the corner pair, so exactly the edges between
+    /// duplicated corners (or a duplicated corner and the front) get duplicated mid-edge nodes.
+    fn mid_edge_node(&mut self, s: &Section, na: usize, nb: usize) -> usize {
         let nodes = &mut self.mesh.nodes;
+        let (va, vb) = (self.vertex[na], self.vertex[nb]);
         *self.mid.entry((na.min(nb), na.max(nb))).or_insert_with(|| {
             let (pa, pb) = (nodes[na], nodes[nb]);
-            nodes.push([
-                0.5 * (pa[0] + pb[0]),
-                0.5 * (pa[1] + pb[1]),
-                0.5 * (pa[2] + pb[2]),
-            ]);
+            let z = 0.5 * (pa[2] + pb[2]);
+            let [x, y] = if pa[2] == pb[2] {
+                s.mid_point(va, vb)
+            } else {
+                [0.5 * (pa[0] + pb[0]), 0.5 * (pa[1] + pb[1])]
+            };
+            nodes.push([x, y, z]);
             nodes.len() - 1
         })
     }

@@ -2,11 +2,11 @@
 //! of §3.1, the ellipse of eq. 3.1.1–3.1.2): for each front node c, the node pairs a/a′ behind
 //! it, b/b′ and d (Hex20), and the sublaminate cells touching c and d.
 
-use super::EmbeddedParams;
 use super::extrusion::Solid;
 use super::planform::Section;
+use super::{EmbeddedParams, MidEdges};
 use crate::MeshError;
-use crate::front::{CellsTouching, Front, FrontPoint, missing_node as missing};
+use crate::front::{CellsTouching, Front, FrontPoint, FrontWidths, missing_node as missing};
 use nonlin3d_element::ElementKind;
 
 /// The §2.8 front descriptor of the §3.1 mesh, from the y axis (q = slices) to the x axis
@@ -26,7 +26,11 @@ pub(super) fn descriptor(
             points.push(mid_edge_point(s, solid, &cells, q)?);
         }
     }
-    Ok(Front { points }.finish(&solid.mesh.nodes))
+    let widths = match p.mid_edges {
+        MidEdges::Chords => FrontWidths::Chords,
+        MidEdges::Mapped => FrontWidths::AlongEdges,
+    };
+    Ok(Front { points, widths }.finish(&solid.mesh.nodes))
 }
 
 /// The corner front point on slice line q (§2.8, Fig. 2.8.1): c on the front ring, a/a′ the

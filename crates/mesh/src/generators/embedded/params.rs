@@ -69,6 +69,27 @@ pub struct EmbeddedParams {
     pub plies: Option<PlyLayout>,
     /// How the centre (the axis r = 0) is meshed.
     pub centre: Centre,
+    /// Where the Hex20 mid-edge nodes sit: on the chords (the thesis's re-centring) or on the
+    /// mapped curves (issue 25).
+    pub mid_edges: MidEdges,
+}
+
+/// Where the Hex20 mid-edge nodes of the swept section sit (thesis §3.1, issue 25).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum MidEdges {
+    /// At the midpoints of their corners (§3.1: "the coordinates of the midside nodes are
+    /// recalculated as the average of the coordinates of the adjacent corner nodes"): every
+    /// edge is straight, the front is the polygon through its corner nodes, and VCCT's width is
+    /// the chord between the midside nodes (eq. 2.8.1).
+    #[default]
+    Chords,
+    /// On the mesh's own curves: each mid-edge node at the planform map of the midpoint in the
+    /// circular mesh (an arc's mid-angle on its ring, a slice line's mid-radius), so every ring
+    /// is a quadratic curve through the map, the front's nodes all lie on the ellipse, and
+    /// VCCT's width is the length along the quadratic edges from midside node to midside node.
+    /// Edges of the joining cells (core to first ring, the bands' transitions to their
+    /// interior vertices) stay straight.
+    Mapped,
 }
 
 /// A band of rings around the front with [`FrontBand::FACTOR`] times the slices (issue 25).
@@ -168,6 +189,7 @@ impl EmbeddedParams {
             map: EllipticMap::Conformal,
             plies: None,
             centre: Centre::OGrid,
+            mid_edges: MidEdges::Chords,
         }
     }
 

@@ -4,9 +4,10 @@
 //! (eq. 3.1.1–3.1.2 or the rectangle, module `maps`).
 
 use super::layers::{Column, LayerTransition, MID_FRACTION};
-use super::maps::{front_radius, planform, radial_stations};
-use super::{Centre, EmbeddedParams, FrontBand};
+use super::maps::{EllipticMap, front_radius, planform, radial_stations};
+use super::{Centre, EmbeddedParams, FrontBand, MidEdges};
 use crate::MeshError;
+use std::f64::consts::{FRAC_PI_2, FRAC_PI_4};
 
 /// The 2-D quarter section of §3.1, already mapped onto the planform.
 pub(super) struct Section {
@@ -16,6 +17,11 @@ pub(super) struct Section {
     pub(super) inside: Vec<bool>,
     /// Which thickness stations each vertex carries (the layer band, issue 25).
     pub(super) column: Vec<Column>,
+    /// Where each vertex lies in the circular mesh before the map (for mapped mid-edges).
+    source: Vec<Source>,
+    /// The map and blend every point goes through; `Some` when the mid-edge nodes are mapped
+    /// too ([`MidEdges::Mapped`]), `None` when they sit on the chords.
+    curve: Option<Curve>,
     /// The arcs of the layer band's 1 → 2 transition rings (module `layers`); their
     /// quadrilaterals are not in `quads`.
     pub(super) layer_transitions: Vec<LayerTransition>,
@@ -30,9 +36,90 @@ pub(super) struct Section {
     pub(super) front_ring: usize,
 }
 
-/// The angle φ = (π/2)·q/slices of slice line q in the circular mesh (§3.1).
-fn angle(p: &EmbeddedParams, q: usize) -> f64 {
-    std::f64::consts::FRAC_PI_2 * q as f64 / p.slices as f64
+/// Where a section vertex lies in the circular mesh of §3.1, before the planform map.
+#[derive(Debug, Clone, Copy)]
+enum Source {
+    /// A ring vertex: radius r and angle φ from the x axis, and whether its ring's arcs are
+    /// curved (with mapped mid-edges: every ring, or with a front band the band's rings only).
+    Polar(f64, f64, bool),
+    /// A vertex of the layer band's transition: a fraction t of the way from vertex c to vertex
+    /// f of its slice line; its arcs blend theirs alike.
+    Between(usize, usize, f64),
+    /// Any other vertex (the core, the front band's transition): its edges stay straight.
+    Joint,
+}
+
+/// The planform's point map (§3.1): eq. 3.1.1–3.1.2 (or the rectangle) up to the transition
+/// radius, the blend into the square beyond.
+#[derive(Debug, Clone, Copy)]
+struct Curve {
+    map: EllipticMap,
+    a: f64,
+    b: f64,
+    /// Half-width W of the square.
+    w: f64,
+    /// The transition radius of the circular mesh (`transition`·min(a, b)).
+    wt: f64,
+}
+
+impl Curve {
+    fn new(p: &EmbeddedParams) -> Self {
+        Self {
+            map: p.map,
+            a: p.a,
+            b: p.b,
+            w: p.w,
+            wt: p.transition * front_radius(p),
+        }
+    }
+
+    /// A point (x, y) of the circular mesh taken through the planform map (eq. 3.1.1–3.1.2 or
+    /// the rectangle of Fig. 3.1.3).
+    fn plane(&self, x: f64, y: f64) -> [f64; 2] {
+        let (u, v) = planform(self.map, self.a, self.b, x, y);
+        [u, v]
+    }
+
+    /// The point at radius r on the slice line at angle φ (§3.1, Fig. 3.1.1c): the planform
+    /// map of the circle point for r ≤ `wt`; beyond, the straight blend from the mapped
+    /// transition ring (β = 0) to the square boundary (β = 1 at W).
+    fn polar(&self, r: f64, phi: f64) -> [f64; 2] {
+        if r <= self.wt {
+            return self.plane(r * phi.cos(), r * phi.sin());
+        }
+        let on_ring = self.plane(self.wt * phi.cos(), self.wt * phi.sin());
+        let beta = (r - self.wt) / (self.w - self.wt);
+        // The y axis (φ = (π/2)·n/n, within round-off of π/2): the corner (0, W) exactly.
+        let sq = if same(phi, FRAC_PI_2) {
+            [0.0, self.w]
+        } else if phi <= FRAC_PI_4 {
+            [self.w, self.w * phi.tan()]
+        } else {
+            [self.w / phi.tan(), self.w]
+        };
+        [
+            (1.0 - beta) * on_ring[0] + beta * sq[0],
+            (1.0 - beta) * on_ring[1] + beta * sq[1],
+        ]
+    }
+}
+
+/// Whether two circular-mesh coordinates are the same station (radii of one ring, angles of
+/// one slice line computed as q/n and 3q/3n): equal to 1e-12 relative.
+fn same(u: f64, v: f64) -> bool {
+    (u - v).abs() <= 1e-12 * u.abs().max(v.abs()).max(1e-300)
+}
+
+/// Whether a ring of n arcs is curved by mapped mid-edges: every ring without a front band,
+/// only the band's rings (n = [`FrontBand::FACTOR`]·slices) with one (module doc of
+/// [`Section::mid_point`]).
+fn curved_ring(p: &EmbeddedParams, n: usize) -> bool {
+    p.front_band.is_none() || n == FrontBand::FACTOR * p.slices
+}
+
+/// The angle φ = (π/2)·q/n of slice line q of n in the circular mesh (§3.1).
+fn angle(q: usize, n: usize) -> f64 {
+    FRAC_PI_2 * q as f64 / n as f64
 }
 
 /// Arcs of the ring at radial station m0 (index into the radial stations, `front` the front
@@ -46,21 +133,17 @@ fn arcs(p: &EmbeddedParams, m0: usize, front: usize) -> usize {
     }
 }
 
-/// A point (x, y) of the circular mesh taken through the planform map (eq. 3.1.1–3.1.2 or the
-/// rectangle of Fig. 3.1.3).
-fn mapped(p: &EmbeddedParams, x: f64, y: f64) -> [f64; 2] {
-    let (u, v) = planform(p.map, p.a, p.b, x, y);
-    [u, v]
-}
-
 /// The §3.1 planform mesh: centre, rings at the radial stations (the front ring mapped onto
 /// the ellipse by eq. 3.1.1–3.1.2), and their quadrilaterals.
 pub(super) fn section(p: &EmbeddedParams) -> Result<Section, MeshError> {
     let (rho, front) = radial_stations(p)?;
+    let curve = Curve::new(p);
     let mut s = Section {
         points: Vec::new(),
         inside: Vec::new(),
         column: Vec::new(),
+        source: Vec::new(),
+        curve: (p.mid_edges == MidEdges::Mapped).then_some(curve),
         layer_transitions: Vec::new(),
         quads: Vec::new(),
         rings: Vec::new(),
@@ -74,8 +157,8 @@ pub(super) fn section(p: &EmbeddedParams) -> Result<Section, MeshError> {
         Column::Full
     };
     let ring0 = match p.centre {
-        Centre::OGrid => s.o_grid_core(p, 0.5 * rho[0], core),
-        Centre::ThesisArc => s.thesis_arc(p, core),
+        Centre::OGrid => s.o_grid_core(&curve, p.slices, 0.5 * rho[0], core),
+        Centre::ThesisArc => s.thesis_arc(p, &curve, core),
     };
     s.rings.push(ring0);
     // Ring nodes: the planform map (ellipse or rectangle) of the circle point up to the
@@ -84,12 +167,15 @@ pub(super) fn section(p: &EmbeddedParams) -> Result<Section, MeshError> {
     // ring lies inside the square, which `check` ensures: it needs transition·max(a, b) < W, and
     // every map sends the ring ρ = t·r₀ (t ≥ 1) inside |x| ≤ t·a, |y| ≤ t·b (eq. 3.1.1 for
     // a ≤ b: semi-axes t·a and √(t²a² + b² − a²) ≤ t·b; mirrored for a > b).
-    let wt = p.transition * front_radius(p);
     for (m0, &r) in rho.iter().enumerate() {
         let n = arcs(p, m0, front);
         let col = column(p, m0, front);
         let ring = (0..=n)
-            .map(|q| s.push(ring_point(p, wt, r, q, n), m0 < front, col))
+            .map(|q| {
+                let phi = angle(q, n);
+                let source = Source::Polar(r, phi, curved_ring(p, n));
+                s.push(curve.polar(r, phi), source, m0 < front, col)
+            })
             .collect();
         s.rings.push(ring);
     }
@@ -107,50 +193,54 @@ fn column(p: &EmbeddedParams, m0: usize, front: usize) -> Column {
     }
 }
 
-/// Ring point at radius `r` (circular mesh) on slice line q of n (§3.1, Fig. 3.1.1c): the
-/// planform map (eq. 3.1.1–3.1.2) of the circle point for r ≤ `wt` (the transition radius);
-/// beyond, the straight blend from the mapped transition ring (β = 0) to the square boundary
-/// (β = 1 at W).
-fn ring_point(p: &EmbeddedParams, wt: f64, r: f64, q: usize, n: usize) -> [f64; 2] {
-    let phi = std::f64::consts::FRAC_PI_2 * q as f64 / n as f64;
-    if r <= wt {
-        return mapped(p, r * phi.cos(), r * phi.sin());
-    }
-    let on_ring = mapped(p, wt * phi.cos(), wt * phi.sin());
-    let beta = (r - wt) / (p.w - wt);
-    let sq = if q == n {
-        [0.0, p.w]
-    } else if phi <= std::f64::consts::FRAC_PI_4 {
-        [p.w, p.w * phi.tan()]
-    } else {
-        [p.w / phi.tan(), p.w]
-    };
-    [
-        (1.0 - beta) * on_ring[0] + beta * sq[0],
-        (1.0 - beta) * on_ring[1] + beta * sq[1],
-    ]
-}
-
 impl Section {
     /// Adds a vertex of the §3.1 section (`inside`: strictly inside the front); its index.
-    fn push(&mut self, point: [f64; 2], inside: bool, column: Column) -> usize {
+    fn push(&mut self, point: [f64; 2], source: Source, inside: bool, column: Column) -> usize {
         self.points.push(point);
+        self.source.push(source);
         self.inside.push(inside);
         self.column.push(column);
         self.points.len() - 1
+    }
+
+    /// The point of the Hex20 mid-edge node between vertices `va` and `vb` (thesis §3.1):
+    /// their midpoint ([`MidEdges::Chords`]), or with [`MidEdges::Mapped`] on an arc of a
+    /// curved ring the map of the arc's mid-angle point, so the ring is a quadratic curve
+    /// through its map (and on the layer band's transition arcs the same blend of the arcs
+    /// either side as its vertices are of theirs). Every other edge stays straight: the slice
+    /// lines of eq. 3.1.2 bend sharply where its scale factor F = ρ/r reaches 1 (on the 30 × 60
+    /// mm ellipse a mid-radius node 0.2 mm off the chord of a 1.4 mm edge), and a coarse arc
+    /// bowed by its sagitta (0.8 mm on the same ellipse's four-slice companion) would invert the
+    /// front band's transition cells that span three fine arcs.
+    pub(super) fn mid_point(&self, va: usize, vb: usize) -> [f64; 2] {
+        let (pa, pb) = (self.points[va], self.points[vb]);
+        let chord = [0.5 * (pa[0] + pb[0]), 0.5 * (pa[1] + pb[1])];
+        let Some(curve) = &self.curve else {
+            return chord;
+        };
+        match (self.source[va], self.source[vb]) {
+            (Source::Polar(r, f, true), Source::Polar(r2, f2, true)) if same(r, r2) => {
+                curve.polar(r, 0.5 * (f + f2))
+            }
+            (Source::Between(c, f, t), Source::Between(c2, f2, t2)) if t == t2 => {
+                let (mc, mf) = (self.mid_point(c, c2), self.mid_point(f, f2));
+                [mc[0] + t * (mf[0] - mc[0]), mc[1] + t * (mf[1] - mc[1])]
+            }
+            _ => chord,
+        }
     }
 
     /// The O-grid centre (this crate's change to §3.1): a square core [0, c]² with c = ρ₀/2
     /// (its corner at 0.71 ρ₀) of k × k cells, k = slices/2, mapped by eq. 3.1.1–3.1.2; one ring
     /// of cells joins its boundary to the first circle ρ₀, so no cell is degenerate. Returns
     /// the core boundary counter-clockwise from the x axis (q ≤ k on x = c, q ≥ k on y = c).
-    fn o_grid_core(&mut self, p: &EmbeddedParams, c: f64, col: Column) -> Vec<usize> {
-        let k = p.slices / 2;
+    fn o_grid_core(&mut self, curve: &Curve, slices: usize, c: f64, col: Column) -> Vec<usize> {
+        let k = slices / 2;
         let mut core_id = vec![vec![0usize; k + 1]; k + 1];
         for (j, row) in core_id.iter_mut().enumerate() {
             for (i, id) in row.iter_mut().enumerate() {
-                let pt = mapped(p, c * i as f64 / k as f64, c * j as f64 / k as f64);
-                *id = self.push(pt, true, col);
+                let (x, y) = (c * i as f64 / k as f64, c * j as f64 / k as f64);
+                *id = self.push(curve.plane(x, y), Source::Joint, true, col);
             }
         }
         self.centre = core_id[0][0];
@@ -164,7 +254,7 @@ impl Section {
                 ]);
             }
         }
-        (0..=p.slices)
+        (0..=slices)
             .map(|q| {
                 if q <= k {
                     core_id[q][k]
@@ -177,11 +267,18 @@ impl Section {
 
     /// The thesis's centre (§3.1): the axis nodes spread on an arc of radius 1e-9 m (mapped by
     /// eq. 3.1.1–3.1.2), so the first ring of cells is nearly triangular. Returns the arc nodes.
-    fn thesis_arc(&mut self, p: &EmbeddedParams, col: Column) -> Vec<usize> {
-        let ring: Vec<usize> = (0..=p.slices)
+    fn thesis_arc(&mut self, p: &EmbeddedParams, curve: &Curve, col: Column) -> Vec<usize> {
+        let slices = p.slices;
+        let ring: Vec<usize> = (0..=slices)
             .map(|q| {
-                let phi = angle(p, q);
-                self.push(mapped(p, 1e-9 * phi.cos(), 1e-9 * phi.sin()), true, col)
+                let phi = angle(q, slices);
+                let pt = curve.plane(1e-9 * phi.cos(), 1e-9 * phi.sin());
+                self.push(
+                    pt,
+                    Source::Polar(1e-9, phi, curved_ring(p, slices)),
+                    true,
+                    col,
+                )
             })
             .collect();
         self.centre = ring[0];
@@ -231,7 +328,8 @@ impl Section {
                 let (pc, pf) = (self.points[self.rings[c][q]], self.points[self.rings[f][q]]);
                 let t = MID_FRACTION;
                 let pt = [pc[0] + t * (pf[0] - pc[0]), pc[1] + t * (pf[1] - pc[1])];
-                self.push(pt, inside, Column::Mid)
+                let source = Source::Between(self.rings[c][q], self.rings[f][q], t);
+                self.push(pt, source, inside, Column::Mid)
             })
             .collect();
         for q in 0..n {
@@ -241,6 +339,23 @@ impl Section {
                 fine: [self.rings[f][q], self.rings[f][q + 1]],
             });
         }
+    }
+
+    /// An interior vertex of the 1 → 3 transition: halfway from the point a fraction t along the
+    /// chord A–B of the coarse arc (coarse arcs stay straight) to the fine vertex F.
+    fn interior(
+        &mut self,
+        a: usize,
+        b: usize,
+        f: usize,
+        t: f64,
+        inside: bool,
+        col: Column,
+    ) -> usize {
+        let (pa, pb, pf) = (self.points[a], self.points[b], self.points[f]);
+        let chord = [pa[0] + t * (pb[0] - pa[0]), pa[1] + t * (pb[1] - pa[1])];
+        let pt = [0.5 * (chord[0] + pf[0]), 0.5 * (chord[1] + pf[1])];
+        self.push(pt, Source::Joint, inside, col)
     }
 
     /// The conformal 1 → 3 transition between ring m and ring m + 1 (one of them has
@@ -262,16 +377,8 @@ impl Section {
         for q in 0..n {
             let (a, b) = (self.rings[c][q], self.rings[c][q + 1]);
             let fv: Vec<usize> = (0..=k).map(|j| self.rings[f][k * q + j]).collect();
-            let [i1, i2] = [1, 2].map(|j| {
-                let t = j as f64 / k as f64;
-                let (pa, pb, pf) = (self.points[a], self.points[b], self.points[fv[j]]);
-                let chord = [pa[0] + t * (pb[0] - pa[0]), pa[1] + t * (pb[1] - pa[1])];
-                self.push(
-                    [0.5 * (chord[0] + pf[0]), 0.5 * (chord[1] + pf[1])],
-                    inside,
-                    col,
-                )
-            });
+            let [i1, i2] =
+                [1, 2].map(|j| self.interior(a, b, fv[j], j as f64 / k as f64, inside, col));
             // Each quad as (inner q, outer q, outer q + 1, inner q + 1), as the ring quads.
             let quads = if coarse_inside {
                 [
