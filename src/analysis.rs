@@ -192,6 +192,7 @@ pub(crate) fn run_at(
             mixed_precision: sweep.mixed.take(),
         },
         model_data: Some(model),
+        coarser: None,
         accuracy: None,
         warnings: Vec::new(),
         provenance: None,
@@ -200,6 +201,13 @@ pub(crate) fn run_at(
     // warnings after the scene's and before the stability ones (a run's end says last).
     if depth == 0 {
         estimate::attach(scene, choice, companion, &mut results)?;
+    } else if let Some((Ok(coarser), _)) = companion {
+        // A companion's own companion: its levels go up with the companion's, to the
+        // estimate's second term (src/analysis_estimate.rs).
+        results.coarser = Some(CoarserRun {
+            dofs: coarser.model.dofs,
+            levels: coarser.levels,
+        });
     }
     let estimated = std::mem::take(&mut results.warnings);
     results.warnings = scene.warnings();

@@ -26,7 +26,9 @@
 //! from a coarser companion of its own in the same way (its slices halved, the rest kept but
 //! for the rings where the slices fall to two: `EmbeddedParams::coarsened_along_front`,
 //! src/analysis_estimate.rs `companion_scene`), which follows the path itself ([`DEEPEST`]):
-//! three meshes, the path followed on the cheapest. The coarser companion serves the seeds only; the estimate is the companion's.
+//! three meshes, the path followed on the cheapest. The coarser companion's levels also go up
+//! with the companion's to the error estimate, whose rule for the default mesh's companion
+//! takes their difference into account (src/analysis_estimate.rs, docs/ACCURACY.md §3d).
 
 use super::deflections;
 use super::level::{Solved, engage_contact};

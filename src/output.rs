@@ -248,6 +248,7 @@ impl RunOutput {
                 mixed_precision: None,
             },
             model_data: None,
+            coarser: None,
             warnings: Vec::new(),
             provenance: None,
         };

@@ -323,12 +323,17 @@ pub fn table(results: &Results) -> String {
     {
         let _ = writeln!(s, "{}", mesh_line(m, results.model.dofs));
     }
-    if let Some(dofs) = results.accuracy.as_ref().and_then(|a| a.companion_dofs) {
+    if let Some(a) = results.accuracy.as_ref()
+        && let Some(dofs) = a.companion_dofs
+    {
+        let coarser = a.coarser_companion_dofs.map_or(String::new(), |k| {
+            format!(" and on its own coarser companion ({k} DOFs)")
+        });
         let _ = writeln!(
             s,
             "± G max: the largest estimated discretisation error of G_I, G_II, G_III, G_T over \
-             the front, from the same levels on a coarser companion mesh ({dofs} DOFs; per point \
-             in front_K.csv and results.json)"
+             the front, from the same levels on a coarser companion mesh ({dofs} DOFs){coarser} \
+             (per point in front_K.csv and results.json)"
         );
     }
     let what = head;

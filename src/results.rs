@@ -404,6 +404,15 @@ impl Results {
     }
 }
 
+/// The levels of a coarser companion mesh and its DOFs.
+#[derive(Debug, Clone)]
+pub(crate) struct CoarserRun {
+    /// Its DOFs.
+    pub(crate) dofs: usize,
+    /// Its levels, as many as the run's when it finished.
+    pub(crate) levels: Vec<LevelResult>,
+}
+
 /// Everything a run produces.
 #[derive(Debug, Clone, Serialize)]
 pub struct Results {
@@ -433,6 +442,11 @@ pub struct Results {
     /// The model (mesh and front), for VTU output; not serialised.
     #[serde(skip)]
     pub model_data: Option<Model>,
+    /// A companion's own coarser companion, where one ran (src/analysis_seed.rs, "Nested
+    /// companions"): its levels enter the run's error estimate (docs/ACCURACY.md §3d); not
+    /// serialised.
+    #[serde(skip)]
+    pub(crate) coarser: Option<CoarserRun>,
     /// Where the results came from (set by the writer of the output folder).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub provenance: Option<Provenance>,

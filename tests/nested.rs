@@ -150,8 +150,12 @@ fn seeded_levels_reach_the_paths_states_in_fewer_iterations() {
     // The error estimate is the same companion's either way.
     for (x, y) in path.levels.iter().zip(&nested.levels) {
         let e = |l: &nonlin3d::results::LevelResult| l.error_estimate.as_ref().map(|e| e.max_j_m2);
-        let (p, q) = (e(x).unwrap(), e(y).unwrap());
-        assert!((p - q).abs() <= 1e-3 * p.abs().max(1e-9), "{p} against {q}");
+        // (No summary on the unbuckled level, in either run.)
+        let (p, q) = (e(x), e(y));
+        assert_eq!(p.is_some(), q.is_some(), "{}", x.value);
+        if let (Some(p), Some(q)) = (p, q) {
+            assert!((p - q).abs() <= 1e-3 * p.abs().max(1e-9), "{p} against {q}");
+        }
     }
 }
 

@@ -82,6 +82,7 @@ fn results() -> Results {
             mixed_precision: None,
         },
         model_data: None,
+        coarser: None,
         provenance: None,
     }
 }

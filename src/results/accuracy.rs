@@ -40,6 +40,10 @@ pub struct AccuracyReport {
     /// companions: a companion of 5 000 DOF or more; 0: it followed every level itself; null:
     /// no estimate).
     pub companion_seeded_levels: Option<usize>,
+    /// DOFs of the companion's own coarser companion whose difference from the companion
+    /// entered the estimate (docs/ACCURACY.md §3d; null: not used — no such companion, as
+    /// with `start = "path"` or a companion under 5 000 DOF, or a rule measured without it).
+    pub coarser_companion_dofs: Option<usize>,
     /// Why there is no estimate although one was asked for (the companion run failed).
     pub unavailable: Option<String>,
     /// The largest relative error estimate over the levels (null: no estimate).

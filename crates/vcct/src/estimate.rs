@@ -25,6 +25,12 @@
 //! accident, and an error there matters against G_T max, not
 //! against the local G.
 //!
+//! Where the companion has a coarser companion of its own (M/4, the nested iteration's) and
+//! the rule was measured with it ([`Rule::coarser`]), the estimate is at least
+//! b·|G_k(M/2) − G_k(M/4)| ([`coarser`]): just past buckling the error of the default mesh is
+//! its buckling strain's, which its companion shares but M/4 (its rings halved) does not
+//! (docs/ACCURACY.md §3d).
+//!
 //! The two fronts have different points; they are matched by their position along the front
 //! (S over the front's length, 0 … 1): the run's G is interpolated linearly to the companion's
 //! points, where the difference is taken, and the differences are interpolated back to the
@@ -34,13 +40,18 @@
 use crate::VcctError;
 use nonlin3d_mesh::CompanionKind;
 
-/// The estimate's two factors: δG_k = `scale`·max(|ΔG_k|, `floor`·|ΔG_T(S*)|) (module docs).
+/// The estimate's factors: δG_k = `scale`·max(|ΔG_k|, `floor`·|ΔG_T(S*)|), and where the
+/// companion has a coarser companion of its own at least `coarser`·|G_k(M/2) − G_k(M/4)|
+/// (module docs, [`coarser`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Rule {
     /// a = 1/(2^p − 1): Richardson's factor for the companion's assumed order p.
     pub scale: f64,
     /// c: the error at any point is at least c times the difference of G_T at its peak.
     pub floor: f64,
+    /// b: the factor of the two companions' difference, where there is a coarser companion;
+    /// `None`: that term is not used (not measured for this kind of companion).
+    pub coarser: Option<f64>,
 }
 
 impl Rule {
@@ -54,6 +65,7 @@ impl Rule {
     pub const SPLIT_KEPT: Self = Self {
         scale: 0.5,
         floor: 0.2,
+        coarser: None,
     };
 
     /// A companion that halves every count (one sublaminate layer, through-width strips):
@@ -64,6 +76,7 @@ impl Rule {
     pub const ALL_HALVED: Self = Self {
         scale: 1.2,
         floor: 0.2,
+        coarser: None,
     };
 
     /// A companion of a mesh with a front band that keeps the split and the rings outside the
@@ -80,10 +93,15 @@ impl Rule {
     /// missed at every level (its difference crosses zero); a = 0.35 misses a second point,
     /// 0.45 is above 3× at −0.003. With the band's rings curved (§3c): 78 of 78 bracketed,
     /// 2.92× at worst; near buckling the same four points missed, by up to 3.1× (±0.14
-    /// against 0.43 J/m²).
+    /// against 0.43 J/m²) without the coarser companion's term; b = 0.27 (p ≈ 1.3 in
+    /// b = 1/(2^p·(2^p − 1))) brackets all 114 points at ε = −0.002 … −0.005 (the smallest
+    /// ratio 1.12, at −0.002; 0.25 leaves 1.04, 0.22 misses one), at most 2.92× too pessimistic
+    /// from −0.003 on and 3.55× at −0.002 (the edge's G_T at S = 0, 1.13 against 0.23 J/m²):
+    /// docs/ACCURACY.md §3d.
     pub const FAR_FIELD_KEPT: Self = Self {
         scale: 0.4,
         floor: 1.0,
+        coarser: Some(0.27),
     };
 
     /// The rule for a companion of this kind.
@@ -128,6 +146,12 @@ impl Modes {
     /// The largest of the four (an error's worst mode).
     pub fn max(self) -> f64 {
         self.array().into_iter().fold(0.0, f64::max)
+    }
+
+    /// Mode by mode the larger of the two (two estimates of one error).
+    pub fn larger(self, other: Self) -> Self {
+        let (a, b) = (self.array(), other.array());
+        Self::from_array(std::array::from_fn(|m| a[m].max(b[m])))
     }
 }
 
@@ -217,7 +241,7 @@ pub fn companion(
 ) -> Result<Vec<Modes>, VcctError> {
     run.check("run's")?;
     companion.check("companion's")?;
-    let Rule { scale, floor } = rule;
+    let Rule { scale, floor, .. } = rule;
     if !(floor.is_finite() && floor >= 0.0 && scale.is_finite() && scale > 0.0) {
         return Err(VcctError::Estimate {
             reason: format!(
@@ -226,15 +250,7 @@ pub fn companion(
         });
     }
     // |G(M) − G(M/2)| at the companion's points.
-    let diffs: Vec<Modes> = companion
-        .at
-        .iter()
-        .zip(companion.g)
-        .map(|(&s, gc)| {
-            let (f, c) = (run.at_position(s).array(), gc.array());
-            Modes::from_array(std::array::from_fn(|m| (f[m] - c[m]).abs()))
-        })
-        .collect();
+    let diffs = differences(&run, &companion);
     let diff = FrontG {
         at: companion.at,
         g: &diffs,
@@ -254,6 +270,53 @@ pub fn companion(
             Modes::from_array(d.map(|v| scale * v.max(floor * peak)))
         })
         .collect())
+}
+
+/// The second term of the estimate where the companion has a coarser companion of its own
+/// (the nested iteration's, src/analysis_seed.rs): at each of the run's positions `run_at`,
+/// δG_k = b·|G_k(M/2) − G_k(M/4)|, the companion's G interpolated to the coarser one's points,
+/// the differences interpolated back (as in [`companion`]). Just past buckling the run's
+/// error is its buckling strain's, which a companion that keeps the rings outside the front
+/// band shares (docs/ACCURACY.md §3b) but one that halves them does not: the difference of the
+/// two companions sees it where the first term cannot. b = 1/(2^p·(2^p − 1)) for an order p
+/// (the run's error from that of its companion's companion); [`Rule::coarser`] gives it.
+pub fn coarser(
+    run_at: &[f64],
+    companion: FrontG<'_>,
+    coarser: FrontG<'_>,
+    scale: f64,
+) -> Result<Vec<Modes>, VcctError> {
+    companion.check("companion's")?;
+    coarser.check("coarser companion's")?;
+    if !(scale.is_finite() && scale > 0.0) {
+        return Err(VcctError::Estimate {
+            reason: format!("the coarser companion's factor must be finite and > 0: {scale}"),
+        });
+    }
+    let diffs = differences(&companion, &coarser);
+    let diff = FrontG {
+        at: coarser.at,
+        g: &diffs,
+        open: None,
+    };
+    Ok(run_at
+        .iter()
+        .map(|&s| Modes::from_array(diff.at_position(s).array().map(|v| scale * v)))
+        .collect())
+}
+
+/// |G(fine) − G(coarse)| per mode at the coarse front's points, the fine front's G
+/// interpolated there (module docs: the finer front is the one interpolated).
+fn differences(fine: &FrontG<'_>, coarse: &FrontG<'_>) -> Vec<Modes> {
+    coarse
+        .at
+        .iter()
+        .zip(coarse.g)
+        .map(|(&s, gc)| {
+            let (f, c) = (fine.at_position(s).array(), gc.array());
+            Modes::from_array(std::array::from_fn(|m| (f[m] - c[m]).abs()))
+        })
+        .collect()
 }
 
 #[cfg(test)]
@@ -455,6 +518,7 @@ mod tests {
             Rule {
                 scale: 1.0,
                 floor: 0.0,
+                coarser: None,
             },
         )
         .unwrap_or_default();
@@ -507,8 +571,42 @@ mod tests {
             Rule {
                 scale: 0.0,
                 floor: 0.2,
+                coarser: None,
             },
         );
         assert!(e.is_err_and(|e| e.to_string().contains("the scale 0 > 0")));
+    }
+
+    /// The coarser companions' term: b·|G(M/2) − G(M/4)| at M/4's points, interpolated to the
+    /// run's positions; the companion's G is interpolated to M/4's points first. Two
+    /// estimates of one point combine mode by mode.
+    #[test]
+    fn the_coarser_term_is_the_two_companions_difference_scaled() {
+        let g_t = |v: f64| Modes {
+            g_i: 0.5 * v,
+            g_ii: 0.5 * v,
+            g_iii: 0.0,
+            g_t: v,
+        };
+        // Companion on 0, ½, 1; coarser on 0, 1: at 0 and 1 the differences are 10 and 30.
+        let (cat, cg) = ([0.0, 0.5, 1.0], [g_t(100.0), g_t(80.0), g_t(60.0)]);
+        let (kat, kg) = ([0.0, 1.0], [g_t(90.0), g_t(90.0)]);
+        fn front<'a>(at: &'a [f64], g: &'a [Modes]) -> FrontG<'a> {
+            FrontG { at, g, open: None }
+        }
+        let (c, k) = (&cg[..], &kg[..]);
+        let est = coarser(&[0.0, 0.25, 1.0], front(&cat, c), front(&kat, k), 0.27).unwrap();
+        let t: Vec<f64> = est.iter().map(|e| e.g_t).collect();
+        for (got, want) in t.iter().zip([0.27 * 10.0, 0.27 * 15.0, 0.27 * 30.0]) {
+            assert_relative_eq!(*got, want, max_relative = 1e-12);
+        }
+        assert_relative_eq!(est[1].g_i, 0.27 * 7.5, max_relative = 1e-12);
+        let both = g_t(1.0).larger(Modes {
+            g_i: 3.0,
+            ..Modes::default()
+        });
+        assert_eq!((both.g_i, both.g_ii, both.g_t), (3.0, 0.5, 1.0));
+        assert!(coarser(&[0.0], front(&cat, c), front(&kat, k), 0.0).is_err());
+        assert!(coarser(&[0.0], front(&cat, c), front(&[0.0], k), 0.27).is_err());
     }
 }
