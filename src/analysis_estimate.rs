@@ -475,6 +475,14 @@ pub(crate) fn attach(
                 }
                 report.companion_dofs = Some(c.model.dofs);
                 report.coarser_companion_dofs = coarser.map(|r| r.dofs);
+                if rule.coarser.is_some() && coarser.is_none() {
+                    results.warnings.push(
+                        "the error estimate lacks its coarser companion's term (it runs with \
+                         [analysis] start = \"companion\", the default, and did not here): \
+                         just past buckling its ± can be 3× too small (docs/ACCURACY.md §3d)"
+                            .into(),
+                    );
+                }
                 report.companion_s = Some(seconds);
                 report.companion_seeded_levels =
                     Some(c.levels.iter().filter(|l| l.convergence.seeded).count());

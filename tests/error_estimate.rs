@@ -282,8 +282,8 @@ fn the_default_meshs_estimate_brackets_g_at_s0_within_three_times() {
 /// G_T; converged 7.533 ± 0.092, 4.813 ± 0.033, 12.337 ± 0.115 J/m², §3d). The coarser
 /// companion halves the rings and sees it: with it the estimate brackets all three at S = 0
 /// (measured ±0.53 / 0.24 / 0.77). Following the path on the run's own mesh
-/// (`start = "path"`) runs no coarser companion: the term is absent and G_T(0) is not
-/// bracketed, as reported.
+/// (`start = "path"`) runs no coarser companion: the term is absent, G_T(0) is not bracketed,
+/// and a warning says so.
 #[test]
 fn near_buckling_the_coarser_companion_brackets_the_circles_s0() {
     let circle = nonlin3d::scene::DEFAULT_SCENE.replace(
@@ -306,6 +306,11 @@ fn near_buckling_the_coarser_companion_brackets_the_circles_s0() {
     let (dir, _) = run_scene("near-buckling-path", &path);
     let r = json(&dir);
     assert!(r["accuracy"]["coarser_companion_dofs"].is_null());
+    let warned = r["warnings"].as_array().unwrap().iter().any(|w| {
+        w.as_str()
+            .is_some_and(|w| w.contains("lacks its coarser companion's term"))
+    });
+    assert!(warned, "{}", r["warnings"]);
     let p0 = &r["levels"][0]["front"][0];
     let (g, est) = (
         p0["g_t"].as_f64().unwrap(),
