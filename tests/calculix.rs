@@ -278,6 +278,59 @@ fn calculix_runs_our_decks_and_agrees_with_our_linear_solution() {
     assert!(rel < 2e-6, "ORTHO block: max relative difference {rel:e}");
 }
 
+/// Curved Hex20 edges (`MidEdges::Mapped`, docs/MESH.md): an embedded-delamination mesh with
+/// its front band's rings curved, steel, clamped on x = 0 and pulled down on x = W, solved by
+/// CalculiX from our deck and by nonlin3d. The same isoparametric C3D20 on the same mid-edge
+/// nodes gives the same linear solution (to the printed digits, as above); a mid-edge node read
+/// or placed differently would not.
+#[test]
+fn calculix_reads_curved_mid_edge_nodes_as_we_do() {
+    if !common::ccx::available() {
+        return;
+    }
+    use nonlin3d::mesh::{EmbeddedParams, FrontBand, MidEdges, embedded_delamination_with_front};
+    let p = EmbeddedParams {
+        slices: 2,
+        radial_inside: 3,
+        radial_outside: 3,
+        sub_layers: 1,
+        base_layers: 2,
+        front_band: Some(FrontBand {
+            inside: 1,
+            outside: 1,
+        }),
+        mid_edges: MidEdges::Mapped,
+        ..EmbeddedParams::thesis_reference()
+    };
+    let (mesh, front) = embedded_delamination_with_front(&p).unwrap();
+    // The front's mid-edge nodes are on the circle, off their chords' midpoints.
+    let mid = front.points.iter().find(|f| !f.corner).unwrap().c;
+    let x = mesh.nodes[mid];
+    assert!((x[0].hypot(x[1]) - p.a).abs() < 1e-15);
+    let steel = materials::steel();
+    let loads = tip_loads(&mesh, -100.0, 3);
+    let mats = [InpMaterial {
+        name: "STEEL".into(),
+        elastic: InpElastic::Isotropic {
+            e: steel.e11,
+            nu: steel.nu12,
+        },
+    }];
+    let deck = linear_deck("nonlin3d curved embedded", &mesh, &mats, &loads);
+    let theirs = run_ccx("curved", &deck, mesh.nodes.len());
+    let ours = solve_linear(
+        &mesh,
+        &vec![steel.stiffness().unwrap(); mesh.cells.len()],
+        "x0",
+        &loads,
+    );
+    let rel = compare(&ours, &theirs);
+    assert!(
+        rel < 2e-6,
+        "curved embedded mesh: max relative difference {rel:e}"
+    );
+}
+
 /// Geometrically nonlinear: the same cantilever under a 3 kN tip load (linear deflection ≈ 16 %
 /// of the span), solved by nonlin3d's Newton path following (Hex20 3×3×3, total Lagrangian,
 /// St. Venant–Kirchhoff, dead loads) and by CalculiX with NLGEOM (C3D20, same material law and
