@@ -121,6 +121,28 @@ fn compare(ours: &[[f64; 3]], theirs: &[[f64; 3]]) -> f64 {
     diff / scale
 }
 
+/// Isotropic steel as a deck material.
+fn steel_material() -> [InpMaterial; 1] {
+    let steel = materials::steel();
+    [InpMaterial {
+        name: "STEEL".into(),
+        elastic: InpElastic::Isotropic {
+            e: steel.e11,
+            nu: steel.nu12,
+        },
+    }]
+}
+
+/// `mesh` in steel, clamped on `x0` under `loads`: CalculiX's linear solution of our deck
+/// against ours, as [`compare`] measures it.
+fn steel_against_ccx(name: &str, mesh: &Mesh, loads: &[InpCload]) -> f64 {
+    let deck = linear_deck(&format!("nonlin3d {name}"), mesh, &steel_material(), loads);
+    let theirs = run_ccx(name, &deck, mesh.nodes.len());
+    let steel = materials::steel().stiffness().unwrap();
+    let ours = solve_linear(mesh, &vec![steel; mesh.cells.len()], "x0", loads);
+    compare(&ours, &theirs)
+}
+
 /// A one-step linear deck clamping `x0` under `loads`.
 fn linear_deck(
     heading: &str,
@@ -172,7 +194,6 @@ fn calculix_runs_our_decks_and_agrees_with_our_linear_solution() {
         [30e-3, 5e-3, 4e-3],
     ))
     .unwrap();
-    let steel = materials::steel();
     let loads = tip_loads(&mesh, -100.0, 3);
     let step = |nlgeom: bool| InpStep {
         nlgeom,
@@ -186,25 +207,11 @@ fn calculix_runs_our_decks_and_agrees_with_our_linear_solution() {
         }],
         cloads: loads.clone(),
     };
-    let mats = [InpMaterial {
-        name: "STEEL".into(),
-        elastic: InpElastic::Isotropic {
-            e: steel.e11,
-            nu: steel.nu12,
-        },
-    }];
-    let deck = linear_deck("nonlin3d cantilever", &mesh, &mats, &loads);
-    let theirs = run_ccx("cantilever", &deck, mesh.nodes.len());
-    let ours = solve_linear(
-        &mesh,
-        &vec![steel.stiffness().unwrap(); mesh.cells.len()],
-        "x0",
-        &loads,
-    );
+    let mats = steel_material();
     // Same element, same quadrature, both direct solvers in double precision: agreement to
     // round-off of κ(K) ≈ 1e8 times 1e-16, far below the 1e-8 asserted; CalculiX prints 6–7
     // significant digits in the .dat file, which sets the floor (≈ 1e-6 relative).
-    let rel = compare(&ours, &theirs);
+    let rel = steel_against_ccx("cantilever", &mesh, &loads);
     assert!(rel < 2e-6, "cantilever: max relative difference {rel:e}");
     // The NLGEOM variant of the deck runs unchanged too.
     let deck_nl = inp_string(&InpDeck {
@@ -307,24 +314,8 @@ fn calculix_reads_curved_mid_edge_nodes_as_we_do() {
     let mid = front.points.iter().find(|f| !f.corner).unwrap().c;
     let x = mesh.nodes[mid];
     assert!((x[0].hypot(x[1]) - p.a).abs() < 1e-15);
-    let steel = materials::steel();
     let loads = tip_loads(&mesh, -100.0, 3);
-    let mats = [InpMaterial {
-        name: "STEEL".into(),
-        elastic: InpElastic::Isotropic {
-            e: steel.e11,
-            nu: steel.nu12,
-        },
-    }];
-    let deck = linear_deck("nonlin3d curved embedded", &mesh, &mats, &loads);
-    let theirs = run_ccx("curved", &deck, mesh.nodes.len());
-    let ours = solve_linear(
-        &mesh,
-        &vec![steel.stiffness().unwrap(); mesh.cells.len()],
-        "x0",
-        &loads,
-    );
-    let rel = compare(&ours, &theirs);
+    let rel = steel_against_ccx("curved", &mesh, &loads);
     assert!(
         rel < 2e-6,
         "curved embedded mesh: max relative difference {rel:e}"

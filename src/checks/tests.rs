@@ -6,6 +6,17 @@ fn reference() -> Scene {
     Scene::thesis_reference().unwrap()
 }
 
+/// A 30 mm through-width strip of the reference laminate.
+fn through_width() -> crate::scene::Geometry {
+    crate::scene::Geometry::ThroughWidth {
+        a_mm: 15.0,
+        length_mm: 60.0,
+        width_mm: 5.0,
+        h_mm: 0.4,
+        base_mm: 4.0,
+    }
+}
+
 fn message(s: &Scene) -> String {
     s.validate().unwrap_err().to_string()
 }
@@ -32,13 +43,7 @@ fn a_front_element_is_positive_and_not_for_through_width_models() {
     assert!(message(&s).contains("mesh.front_element_mm = -0.1"));
     s.mesh.front_element_mm = Some(0.1);
     assert!(s.validate().is_ok());
-    s.geometry = crate::scene::Geometry::ThroughWidth {
-        a_mm: 15.0,
-        length_mm: 60.0,
-        width_mm: 5.0,
-        h_mm: 0.4,
-        base_mm: 4.0,
-    };
+    s.geometry = through_width();
     let m = message(&s);
     assert!(m.contains("through-width"), "{m}");
     s.mesh.front_element_mm = None;
@@ -159,13 +164,7 @@ fn curved_edges_are_refused_where_there_are_no_curves_to_follow() {
     );
     s.mesh.element = None;
     s.mesh.slices = None;
-    s.geometry = crate::scene::Geometry::ThroughWidth {
-        a_mm: 15.0,
-        length_mm: 60.0,
-        width_mm: 5.0,
-        h_mm: 0.4,
-        base_mm: 4.0,
-    };
+    s.geometry = through_width();
     let m = message(&s);
     assert!(m.contains("through-width"), "{m}");
     s.mesh.curved_edges = Some(false);
