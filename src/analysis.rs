@@ -190,6 +190,7 @@ pub(crate) fn run_at(
                 n => n,
             },
             mixed_precision: sweep.mixed.take(),
+            factor: std::mem::take(&mut sweep.factor),
         },
         model_data: Some(model),
         coarser: None,
@@ -289,6 +290,8 @@ struct Sweep {
     vcct_s: f64,
     /// What mixed precision did (None with an f64 solver).
     mixed: Option<MixedSummary>,
+    /// What the main mesh's systems' analyses found (the level loop's, the contact loop's).
+    factor: Vec<FactorSummary>,
 }
 
 /// The levels solved in order from the unloaded state, each from the previous converged
@@ -338,6 +341,7 @@ fn sweep(
         solve_s: 0.0,
         vcct_s: 0.0,
         mixed: None,
+        factor: Vec::new(),
     };
     let host = sub
         .as_deref_mut()
@@ -460,6 +464,10 @@ fn sweep(
         from = lambda;
     }
     out.mixed = MixedSummary::of([session.mixed_stats(), stage.mixed_stats()]);
+    let solid = session
+        .analysis()
+        .map(|a| FactorSummary::of("solid", problem.assembler().n(), &a));
+    out.factor = solid.into_iter().chain(stage.factor()).collect();
     Ok(out)
 }
 

@@ -319,6 +319,17 @@ impl ContactStage {
             .collect()
     }
 
+    /// What the contact system's analysis found (None: contact never engaged).
+    pub(crate) fn factor(&self) -> Option<crate::results::FactorSummary> {
+        let e = self.engaged.as_ref()?;
+        let analysis = e.session.analysis()?;
+        Some(crate::results::FactorSummary::of(
+            "contact",
+            e.problem.assembler().n(),
+            &analysis,
+        ))
+    }
+
     /// What mixed precision did in the contact system's solver (None: not engaged, or f64).
     pub(crate) fn mixed_stats(&self) -> Option<nonlin3d_solver::MixedStats> {
         self.engaged.as_ref().and_then(|e| e.session.mixed_stats())

@@ -246,6 +246,7 @@ impl RunOutput {
                 output_s: 0.0,
                 threads: rayon::current_num_threads(),
                 mixed_precision: None,
+                factor: Vec::new(),
             },
             model_data: None,
             coarser: None,

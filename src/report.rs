@@ -419,6 +419,9 @@ pub fn table(results: &Results) -> String {
         "{} nodes, {} DOFs; mesh {:.2} s, setup {:.2} s, solve {:.2} s, VCCT {:.3} s",
         results.model.nodes, results.model.dofs, t.mesh_s, t.setup_s, t.solve_s, t.vcct_s
     );
+    for f in &t.factor {
+        let _ = writeln!(s, "  {}", f.line());
+    }
     if let Some(sub) = &results.model.substructure {
         let realised = sub.realised_offset_mm.map_or(String::new(), |[lo, hi]| {
             format!(", realised ℓ {lo:.3}–{hi:.3} mm")

@@ -6,10 +6,12 @@ use nonlin3d_vcct::FrontRelease;
 use serde::Serialize;
 
 mod accuracy;
+mod factor;
 mod mixed;
 mod overlap;
 
 pub use accuracy::{AccuracyReport, GError, LevelError, MeshChoice, MeshRule};
+pub use factor::FactorSummary;
 pub use mixed::MixedSummary;
 
 /// The state of the crack faces one element behind a front point.
@@ -326,6 +328,10 @@ pub struct Timings {
     /// with an f64 solver.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub mixed_precision: Option<MixedSummary>,
+    /// The main mesh's systems as their last analyses found them (the level loop's, then the
+    /// contact loop's if contact engaged): equations, ordering, factor size and flops.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub factor: Vec<FactorSummary>,
 }
 
 /// Onset of growth by the scene's criterion.

@@ -181,6 +181,10 @@ pub(crate) fn solve(
                         i.iterations
                     ));
                 }
+                // The step's factor: the numbers CalculiX and Abaqus print for a step.
+                if let Some(f) = &r.factor {
+                    m.say(&format!("  {}", f.line()));
+                }
                 // `--solver faer-mixed`: whether the f32 factor held, by increment.
                 for i in r.increments.iter() {
                     if let Some(mp) = &i.mixed_precision {

@@ -80,6 +80,9 @@ pub(crate) struct Converged<'a> {
     pub problem: &'a mut StructuralProblem,
     /// Every attempt of the step so far.
     pub attempts: &'a [IncrementSummary],
+    /// What the step's solver analysis found (None where the step's path follower keeps
+    /// its own solver: a Riks step).
+    pub analysis: Option<nonlin3d_solver::Analysis>,
 }
 
 /// Runs step `k` (0-based) from `u` (updated to its end), appending every attempt to
@@ -213,6 +216,7 @@ pub(crate) fn run_step(
                 u,
                 problem,
                 attempts,
+                analysis: session.analysis(),
             })?;
             if p.direct || !step.nlgeom {
                 continue;

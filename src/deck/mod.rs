@@ -26,6 +26,7 @@ pub use files::DeckOutput;
 pub use output::{OutputTable, write_results};
 
 use crate::Error;
+use crate::results::FactorSummary;
 use nonlin3d_assembly::{Assembler, Constraints, StressRules};
 use nonlin3d_element::{IntegrationRule, Kinematics};
 use nonlin3d_laminate::ShearCoupling;
@@ -321,6 +322,10 @@ pub struct StepResult {
     /// The slave nodes (mesh indices) of the contact pairs closed at the end of the step.
     #[serde(skip)]
     pub contact_closed: Vec<usize>,
+    /// What the step's symbolic analysis found: equations, ordering, the factor's entries and
+    /// flops, its supernode tree (absent for a Riks step).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub factor: Option<crate::results::FactorSummary>,
 }
 
 /// What [`solve_deck_with`] reports as it goes.
@@ -415,10 +420,20 @@ pub fn solve_deck_with(
             displacements: Vec::new(),
             outputs: output::tables(model, step),
             contact_closed: Vec::new(),
+            factor: None,
         };
         let mut attempts = Vec::new();
+        // The step's one system: with *CONTACT PAIR its pattern reserves every candidate pair.
+        let system = if contact.is_some() {
+            "contact"
+        } else {
+            "solid"
+        };
         let mut record = |c: drive::Converged<'_>| {
             let (u, tried) = (c.u, c.attempts);
+            current.factor = c
+                .analysis
+                .map(|a| FactorSummary::of(system, c.problem.assembler().n(), &a));
             output::record(model, &mesh, &rules, step, frame, &mut current.outputs, c)?;
             current.increments = tried.to_vec();
             current.displacements = nodal(u);

@@ -99,6 +99,7 @@ pub(crate) fn run_step(
             u,
             problem,
             attempts,
+            analysis: None,
         });
         match told {
             Ok(()) => false,

@@ -80,6 +80,7 @@ fn results() -> Results {
             output_s: 0.0,
             threads: 1,
             mixed_precision: None,
+            factor: Vec::new(),
         },
         model_data: None,
         coarser: None,

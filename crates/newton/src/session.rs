@@ -3,7 +3,7 @@
 //! starts from the last factorisation instead of a new one.
 
 use crate::{NewtonError, NonlinearProblem, TangentCache};
-use nonlin3d_solver::{LinearSolver, SolverKind, SymmetricMatrix};
+use nonlin3d_solver::{Analysis, LinearSolver, SolverKind, SymmetricMatrix};
 use std::sync::Arc;
 
 /// What [`PathSolver::start_tangent`] found.
@@ -38,9 +38,8 @@ pub struct PathSolver {
     /// Symbolic analyses made over the session's life (1 from [`PathSolver::new`], one more
     /// each time [`fit`](Self::fit) had to make it anew).
     analyses: usize,
-    /// Whether `solver` is analysed for `k`'s pattern ([`PathSolver::deferred`]: not until
-    /// the first call needs it).
-    analysed: bool,
+    /// What the last symbolic analysis found (`None` while a deferred session waits).
+    analysis: Option<Analysis>,
 }
 
 impl PathSolver {
@@ -48,7 +47,7 @@ impl PathSolver {
     pub fn new(problem: &dyn NonlinearProblem, kind: SolverKind) -> Result<Self, NewtonError> {
         let pattern = problem.pattern();
         let mut solver = kind.build();
-        solver.analyze(&pattern)?;
+        let analysis = solver.analyze(&pattern)?;
         Ok(Self {
             kind,
             solver,
@@ -57,7 +56,7 @@ impl PathSolver {
             state: Vec::new(),
             pivots: None,
             analyses: 1,
-            analysed: true,
+            analysis: Some(analysis),
         })
     }
 
@@ -75,7 +74,7 @@ impl PathSolver {
             state: Vec::new(),
             pivots: None,
             analyses: 0,
-            analysed: false,
+            analysis: None,
         }
     }
 
@@ -90,6 +89,12 @@ impl PathSolver {
     /// released DOF) costs none.
     pub fn analyses(&self) -> usize {
         self.analyses
+    }
+
+    /// What the last symbolic analysis found: the ordering, the factor's entries and flops,
+    /// its supernode tree (`None` while a [`deferred`](Self::deferred) session waits).
+    pub fn analysis(&self) -> Option<Analysis> {
+        self.analysis
     }
 
     /// Newton at the fixed load factor λ from `u` (updated in place, also when not
@@ -141,9 +146,8 @@ impl PathSolver {
             let analyses = self.analyses;
             *self = Self::new(problem, kind)?;
             self.analyses = analyses + 1;
-        } else if !self.analysed {
-            self.solver.analyze(&pattern)?;
-            self.analysed = true;
+        } else if self.analysis.is_none() {
+            self.analysis = Some(self.solver.analyze(&pattern)?);
             self.analyses += 1;
         }
         Ok(())
@@ -277,6 +281,7 @@ mod tests {
         let (mut problem, _, _) = compressed();
         let mut lazy = PathSolver::deferred(&problem, settings.solver);
         assert_eq!(lazy.analyses(), 0);
+        assert!(lazy.analysis().is_none());
         assert!(!lazy.is_factored());
         let mut eager = PathSolver::new(&problem, settings.solver).unwrap();
         let (mut a, mut b) = (vec![0.0; problem.n()], vec![0.0; problem.n()]);
@@ -291,5 +296,8 @@ mod tests {
             assert!(a.iter().zip(&b).all(|(x, y)| x.to_bits() == y.to_bits()));
         }
         assert_eq!(lazy.analyses(), 1);
+        // Both sessions report the same analysis once made.
+        assert_eq!(lazy.analysis(), eager.analysis());
+        assert!(lazy.analysis().is_some_and(|a| a.flops > 0.0));
     }
 }

@@ -372,6 +372,7 @@ impl LinearSolver for FaerSolver {
         })?;
         let flops = factor_flops(&symbolic);
         let lower_nonzeros = column_counts(&symbolic).iter().sum();
+        let tree = counts::tree_work(&symbolic);
         if mixed {
             self.mixed.reset(len, self.split_state.is_none())?;
         } else if self.split_state.is_none() {
@@ -389,6 +390,8 @@ impl LinearSolver for FaerSolver {
             flops,
             bandwidth: None,
             profile: None,
+            ordering: chosen.name(),
+            tree,
         })
     }
 

@@ -59,6 +59,6 @@ pub use ordering::{
 };
 pub use pattern::SymmetricPattern;
 pub use profile::{ProfileLdlt, ProfileOrdering};
-pub use solver::{Analysis, Factorization, LinearSolver, SolverKind, solve};
+pub use solver::{Analysis, Factorization, LinearSolver, SolverKind, TreeWork, solve};
 
 mod pattern;

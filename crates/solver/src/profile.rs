@@ -204,6 +204,12 @@ impl LinearSolver for ProfileLdlt {
             flops,
             bandwidth: Some(stats.bandwidth),
             profile: Some(stats.profile),
+            ordering: match self.ordering {
+                ProfileOrdering::ReverseCuthillMckee => "RCM",
+                ProfileOrdering::Natural => "natural",
+                ProfileOrdering::Given(_) => "given",
+            },
+            tree: None,
         })
     }
 

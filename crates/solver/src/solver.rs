@@ -18,6 +18,44 @@ pub struct Analysis {
     pub bandwidth: Option<usize>,
     /// Profile (off-diagonal envelope entries) after ordering (profile solver).
     pub profile: Option<usize>,
+    /// The fill-reducing ordering used: "RCM", "AMD", "nested dissection" or "METIS".
+    pub ordering: &'static str,
+    /// How the factor's work lies on its supernode tree (faer's supernodal factor; `None`
+    /// for the profile solver and faer's simplicial factor of small systems).
+    pub tree: Option<TreeWork>,
+}
+
+/// The work of a supernodal factor's elimination tree: what threads can make of it.
+///
+/// Tree-level parallelism runs independent subtrees side by side; a supernode waits for its
+/// children. Its bound is W / cp ([`TreeWork::parallelism`]): with any number of threads
+/// that only do that, a factorisation takes at least cp/W of its one-thread time. Threads
+/// inside a supernode's dense blocks (faer's kernels) can beat it only on the wide
+/// supernodes at the top of the tree, whose size `largest_supernode_flops` and `widest` show.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TreeWork {
+    /// Supernodes (after faer's relaxed merging).
+    pub supernodes: usize,
+    /// Columns of the widest supernode.
+    pub widest: usize,
+    /// W: Σ c² over the factor's column counts (as [`Analysis::flops`] for the unsplit
+    /// factor).
+    pub flops: f64,
+    /// cp: the largest Σ of supernode flops along a chain from a leaf to the root.
+    pub critical_path_flops: f64,
+    /// The flops of the costliest single supernode.
+    pub largest_supernode_flops: f64,
+}
+
+impl TreeWork {
+    /// W / cp: the most that tree-level parallelism can divide a factorisation's time by.
+    pub fn parallelism(&self) -> f64 {
+        if self.critical_path_flops > 0.0 {
+            self.flops / self.critical_path_flops
+        } else {
+            1.0
+        }
+    }
 }
 
 /// What a numeric factorisation found.

@@ -60,10 +60,18 @@ pub(super) fn auto_choice(
             FaerOrdering::Amd,
         )),
         // AMD won with no permutation (faer's identity) — or nothing was compared, which
-        // cannot happen: nested dissection always gives a factor or an error.
-        (None, _) => Ok((
-            symbolic_for(SymmetricOrdering::Identity)?,
-            FaerOrdering::Amd,
-        )),
+        // cannot happen: nested dissection always gives a factor or an error. The identity
+        // goes in as a custom order: faer's `SymmetricOrdering::Identity` skips the step that
+        // reads `Side::Lower`, and would take our lower-triangle pattern as an upper one (a
+        // diagonal factor; `counts.rs`'s tests met it).
+        (None, _) => {
+            let identity: Vec<usize> = (0..n).collect();
+            Ok((
+                symbolic_for(SymmetricOrdering::Custom(faer::perm::PermRef::new_checked(
+                    &identity, &identity, n,
+                )))?,
+                FaerOrdering::Amd,
+            ))
+        }
     }
 }

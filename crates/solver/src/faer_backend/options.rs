@@ -48,6 +48,18 @@ pub enum FaerOrdering {
     Auto,
 }
 
+impl FaerOrdering {
+    /// The name reports use ("AMD", "nested dissection", "METIS"; "auto" before a choice).
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Amd => "AMD",
+            Self::NestedDissection => "nested dissection",
+            Self::Metis => "METIS",
+            Self::Auto => "auto",
+        }
+    }
+}
+
 /// From this many DOFs on, [`FaerOrdering::Auto`] leaves AMD out of its comparison.
 pub const AUTO_WITHOUT_AMD_DOFS: usize = 10_000;
 
