@@ -21,6 +21,9 @@
 //! analysis, its label the order chosen), `-- nond` to leave out faer with our nested
 //! dissection, `-- rounds=N` to run every solver of a case N times in
 //! turn, so that ratios between solvers come from neighbouring runs on a busy machine).
+//! Before each faer row, a `tree of …` line gives its supernode tree: supernodes, the widest,
+//! W = Σ c², the critical path cp (the costliest leaf-to-root chain) and W/cp, the most that
+//! running subtrees side by side could divide the factorisation's time by.
 //! The last column is the normwise backward error ‖b − A x‖∞ / (‖A‖∞‖x‖∞ + ‖b‖∞) of the
 //! solve.
 
@@ -220,6 +223,20 @@ fn run(
         }
     };
     let symbolic = t.elapsed().as_secs_f64();
+    // The supernode tree (faer's supernodal factors): how far threads could take it.
+    if let Some(tree) = analysis.tree {
+        println!(
+            "tree of {case}, {label} ({}): {} supernodes, widest {} columns, W {:.2} G, critical \
+             path {:.2} G (W/cp {:.2}), largest supernode {:.2} G",
+            analysis.ordering,
+            tree.supernodes,
+            tree.widest,
+            tree.flops * 1e-9,
+            tree.critical_path_flops * 1e-9,
+            tree.parallelism(),
+            tree.largest_supernode_flops * 1e-9
+        );
+    }
     // Small systems take milliseconds: best of several runs there, one run for large ones.
     let reps = if n < 20_000 { 15 } else { 1 };
     let (mut numeric, mut solve) = (f64::INFINITY, f64::INFINITY);
