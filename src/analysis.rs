@@ -202,12 +202,20 @@ pub(crate) fn run_at(
     // warnings after the scene's and before the stability ones (a run's end says last).
     if depth == 0 {
         estimate::attach(scene, choice, companion, &mut results)?;
-    } else if let Some((Ok(coarser), _)) = companion {
+    } else if let Some((run, _)) = companion {
         // A companion's own companion: its levels go up with the companion's, to the
-        // estimate's second term (src/analysis_estimate.rs).
-        results.coarser = Some(CoarserRun {
-            dofs: coarser.model.dofs,
-            levels: coarser.levels,
+        // estimate's second term (src/analysis_estimate.rs), or why it has none.
+        results.coarser = Some(match run {
+            Ok(coarser) => CoarserRun {
+                dofs: coarser.model.dofs,
+                levels: coarser.levels,
+                failure: None,
+            },
+            Err(e) => CoarserRun {
+                dofs: 0,
+                levels: Vec::new(),
+                failure: Some(e.to_string()),
+            },
         });
     }
     let estimated = std::mem::take(&mut results.warnings);

@@ -7,7 +7,7 @@
 use crate::Error;
 use crate::model::{embedded_params, through_width_params};
 use crate::results::{
-    AccuracyReport, GError, LevelError, LevelResult, MeshChoice, MeshRule, Results,
+    AccuracyReport, CoarserRun, GError, LevelError, LevelResult, MeshChoice, MeshRule, Results,
 };
 use crate::scene::{
     ElementName, ErrorEstimateName, Geometry, MeshControls, PartitionName, Scene, Shape,
@@ -289,6 +289,28 @@ fn front_g(level: &LevelResult) -> (Vec<f64>, Vec<Modes>, Vec<bool>) {
     (at, g, open)
 }
 
+/// The warning of an estimate whose rule wants the coarser companion's term (§3d) and has
+/// none, saying why: no coarser companion ran (`start = "path"`), it failed (its error), or
+/// it stopped before the last level.
+fn missing_coarser_term(coarser: Option<&CoarserRun>, levels: usize) -> String {
+    let why = match coarser {
+        None => "it runs with [analysis] start = \"companion\", the default, and did not here"
+            .to_string(),
+        Some(CoarserRun {
+            failure: Some(e), ..
+        }) => format!("the coarser companion mesh failed: {e}"),
+        Some(r) => format!(
+            "the coarser companion mesh ({} DOFs) solved {} levels of {levels}",
+            r.dofs,
+            r.levels.len()
+        ),
+    };
+    format!(
+        "the error estimate lacks its coarser companion's term ({why}): just past buckling its \
+         ± can be 3× too small (docs/ACCURACY.md §3d)"
+    )
+}
+
 /// Fills each level's per-point errors and summary from the companion's matching level, with
 /// the estimate's factors for what the companion coarsens, and from the companion's own
 /// coarser companion's level where the rule uses it (`coarser`).
@@ -476,12 +498,9 @@ pub(crate) fn attach(
                 report.companion_dofs = Some(c.model.dofs);
                 report.coarser_companion_dofs = coarser.map(|r| r.dofs);
                 if rule.coarser.is_some() && coarser.is_none() {
-                    results.warnings.push(
-                        "the error estimate lacks its coarser companion's term (it runs with \
-                         [analysis] start = \"companion\", the default, and did not here): \
-                         just past buckling its ± can be 3× too small (docs/ACCURACY.md §3d)"
-                            .into(),
-                    );
+                    results
+                        .warnings
+                        .push(missing_coarser_term(c.coarser.as_ref(), c.levels.len()));
                 }
                 report.companion_s = Some(seconds);
                 report.companion_seeded_levels =
@@ -536,4 +555,38 @@ pub(crate) fn attach(
     }
     results.accuracy = Some(report);
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The warning says why the term is missing: no coarser companion ran, it failed (with its
+    /// error), or it stopped short of the run's levels.
+    #[test]
+    fn the_missing_term_warning_says_why() {
+        let none = missing_coarser_term(None, 5);
+        assert!(none.contains("lacks its coarser companion's term (it runs with [analysis]"));
+        let failed = CoarserRun {
+            dofs: 0,
+            levels: Vec::new(),
+            failure: Some("level 3: no convergence".into()),
+        };
+        let w = missing_coarser_term(Some(&failed), 5);
+        assert!(
+            w.contains("(the coarser companion mesh failed: level 3: no convergence)"),
+            "{w}"
+        );
+        let short = CoarserRun {
+            dofs: 3345,
+            levels: Vec::new(),
+            failure: None,
+        };
+        let w = missing_coarser_term(Some(&short), 5);
+        assert!(
+            w.contains("(the coarser companion mesh (3345 DOFs) solved 0 levels of 5)"),
+            "{w}"
+        );
+        assert!(w.ends_with("(docs/ACCURACY.md §3d)"));
+    }
 }

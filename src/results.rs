@@ -410,13 +410,15 @@ impl Results {
     }
 }
 
-/// The levels of a coarser companion mesh and its DOFs.
+/// The levels of a coarser companion mesh and its DOFs, or why it has none.
 #[derive(Debug, Clone)]
 pub(crate) struct CoarserRun {
-    /// Its DOFs.
+    /// Its DOFs (0 when it failed before its model was made).
     pub(crate) dofs: usize,
     /// Its levels, as many as the run's when it finished.
     pub(crate) levels: Vec<LevelResult>,
+    /// Why it stopped, when it failed (its error as the terminal would show it).
+    pub(crate) failure: Option<String>,
 }
 
 /// Everything a run produces.
