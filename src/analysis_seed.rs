@@ -112,9 +112,10 @@ pub(crate) const NESTED_FROM_DOFS: usize = 5_000;
 pub(crate) const DEEPEST: usize = 2;
 
 /// Whether a run at `depth` (0 the run itself, 1 its companion, …) has a companion run beside
-/// or before it: the run when the scene asks for the error estimate; a companion when its
-/// levels can start from a coarser one's ([`wanted`]), it has [`NESTED_FROM_DOFS`] or more
-/// and is not the deepest.
+/// or before it: the run when the scene asks for the error estimate; the run without the
+/// estimate, and a companion that is not the deepest, when its levels can start from a coarser
+/// mesh's ([`seeds_pay`]). Without the estimate the companion's run serves the seeds alone:
+/// turning the estimate off must not cost the nested iteration (it doubled model 6's time).
 pub(crate) fn companion_runs(
     scene: &Scene,
     model: &Model,
@@ -122,14 +123,18 @@ pub(crate) fn companion_runs(
     depth: usize,
 ) -> bool {
     match depth {
-        0 => super::estimate::wanted(scene),
-        d => {
-            d < DEEPEST
-                && 3 * model.mesh.nodes.len() >= NESTED_FROM_DOFS
-                && model.kind != ModelKind::ThroughWidth
-                && wanted(scene, model, substructured)
-        }
+        0 => super::estimate::wanted(scene) || seeds_pay(scene, model, substructured),
+        d => d < DEEPEST && seeds_pay(scene, model, substructured),
     }
+}
+
+/// Whether a run's levels should start from a coarser companion's for speed alone: they can
+/// ([`wanted`]), the mesh has [`NESTED_FROM_DOFS`] or more, and it is not a through-width
+/// model.
+fn seeds_pay(scene: &Scene, model: &Model, substructured: bool) -> bool {
+    3 * model.mesh.nodes.len() >= NESTED_FROM_DOFS
+        && model.kind != ModelKind::ThroughWidth
+        && wanted(scene, model, substructured)
 }
 
 /// Whether a scene's levels can start from a companion's: `start = "companion"`, load
