@@ -114,6 +114,10 @@ fn export_then_solve_gives_the_contact_set_and_displacements_of_run() {
             last.contact.as_ref().unwrap().pairs_closed,
             step.contact_closed.len()
         );
+        // The step's one system reserves the candidate pairs: its factor says so.
+        let factor = step.factor.as_ref().unwrap();
+        assert_eq!(factor.system, "contact");
+        assert_eq!(factor.equations, ours.model.dofs);
         closed_at_end = expected;
     }
     // The case closes pairs (else the test would not test contact).
