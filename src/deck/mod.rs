@@ -325,7 +325,7 @@ pub struct StepResult {
     /// What the step's symbolic analysis found: equations, ordering, the factor's entries and
     /// flops, its supernode tree (absent for a Riks step).
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub factor: Option<crate::results::FactorSummary>,
+    pub factor: Option<FactorSummary>,
 }
 
 /// What [`solve_deck_with`] reports as it goes.
