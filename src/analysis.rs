@@ -7,14 +7,12 @@
 use crate::contact::ContactStage;
 pub use crate::model::{Model, ModelKind, build_model, perturbation_force, perturbation_loads};
 pub use crate::problem::{build_problem, constraints, load_factors, settings};
-use crate::scene::{ForceKinematics, PartitionName, PathName, Scene};
+use crate::scene::{PartitionName, PathName, Scene};
 use crate::substructure::Substructured;
 use crate::{Error, results::*};
-use nonlin3d_element::Kinematics;
-use nonlin3d_mesh::names::{CENTER_TOP, CRACK_LOWER, CRACK_UPPER};
 pub use nonlin3d_newton::solve_level;
 use nonlin3d_newton::{ArcLength, PathSolver, SignRule, StructuralProblem};
-use nonlin3d_vcct::{FrontRelease, cells_above, release_rates};
+use nonlin3d_vcct::FrontRelease;
 use std::time::Instant;
 
 #[path = "analysis_estimate.rs"]
@@ -24,50 +22,7 @@ mod level;
 #[path = "analysis_seed.rs"]
 pub(crate) mod seed;
 use level::{Strategy, follow_level, record_level};
-
-/// G along the front at state `u`.
-pub fn front_table(
-    scene: &Scene,
-    model: &Model,
-    problem: &StructuralProblem,
-    u: &[f64],
-) -> Result<Vec<FrontRelease>, Error> {
-    let kin = match scene.analysis.vcct_forces {
-        ForceKinematics::Nonlinear => Kinematics::Nonlinear,
-        ForceKinematics::Linear => Kinematics::Linear,
-    };
-    let f = problem
-        .assembler()
-        .partial_internal(&cells_above(&model.front), u, kin)?;
-    Ok(release_rates(&model.front, &model.mesh.nodes, u, &f)?)
-}
-
-/// Deflections at a state: w at the sublaminate centre top (the mean over the `center_top`
-/// nodes; 0 without the set), and the largest opening w(upper) − w(lower) over the crack faces
-/// (the sublaminate's deflection off the base).
-pub fn deflections(model: &Model, u: &[f64]) -> (f64, f64) {
-    let mesh = &model.mesh;
-    let centre = mesh
-        .node_sets
-        .get(CENTER_TOP)
-        .filter(|s| !s.is_empty())
-        .map_or(0.0, |s| {
-            s.iter().map(|&n| u[3 * n + 2]).sum::<f64>() / s.len() as f64
-        });
-    let (up, low) = (
-        mesh.node_sets.get(CRACK_UPPER),
-        mesh.node_sets.get(CRACK_LOWER),
-    );
-    let peak = match (up, low) {
-        (Some(up), Some(low)) => up
-            .iter()
-            .zip(low)
-            .map(|(&a, &b)| u[3 * a + 2] - u[3 * b + 2])
-            .fold(0.0_f64, |m, d| if d.abs() > m.abs() { d } else { m }),
-        _ => 0.0,
-    };
-    (centre, peak)
-}
+pub use level::{deflections, front_table};
 
 /// What [`run`] reports as it goes.
 #[derive(Debug, Clone, Copy)]

@@ -1,22 +1,70 @@
 //! The stages of one level of the sweep ([`super::run`]): the Newton strategy of each level,
 //! the solve without contact (whole, by arc length, or in the contact loop's steps, with the
-//! BFGS redo), the contact stage, and the level's record (VCCT, deflections, convergence).
+//! BFGS redo), the contact stage, and the level's record (G by [`front_table`],
+//! [`deflections`], convergence).
 
-use super::{deflections, front_table};
 use crate::Error;
 use crate::contact::ContactStage;
 use crate::model::{Model, ModelKind};
 use crate::problem::settings;
 use crate::results::{ContactSummary, Crossing, LevelResult};
+use crate::scene::ForceKinematics;
 use crate::scene::{NewtonName, Scene};
 use crate::substructure::Substructured;
+use nonlin3d_element::Kinematics;
+use nonlin3d_mesh::names::{CENTER_TOP, CRACK_LOWER, CRACK_UPPER};
 use nonlin3d_newton::{
     ArcLength, IncrementReport, LevelReport, NewtonSettings, PathSolver, Stepping,
     StructuralProblem, solve_level, solve_level_arc,
 };
 use nonlin3d_solver::SolverKind;
 use nonlin3d_vcct::respect_contact;
+use nonlin3d_vcct::{FrontRelease, cells_above, release_rates};
 use std::time::Instant;
+
+/// G along the front at state `u`.
+pub fn front_table(
+    scene: &Scene,
+    model: &Model,
+    problem: &StructuralProblem,
+    u: &[f64],
+) -> Result<Vec<FrontRelease>, Error> {
+    let kin = match scene.analysis.vcct_forces {
+        ForceKinematics::Nonlinear => Kinematics::Nonlinear,
+        ForceKinematics::Linear => Kinematics::Linear,
+    };
+    let f = problem
+        .assembler()
+        .partial_internal(&cells_above(&model.front), u, kin)?;
+    Ok(release_rates(&model.front, &model.mesh.nodes, u, &f)?)
+}
+
+/// Deflections at a state: w at the sublaminate centre top (the mean over the `center_top`
+/// nodes; 0 without the set), and the largest opening w(upper) − w(lower) over the crack faces
+/// (the sublaminate's deflection off the base).
+pub fn deflections(model: &Model, u: &[f64]) -> (f64, f64) {
+    let mesh = &model.mesh;
+    let centre = mesh
+        .node_sets
+        .get(CENTER_TOP)
+        .filter(|s| !s.is_empty())
+        .map_or(0.0, |s| {
+            s.iter().map(|&n| u[3 * n + 2]).sum::<f64>() / s.len() as f64
+        });
+    let (up, low) = (
+        mesh.node_sets.get(CRACK_UPPER),
+        mesh.node_sets.get(CRACK_LOWER),
+    );
+    let peak = match (up, low) {
+        (Some(up), Some(low)) => up
+            .iter()
+            .zip(low)
+            .map(|(&a, &b)| u[3 * a + 2] - u[3 * b + 2])
+            .fold(0.0_f64, |m, d| if d.abs() > m.abs() { d } else { m }),
+        _ => 0.0,
+    };
+    (centre, peak)
+}
 
 /// The Newton settings of a sweep's levels: the scene's (`newton`), and full Newton for the
 /// levels up to the one that takes the §3.2 perturbation when the scene's is modified Newton.
