@@ -3,8 +3,9 @@
 //! each system's equations, ordering, factor entries and flops, and where the factor is
 //! supernodal its tree's critical path; the terminal prints the same line.
 
+mod common;
+
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
 fn tmp(name: &str) -> PathBuf {
     let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("factor-report-{name}"));
@@ -13,16 +14,9 @@ fn tmp(name: &str) -> PathBuf {
     d
 }
 
-fn nonlin3d(dir: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_nonlin3d"))
-        .current_dir(dir)
-        .args(args)
-        .output()
-        .unwrap()
-}
-
-fn json(path: &Path) -> serde_json::Value {
-    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+/// Everything the program printed, stdout then stderr.
+fn terminal(o: &std::process::Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned() + &String::from_utf8_lossy(&o.stderr)
 }
 
 /// One factor entry's numbers hold together: L's lower nonzeros within the stored entries,
@@ -68,10 +62,15 @@ fn a_run_reports_its_systems_factors() {
             "strains = [-0.001, -0.002, -0.003, -0.004, -0.005]",
             "strains = [-0.001, -0.002]",
         );
-    std::fs::write(dir.join("scene.toml"), text).unwrap();
-    let o = nonlin3d(&dir, &["run", "--out", "out", "scene.toml"]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let v = json(&dir.join("out/results.json"));
+    let (scene, out) = (dir.join("scene.toml"), dir.join("out"));
+    std::fs::write(&scene, text).unwrap();
+    let o = common::nonlin3d_ok([
+        "run".as_ref(),
+        "--out".as_ref(),
+        out.as_os_str(),
+        scene.as_os_str(),
+    ]);
+    let v = common::results_json(&out);
     let dofs = v["model"]["dofs"].as_u64().unwrap();
     let factors = v["timings"]["factor"].as_array().unwrap();
     let systems: Vec<&str> = factors
@@ -84,8 +83,7 @@ fn a_run_reports_its_systems_factors() {
         assert!(f["supernodes"].as_u64().is_some(), "{f}");
     }
     assert!(factors[1]["factor_entries"].as_u64() > factors[0]["factor_entries"].as_u64());
-    let terminal =
-        String::from_utf8_lossy(&o.stdout).into_owned() + &String::from_utf8_lossy(&o.stderr);
+    let terminal = terminal(&o);
     for system in systems {
         assert!(
             terminal.contains(&format!("  {system} system: {dofs} equations, ")),
@@ -100,9 +98,15 @@ fn a_run_reports_its_systems_factors() {
 fn a_solve_reports_each_steps_factor() {
     let dir = tmp("solve");
     let deck = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/decks/uniaxial_box.inp");
-    let o = nonlin3d(&dir, &["solve", "--out", "out", deck.to_str().unwrap()]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let v = json(&dir.join("out/summary.json"));
+    let out = dir.join("out");
+    let o = common::nonlin3d_ok([
+        "solve".as_ref(),
+        "--out".as_ref(),
+        out.as_os_str(),
+        deck.as_os_str(),
+    ]);
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     let text = std::fs::read_to_string(&deck).unwrap();
     let nodes = text
         .split("*NODE")
@@ -119,8 +123,7 @@ fn a_solve_reports_each_steps_factor() {
         assert_eq!(check_factor(&step["factor"]), 3 * nodes);
         assert_eq!(step["factor"]["system"], "solid");
     }
-    let terminal =
-        String::from_utf8_lossy(&o.stdout).into_owned() + &String::from_utf8_lossy(&o.stderr);
+    let terminal = terminal(&o);
     assert!(
         terminal.contains(&format!("  solid system: {} equations, ", 3 * nodes)),
         "{terminal}"
