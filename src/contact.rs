@@ -20,10 +20,11 @@
 //!   twice. With arc length the level is solved whole and, if it overlaps and is longer than
 //!   `max_step`, followed again from its start in the loop's sub-levels.
 //!
-//! The contact system (all candidate pairs reserved in its pattern) is built on first use,
-//! beside the level loop's own system, with its own solver session. In a substructured model
-//! (src/substructure.rs) it is the nonlinear region's problem, superelement included, and the
-//! pairs are the region's (`ContactHost` in src/substructure.rs).
+//! The contact system (its pattern grown with the set: `nonlin3d_contact::Reserve`) is built on
+//! first use, beside the level loop's own system, with its own solver session. In a
+//! substructured model (src/substructure.rs) it is the nonlinear region's problem,
+//! superelement included, and the pairs are the region's (`ContactHost` in
+//! src/substructure.rs).
 
 use crate::model::Model;
 use crate::problem::build_problem;
@@ -236,8 +237,8 @@ impl ContactStage {
     /// Builds the contact system ahead of its first use, where the sweep would otherwise wait
     /// (src/analysis_seed.rs: a seeded level waiting for the companion's): a stage that can
     /// act (`auto`/`on`) and is not engaged builds it now, and its first engagement takes it
-    /// instead of building one — the same system and the same symbolic analysis, so the same
-    /// bits. Nothing changes for a stage that never engages but the CPU spent. A build that
+    /// instead of building one — the same system, so the same bits (with a reserve grown from
+    /// none, the symbolic analysis waits for the first set: `build`). Nothing changes for a stage that never engages but the CPU spent. A build that
     /// fails is dropped: the engagement builds again and reports the error where it always did.
     pub(crate) fn prepare(&mut self, scene: &Scene, model: &Model, newton: &NewtonSettings) {
         if !self.enabled() || self.engaged.is_some() || self.prepared.is_some() {
@@ -263,7 +264,8 @@ impl ContactStage {
         }
     }
 
-    /// The contact system: all candidate pairs reserved in the pattern, its own solver session.
+    /// The contact system: the contact's reserve (none yet by default) in the pattern, its own
+    /// solver session.
     fn build(
         &self,
         scene: &Scene,
@@ -280,7 +282,13 @@ impl ContactStage {
                 })?
             }
         };
-        let session = PathSolver::new(&problem, newton.solver)?;
+        // A reserve that grows from none is analysed at its first factorisation, after the
+        // first set has widened the pattern (an analysis now would be thrown away).
+        let session = if contact.reserved().iter().any(|&r| r) {
+            PathSolver::new(&problem, newton.solver)?
+        } else {
+            PathSolver::deferred(&problem, newton.solver)
+        };
         Ok(Engaged {
             contact,
             problem,

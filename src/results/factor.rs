@@ -10,7 +10,7 @@ use serde::Serialize;
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct FactorSummary {
     /// Which system: "solid" (the level loop's, or a deck step's), "contact" (the contact
-    /// loop's, every candidate pair reserved).
+    /// loop's, with its reserve as it last grew).
     pub system: &'static str,
     /// Equations (DOFs of the system, constrained ones included).
     pub equations: usize,

@@ -8,7 +8,8 @@
 //! map from the masters to the slaves). The pattern is the union of the contributions'
 //! couplings, the fill the ties' folds need, and couplings reserved up front; it is built once,
 //! so a tie group replaced later within the reserved couplings costs no new pattern and no new
-//! symbolic analysis of the solver.
+//! symbolic analysis of the solver. Ties outside it are reserved later by
+//! [`System::reserve_ties`]: the pattern is built again (the solver must then analyse anew).
 
 use crate::constrain::{Masks, missing_coupling, node_neighbours};
 use crate::contribution::check_len;
@@ -30,6 +31,10 @@ pub struct System {
     neighbours: OnceLock<Vec<Vec<usize>>>,
     masks: Masks,
     builds: usize,
+    /// The couplings reserved at build (kept for a rebuild by [`System::reserve_ties`]).
+    reserved: Vec<Vec<usize>>,
+    /// The ties reserved at build and since.
+    reserved_ties: Vec<Tie>,
 }
 
 /// What [`System::builder`] collects before the pattern is built.
@@ -86,31 +91,13 @@ impl SystemBuilder {
     /// Builds the union pattern (once) and hands it to every contribution.
     pub fn build(self) -> Result<System, AssemblyError> {
         let n = self.constraints.n();
-        let mut lists: Vec<Vec<usize>> = Vec::new();
-        for c in &self.contributions {
-            lists.extend(c.couplings());
-        }
-        lists.extend(self.reserved);
-        for l in &lists {
-            if let Some(&d) = l.iter().find(|&&d| d >= n) {
-                return Err(AssemblyError::Length {
-                    what: "coupled DOF",
-                    expected: n,
-                    got: d,
-                });
-            }
-        }
-        let ties: Vec<&Tie> = self
-            .constraints
-            .ties()
-            .iter()
-            .chain(&self.reserved_ties)
-            .collect();
-        let pattern = Arc::new(union_pattern(n, lists, &ties)?);
         let mut contributions = self.contributions;
-        for c in &mut contributions {
-            c.adopt(&pattern)?;
-        }
+        let pattern = build_pattern(
+            &mut contributions,
+            &self.constraints,
+            &self.reserved,
+            &self.reserved_ties,
+        )?;
         Ok(System {
             n,
             contributions,
@@ -119,8 +106,41 @@ impl SystemBuilder {
             neighbours: OnceLock::new(),
             masks: Masks::default(),
             builds: 1,
+            reserved: self.reserved,
+            reserved_ties: self.reserved_ties,
         })
     }
+}
+
+/// The union pattern of the contributions' couplings, the `reserved` blocks and the fill of
+/// the constraints' ties and the `reserved_ties`, handed to every contribution.
+fn build_pattern(
+    contributions: &mut [Box<dyn Contribution>],
+    constraints: &Constraints,
+    reserved: &[Vec<usize>],
+    reserved_ties: &[Tie],
+) -> Result<Arc<SymmetricPattern>, AssemblyError> {
+    let n = constraints.n();
+    let mut lists: Vec<Vec<usize>> = Vec::new();
+    for c in contributions.iter() {
+        lists.extend(c.couplings());
+    }
+    lists.extend(reserved.iter().cloned());
+    for l in &lists {
+        if let Some(&d) = l.iter().find(|&&d| d >= n) {
+            return Err(AssemblyError::Length {
+                what: "coupled DOF",
+                expected: n,
+                got: d,
+            });
+        }
+    }
+    let ties: Vec<&Tie> = constraints.ties().iter().chain(reserved_ties).collect();
+    let pattern = Arc::new(union_pattern(n, lists, &ties)?);
+    for c in contributions.iter_mut() {
+        c.adopt(&pattern)?;
+    }
+    Ok(pattern)
 }
 
 /// The node-blocked pattern of `lists` (each a dense block, widened to whole nodes) with the
@@ -193,7 +213,8 @@ impl System {
         &self.pattern
     }
 
-    /// How many times the pattern was built (1: no change since [`SystemBuilder::build`]).
+    /// How many times the pattern was built (1: no change since [`SystemBuilder::build`]; one
+    /// more for each [`reserve_ties`](Self::reserve_ties) that had to widen it).
     pub fn pattern_builds(&self) -> usize {
         self.builds
     }
@@ -262,6 +283,40 @@ impl System {
             }
         }
         self.constraints.replace_tie_group(group, ties)
+    }
+
+    /// Reserves what folding each of `ties` needs, as [`SystemBuilder::reserve_ties`] does at
+    /// build, for ties found to be needed later (a contact set that grew beyond the pairs
+    /// reserved): if the pattern holds every coupling already, nothing changes and `false` is
+    /// returned; else the pattern is built again with them (every contribution adopts it, the
+    /// tangents made before no longer fit: make them anew, and a solver analysed for the old
+    /// pattern must analyse again) and `true` is returned. Errors: a DOF out of range.
+    pub fn reserve_ties(&mut self, ties: &[Tie]) -> Result<bool, AssemblyError> {
+        let neighbours = self
+            .neighbours
+            .get_or_init(|| node_neighbours(&self.pattern));
+        let held = |t: &Tie| {
+            t.slave < self.n
+                && t.masters.iter().all(|m| m.0 < self.n)
+                && missing_coupling(neighbours, t.slave, &t.masters).is_none()
+        };
+        if ties.iter().all(held) {
+            return Ok(false);
+        }
+        let mut reserved_ties = self.reserved_ties.clone();
+        reserved_ties.extend_from_slice(ties);
+        let pattern = build_pattern(
+            &mut self.contributions,
+            &self.constraints,
+            &self.reserved,
+            &reserved_ties,
+        )?;
+        self.reserved_ties = reserved_ties;
+        self.pattern = pattern;
+        self.neighbours = OnceLock::new();
+        self.masks = Masks::default();
+        self.builds += 1;
+        Ok(true)
     }
 
     /// Releases prescribed DOF `dof` (free from the next evaluation on). Returns whether it was

@@ -490,6 +490,63 @@ fn a_tie_outside_the_reserved_couplings_is_refused() {
     assert!(message.contains(&format!("node {far}")), "{message}");
 }
 
+/// Ties reserved after the build: the pattern is built again (a second build) and is the one a
+/// system built with them reserved up front has, so the tie group then installed gives the
+/// same residual, reactions and tangent bit for bit; ties it holds already change nothing.
+#[test]
+fn ties_reserved_later_widen_the_pattern_to_the_one_reserved_up_front() {
+    let mesh = hex20_box([3, 1, 1]);
+    let c = supports(&mesh);
+    let (far, near) = (nodes_at_x(&mesh, 4.0)[0], nodes_at_x(&mesh, 0.0)[0]);
+    let tie = Tie {
+        slave: 3 * far + 2,
+        masters: vec![(3 * near + 2, 1.0)],
+        offset: 0.0,
+    };
+    let ties = std::slice::from_ref(&tie);
+    let mut later = System::builder(c.clone())
+        .contribution(solid(&mesh, Kinematics::Nonlinear))
+        .build()
+        .unwrap();
+    let old = later.pattern().clone();
+    let mut k_old = later.new_tangent();
+    assert!(later.reserve_ties(ties).unwrap());
+    assert_eq!(later.pattern_builds(), 2);
+    assert!(later.pattern().nnz_lower() > old.nnz_lower());
+    let mut early = System::builder(c)
+        .contribution(solid(&mesh, Kinematics::Nonlinear))
+        .reserve_ties(ties)
+        .build()
+        .unwrap();
+    assert!(**later.pattern() == **early.pattern());
+    assert!(!later.reserve_ties(ties).unwrap());
+    assert!(!early.reserve_ties(ties).unwrap());
+    assert_eq!((later.pattern_builds(), early.pattern_builds()), (2, 1));
+    let mut u = vec![0.0; later.n()];
+    u.iter_mut()
+        .enumerate()
+        .for_each(|(i, x)| *x = 1e-4 * ((i % 7) as f64 - 3.0));
+    for system in [&mut later, &mut early] {
+        system.replace_tie_group(TieGroup(3), ties).unwrap();
+        system.prescribe(&mut u, 0.5);
+    }
+    let (mut kl, mut ke) = (later.new_tangent(), early.new_tangent());
+    let el = later.evaluate(&u, 0.5, Some(&mut kl)).unwrap();
+    let ee = early.evaluate(&u, 0.5, Some(&mut ke)).unwrap();
+    assert!(el == ee);
+    assert!(kl.values() == ke.values());
+    // A tangent made on the old pattern no longer fits.
+    assert!(later.evaluate(&u, 0.5, Some(&mut k_old)).is_err());
+    // A DOF out of range is refused, and the pattern stays.
+    let bad = Tie {
+        slave: 3 * mesh.nodes.len(),
+        masters: vec![(0, 1.0)],
+        offset: 0.0,
+    };
+    assert!(later.reserve_ties(&[bad]).is_err());
+    assert_eq!(later.pattern_builds(), 2);
+}
+
 /// A released DOF is free at the next evaluation: the system gives bitwise what a system built
 /// without that prescription gives (same pattern, masks found again), and differs from before.
 #[test]

@@ -8,9 +8,8 @@
 //! again at the same load factor; a set seen before at the level is a cycle and ends the level
 //! with [`ContactError::Cycle`].
 
-use crate::tie::{candidate_tie, contact_force, slave_component, weighted_tie};
-use crate::{ALPHA, ContactError, CrackFaces, Pair};
-use nonlin3d_assembly::SystemBuilder;
+use crate::tie::{contact_force, slave_component, weighted_tie};
+use crate::{ALPHA, ContactError, CrackFaces};
 use nonlin3d_mesh::Mesh;
 use nonlin3d_newton::{
     LevelReport, NewtonSettings, NonlinearProblem, PathSolver, StructuralProblem, solve_level,
@@ -21,7 +20,7 @@ mod settings;
 
 /// Refresh passes over which the overlap must shrink tenfold ([`Contact::check_refresh`]).
 const REFRESH_WINDOW: usize = 5;
-pub use settings::{ContactSettings, LevelSettings, Mode};
+pub use settings::{ContactSettings, LevelSettings, Mode, Reserve};
 
 /// Gaps, forces and the set at a state: the results of contact.
 #[derive(Debug, Clone, PartialEq)]
@@ -171,6 +170,8 @@ pub struct Contact {
     settings: ContactSettings,
     /// The installed constraint of each pair (None: open).
     held: Vec<Option<Held>>,
+    /// Whether each pair's tie is reserved in the pattern ([`Reserve`]).
+    reserved: Vec<bool>,
     /// Whether a re-solve that converges unstable ends the level ([`Self::set_stable_only`]).
     stable_only: bool,
 }
@@ -196,28 +197,22 @@ impl Contact {
         if !(settings.max_step > 0.0 && settings.max_step.is_finite()) {
             return bad("max_step", format!("{} (load factor)", settings.max_step));
         }
+        if let Reserve::Grow { gap_share, .. } = settings.reserve
+            && !(gap_share >= 0.0 && gap_share.is_finite())
+        {
+            return bad(
+                "reserve.gap_share",
+                format!("{gap_share} (a share of the largest gap)"),
+            );
+        }
+        let all = settings.reserve == Reserve::All && settings.mode == Mode::TwoBody;
         Ok(Self {
             held: vec![None; faces.len()],
+            reserved: vec![all; faces.len()],
             faces,
             settings,
             stable_only: false,
         })
-    }
-
-    /// Reserves every candidate pair's couplings in the system to be built (both whole nodes of
-    /// each pair and, for a mid-edge pair, of the pairs at its edge's ends): any active set
-    /// then fits the pattern.
-    pub fn reserve(&self, builder: SystemBuilder) -> SystemBuilder {
-        let pairs = self.faces.pairs();
-        let ties: Vec<_> = pairs
-            .iter()
-            .enumerate()
-            .map(|(i, &p)| {
-                let ends: Vec<Pair> = self.faces.ends(i).iter().map(|&c| pairs[c]).collect();
-                candidate_tie(p, &ends)
-            })
-            .collect();
-        builder.reserve_ties(&ties)
     }
 
     /// The crack faces.
@@ -266,6 +261,7 @@ impl Contact {
                 got: active.len(),
             });
         }
+        self.grow_reserve(problem, u, active)?;
         let normals = self.faces.normals(u)?;
         let g0 = self.faces.initial_gaps(&normals);
         let group = self.settings.group;
@@ -499,6 +495,7 @@ impl Contact {
 
 mod holding;
 mod passes;
+mod reserve;
 pub use passes::{Iterate, Resumed};
 
 #[cfg(test)]

@@ -69,7 +69,7 @@ mod tie;
 pub use active::{Change, Tolerances, update};
 pub use driver::{
     Contact, ContactLevel, ContactSettings, ContactState, Iterate, LevelSettings, Mode, PassReport,
-    Resumed,
+    Reserve, Resumed,
 };
 pub use error::ContactError;
 pub use pairs::{CrackFaces, Pair};

@@ -38,6 +38,8 @@ pub struct CrackFaces {
     facets: Vec<Facet>,
     /// Facets around each pair's lower node.
     around: Vec<Vec<usize>>,
+    /// The pairs whose lower nodes share a facet with each pair's (itself included, sorted).
+    near: Vec<Vec<usize>>,
     /// Reference coordinates (m).
     coords: Vec<[f64; 3]>,
     /// The transformed basis of each pair's lower node ([`recover`](Self::recover)).
@@ -91,12 +93,21 @@ impl CrackFaces {
         for (i, p) in pairs.iter().enumerate() {
             index[p.lower] = i;
         }
+        let mut near: Vec<Vec<usize>> = (0..pairs.len()).map(|i| vec![i]).collect();
         for (f, (_, nodes)) in facets.iter().enumerate() {
-            for &v in nodes {
-                if let Some(list) = around.get_mut(index[v]) {
-                    list.push(f);
-                }
+            let on: Vec<usize> = nodes
+                .iter()
+                .map(|&v| index[v])
+                .filter(|&i| i < pairs.len())
+                .collect();
+            for &i in &on {
+                around[i].push(f);
+                near[i].extend_from_slice(&on);
             }
+        }
+        for list in &mut near {
+            list.sort_unstable();
+            list.dedup();
         }
         if let Some(i) = around.iter().position(Vec::is_empty) {
             return Err(ContactError::Node {
@@ -110,6 +121,7 @@ impl CrackFaces {
             pairs,
             facets,
             around,
+            near,
             coords: mesh.nodes.clone(),
             basis,
         })
@@ -128,6 +140,32 @@ impl CrackFaces {
     /// Whether there is no pair.
     pub fn is_empty(&self) -> bool {
         self.pairs.is_empty()
+    }
+
+    /// The pairs whose lower nodes lie on a lower-face facet with pair `i`'s (`i` included,
+    /// in increasing order): one ring of neighbours.
+    pub fn near(&self, i: usize) -> &[usize] {
+        &self.near[i]
+    }
+
+    /// The pairs within `rings` rings of neighbours ([`near`](Self::near)) of the pairs
+    /// flagged in `seeds` (the seeds included: `rings` = 0 gives them back).
+    pub fn within(&self, seeds: &[bool], rings: usize) -> Vec<bool> {
+        let mut out = seeds.to_vec();
+        let mut front: Vec<usize> = (0..seeds.len()).filter(|&i| seeds[i]).collect();
+        for _ in 0..rings {
+            let mut next = Vec::new();
+            for &i in &front {
+                for &j in &self.near[i] {
+                    if !out[j] {
+                        out[j] = true;
+                        next.push(j);
+                    }
+                }
+            }
+            front = next;
+        }
+        out
     }
 
     /// Number of lower-face facets.

@@ -4,12 +4,12 @@
 //! is pulled away.
 
 use nonlin3d_assembly::{Assembler, Constraints};
-use nonlin3d_contact::{Contact, ContactSettings, LevelSettings};
+use nonlin3d_contact::{Contact, ContactSettings, LevelSettings, Reserve};
 use nonlin3d_element::{ElementKind, IntegrationRule, Kinematics};
 use nonlin3d_laminate::{ShearCoupling, materials};
 use nonlin3d_mesh::names::{CRACK_UPPER, X0, Y0, Z0};
 use nonlin3d_mesh::{EmbeddedParams, Imperfection, Mesh, embedded_delamination};
-use nonlin3d_newton::{NewtonSettings, PathSolver, Stepping, StructuralProblem};
+use nonlin3d_newton::{NewtonSettings, NonlinearProblem, PathSolver, Stepping, StructuralProblem};
 
 /// A 30 mm circle under a 0.4 mm sublaminate on a 2 mm base, W = 30 mm, Hex8, 2 slices, two
 /// rings inside the front: a few hundred nodes.
@@ -28,7 +28,8 @@ fn mesh() -> Mesh {
 }
 
 /// Steel; w = 0 on z = 0, symmetry on x = 0 and y = 0; `load` (N, +z up) spread over the
-/// sublaminate's top nodes above the crack (those over a `crack_upper` node).
+/// sublaminate's top nodes above the crack (those over a `crack_upper` node). The contact's
+/// reserve is reserved.
 fn problem(mesh: &Mesh, contact: &Contact, load: f64) -> StructuralProblem {
     let steel = materials::steel().stiffness().unwrap();
     let solid = Assembler::new(
@@ -66,11 +67,16 @@ fn problem(mesh: &Mesh, contact: &Contact, load: f64) -> StructuralProblem {
 
 /// Pushing the sublaminate down (no pair closed at first): the first solve overlaps, the
 /// overlapping pairs close, and passes follow until the set is stable: then no overlap beyond
-/// the gap tolerance and every force compressive. One pattern, one symbolic analysis.
+/// the gap tolerance and every force compressive. With every pair reserved up front
+/// ([`Reserve::All`]): one pattern, one symbolic analysis.
 #[test]
 fn a_pushed_sublaminate_closes_onto_its_base() {
     let mesh = mesh();
-    let mut contact = Contact::new(&mesh, ContactSettings::default()).unwrap();
+    let settings = ContactSettings {
+        reserve: Reserve::All,
+        ..ContactSettings::default()
+    };
+    let mut contact = Contact::new(&mesh, settings).unwrap();
     let mut problem = problem(&mesh, &contact, -200.0);
     let newton = NewtonSettings::default();
     let mut session = PathSolver::new(&problem, newton.solver).unwrap();
@@ -253,4 +259,156 @@ fn held_pairs_are_refreshed_until_the_penetration_is_within_the_tolerance() {
     for p in level.passes.iter().filter(|p| p.refresh) {
         assert!(p.closed.is_empty() && p.opened.is_empty());
     }
+}
+
+/// The reserve grown from none ([`Reserve::Grow`], one ring, no gap rule): installing a set
+/// reserves its
+/// pairs and their neighbours (one more pattern build), a set inside that reserve builds
+/// nothing, a pair outside grows it again; the pattern stays smaller than the one with every
+/// pair reserved, and with the same set installed both give the same residual and reactions
+/// bit for bit (the same element sums and folds; only the pattern's unused entries differ).
+#[test]
+fn the_reserve_grows_around_the_closed_pairs_only_when_a_set_leaves_it() {
+    let mesh = embedded_delamination(&EmbeddedParams {
+        kind: ElementKind::Hex8,
+        slices: 4,
+        radial_inside: 4,
+        radial_outside: 1,
+        base: 2e-3,
+        w: 30e-3,
+        base_layers: 1,
+        ..EmbeddedParams::thesis_reference()
+    })
+    .unwrap();
+    let with = |reserve| {
+        let settings = ContactSettings {
+            reserve,
+            ..ContactSettings::default()
+        };
+        let contact = Contact::new(&mesh, settings).unwrap();
+        let problem = problem(&mesh, &contact, -100.0);
+        (contact, problem)
+    };
+    let (mut all, mut all_problem) = with(Reserve::All);
+    let (mut grown, mut problem) = with(Reserve::Grow {
+        rings: 1,
+        gap_share: 0.0,
+    });
+    let faces = grown.faces().clone();
+    let n = faces.len();
+    assert!(grown.reserved().iter().all(|&r| !r));
+    assert!(all.reserved().iter().all(|&r| r));
+    let radius = |i: usize| {
+        let x = mesh.nodes[faces.pairs()[i].upper];
+        x[0].hypot(x[1])
+    };
+    let by_radius = |near: bool| {
+        (0..n)
+            .min_by(|&a, &b| {
+                let (ra, rb) = (radius(a), radius(b));
+                if near {
+                    ra.total_cmp(&rb)
+                } else {
+                    rb.total_cmp(&ra)
+                }
+            })
+            .unwrap()
+    };
+    let (centre, rim) = (by_radius(true), by_radius(false));
+    let only = |i: usize| (0..n).map(|j| j == i).collect::<Vec<bool>>();
+    let u = vec![0.0; problem.system().n()];
+    let builds = |p: &StructuralProblem| p.system().pattern_builds();
+
+    grown.install(&mut problem, &u, &only(centre)).unwrap();
+    assert_eq!(builds(&problem), 2);
+    assert_eq!(grown.reserved(), faces.within(&only(centre), 1).as_slice());
+    assert!(faces.near(centre).len() > 1 && grown.reserved().iter().any(|&r| !r));
+    // Inside the reserve: the ring around the centre pair, then nothing.
+    let ring: Vec<bool> = grown.reserved().to_vec();
+    grown.install(&mut problem, &u, &ring).unwrap();
+    grown.install(&mut problem, &u, &vec![false; n]).unwrap();
+    assert_eq!(builds(&problem), 2);
+    // A pair at the rim is outside: the reserve grows around the set, keeping what it had.
+    let mut far = ring.clone();
+    far[rim] = true;
+    grown.install(&mut problem, &u, &far).unwrap();
+    assert_eq!(builds(&problem), 3);
+    assert!(grown.reserved()[rim] && ring.iter().zip(grown.reserved()).all(|(&a, &b)| !a || b));
+    assert!(grown.reserved().iter().any(|&r| !r));
+    let (small, full) = (
+        problem.system().pattern().nnz_lower(),
+        all_problem.system().pattern().nnz_lower(),
+    );
+    assert!(small < full, "{small} against {full} entries");
+
+    all.install(&mut all_problem, &u, &far).unwrap();
+    let mut w = u.clone();
+    w.iter_mut()
+        .enumerate()
+        .for_each(|(i, x)| *x = 1e-7 * ((i % 5) as f64 - 2.0));
+    let (mut r1, mut r2) = (vec![0.0; w.len()], vec![0.0; w.len()]);
+    problem.evaluate(&w, 0.5, &mut r1, None).unwrap();
+    all_problem.evaluate(&w, 0.5, &mut r2, None).unwrap();
+    assert!(r1 == r2);
+    assert!(problem.reactions() == all_problem.reactions());
+}
+
+/// The gap rule of [`Reserve::Grow`]: with the sublaminate's underside lifted in proportion to
+/// the distance from the centre (gaps from 0 at the centre to 2 µm at the rim), installing the
+/// centre pair alone reserves, besides its ring, exactly the pairs whose gap is within the
+/// share of the largest; with no open gap (u = 0, the faces touching everywhere) every pair.
+#[test]
+fn the_reserve_takes_the_pairs_whose_faces_are_near() {
+    let mesh = embedded_delamination(&EmbeddedParams {
+        kind: ElementKind::Hex8,
+        slices: 4,
+        radial_inside: 4,
+        radial_outside: 1,
+        base: 2e-3,
+        w: 30e-3,
+        base_layers: 1,
+        ..EmbeddedParams::thesis_reference()
+    })
+    .unwrap();
+    let share = 0.3;
+    let settings = ContactSettings {
+        reserve: Reserve::Grow {
+            rings: 1,
+            gap_share: share,
+        },
+        ..ContactSettings::default()
+    };
+    let mut contact = Contact::new(&mesh, settings.clone()).unwrap();
+    let mut lifted = problem(&mesh, &contact, -100.0);
+    let faces = contact.faces().clone();
+    let n = faces.len();
+    let r = |i: usize| {
+        let x = mesh.nodes[faces.pairs()[i].upper];
+        x[0].hypot(x[1])
+    };
+    let centre = (0..n).min_by(|&a, &b| r(a).total_cmp(&r(b))).unwrap();
+    let only: Vec<bool> = (0..n).map(|j| j == centre).collect();
+    let mut u = vec![0.0; lifted.system().n()];
+    for i in 0..n {
+        u[3 * faces.pairs()[i].upper + 2] = 2e-6 * r(i) / 15e-3;
+    }
+    contact.install(&mut lifted, &u, &only).unwrap();
+    let gaps = faces.gaps(&u, &faces.normals(&u).unwrap());
+    let largest = gaps.iter().fold(0.0f64, |m, &g| m.max(g));
+    let rings = faces.within(&only, 1);
+    let expected: Vec<bool> = (0..n)
+        .map(|i| rings[i] || gaps[i] <= share * largest)
+        .collect();
+    assert_eq!(contact.reserved(), expected.as_slice());
+    let taken = expected.iter().filter(|&&e| e).count();
+    assert!(
+        taken > rings.iter().filter(|&&e| e).count() && taken < n,
+        "{taken} of {n}"
+    );
+
+    let mut touching = Contact::new(&mesh, settings).unwrap();
+    let mut flat = problem(&mesh, &touching, -100.0);
+    let zero = vec![0.0; flat.system().n()];
+    touching.install(&mut flat, &zero, &only).unwrap();
+    assert!(touching.reserved().iter().all(|&r| r));
 }

@@ -5,7 +5,7 @@
 
 use nonlin3d_assembly::{Assembler, Constraints};
 use nonlin3d_contact::{
-    Contact, ContactError, ContactLevel, ContactSettings, CrackFaces, LevelSettings, Mode,
+    Contact, ContactError, ContactLevel, ContactSettings, CrackFaces, LevelSettings, Mode, Reserve,
 };
 use nonlin3d_element::{ElementKind, IntegrationRule, Kinematics};
 use nonlin3d_laminate::{ShearCoupling, materials};
@@ -122,6 +122,8 @@ struct Run {
     u: Vec<f64>,
     problem: StructuralProblem,
     session: PathSolver,
+    /// Pairs reserved in the pattern at the end.
+    reserved: usize,
 }
 
 /// One level 0 → 1 starting with every pair closed (the free plate needs contact to be held
@@ -159,9 +161,11 @@ fn run_with(
     let mut contact = Contact::with_faces(faces, settings).unwrap();
     let mut problem = problem(mesh, &contact, top, weights, LOAD);
     let newton = NewtonSettings::default();
-    let mut session = PathSolver::new(&problem, newton.solver).unwrap();
     let mut u = vec![0.0; problem.n()];
+    // The initial set grows the reserve (none at build by default): the session is analysed
+    // for the pattern it leaves.
     contact.install(&mut problem, &u, initial).unwrap();
+    let mut session = PathSolver::new(&problem, newton.solver).unwrap();
     let level = contact.solve_level(
         &mut problem,
         &mut session,
@@ -178,6 +182,7 @@ fn run_with(
         u,
         problem,
         session,
+        reserved: contact.reserved().iter().filter(|&&r| r).count(),
     })
 }
 
@@ -219,8 +224,9 @@ fn check(run: &mut Run, plate_nodes: usize) -> f64 {
 }
 
 /// A uniform pressure: every pair stays closed with a compressive force, the forces carry the
-/// load, and the set is right at the first solve (no pass). The set changed twice (the initial
-/// install, none after) without a new pattern or symbolic analysis.
+/// load, and the set is right at the first solve (no pass). The initial install reserved the
+/// pairs (the pattern's second build, [`nonlin3d_contact::Reserve::Grow`]); nothing after it
+/// made a new pattern or symbolic analysis.
 #[test]
 fn a_pressed_plate_is_held_by_compressive_contact_forces() {
     let (mesh, up, lo, top) = toy();
@@ -237,14 +243,15 @@ fn a_pressed_plate_is_held_by_compressive_contact_forces() {
         run.level.newton_iterations(),
         s.forces
     );
-    assert_eq!(run.problem.system().pattern_builds(), 1);
+    assert_eq!(run.problem.system().pattern_builds(), 2);
     assert_eq!(run.session.analyses(), 1);
 }
 
 /// A point load at the plate's centre (the quarter's corner node): the plate bends and its
 /// outer pairs pull on the base when all are tied; those are released pass by pass until every
 /// remaining force is compressive, the released faces open, and the forces still carry the
-/// load. The passes change the tie group without a new pattern or symbolic analysis. Reversing
+/// load. The passes change the tie group without a new pattern or symbolic analysis (the one
+/// rebuild is the initial install's, which reserved every pair). Reversing
 /// the order of the pairs gives the same set, the same forces and gaps: both runs are converged
 /// to tol = ε_r·F, so their residuals differ by at most 2·tol per DOF and a force by at most
 /// what that moves over the plate's 18 nodes, 36·tol; the gaps then differ by that force times
@@ -279,7 +286,7 @@ fn a_point_load_lifts_the_plate_edges_and_the_order_does_not_matter() {
             assert!(*g > 0.0);
         }
     }
-    assert_eq!(run1.problem.system().pattern_builds(), 1);
+    assert_eq!(run1.problem.system().pattern_builds(), 2);
     assert_eq!(run1.session.analyses(), 1);
 
     let (rup, rlo): (Vec<usize>, Vec<usize>) = (up.iter().rev().copied().collect(), {
@@ -495,6 +502,59 @@ fn inexact_updates_reach_the_same_set_in_fewer_iterations() {
         .zip(&inexact.u)
         .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
     assert!(diff <= 1e-6 * scale, "|Δu| {diff:e} m of {scale:e} m");
+}
+
+/// A reserve that grows (issue 20: the crack faces coupled only where pairs close) against
+/// every pair reserved, on the point-loaded Hex20 plate started from the pairs near the centre
+/// and with no ring of neighbours and no gap rule, so that passes closing pairs outside the reserve grow it
+/// while the loop runs: the same passes and set, and the same state to the tolerance of the
+/// inexact test above (1e-6 of the largest displacement: two converged states of one set,
+/// solved on different patterns whose extra entries are zeros), each pattern analysed once.
+/// (The passes here close every pair at some point, so the pattern ends as the full one:
+/// `tests/delamination.rs` shows a smaller one.)
+#[test]
+fn a_reserve_grown_while_the_loop_runs_gives_the_full_reserves_state() {
+    let with = |reserve| {
+        point_loaded_hex20(ContactSettings {
+            reserve,
+            ..ContactSettings::default()
+        })
+        .unwrap()
+    };
+    let (all, grown) = (
+        with(Reserve::All),
+        with(Reserve::Grow {
+            rings: 0,
+            gap_share: 0.0,
+        }),
+    );
+    let builds = grown.problem.system().pattern_builds();
+    println!(
+        "grown: {builds} builds, {} analyses, {} reserved of {} pairs, {} against {} entries",
+        grown.session.analyses(),
+        grown.reserved,
+        grown.level.state.active.len(),
+        grown.problem.system().pattern().nnz_lower(),
+        all.problem.system().pattern().nnz_lower()
+    );
+    assert_eq!(all.level.state.active, grown.level.state.active);
+    let log = |r: &Run| {
+        let p = &r.level.passes;
+        p.iter()
+            .map(|p| (p.closed.clone(), p.opened.clone(), p.iterations))
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(log(&all), log(&grown));
+    let scale = all.u.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    let diff = all
+        .u
+        .iter()
+        .zip(&grown.u)
+        .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+    assert!(diff <= 1e-6 * scale, "|Δu| {diff:e} m of {scale:e} m");
+    assert_eq!(all.problem.system().pattern_builds(), 1);
+    assert!(builds >= 3, "the passes never grew the reserve");
+    assert_eq!(grown.session.analyses(), builds - 1);
 }
 
 /// The pass limit counts the inexact updates too: a level (one step: `max_step` 1, the limit

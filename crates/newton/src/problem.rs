@@ -258,7 +258,7 @@ pub(crate) mod tests {
 
     /// A steel bar 4×1×1 mm of 4 Hex8 along x, fixed on x = 0, nonlinear kinematics; the DOFs
     /// of the x = 0 and x = 4 mm faces.
-    fn bar() -> (StructuralProblem, Vec<usize>, Vec<usize>) {
+    pub(crate) fn bar() -> (StructuralProblem, Vec<usize>, Vec<usize>) {
         let mesh = structured_box(&BoxParams::new(
             ElementKind::Hex8,
             [4, 1, 1],

@@ -3,7 +3,7 @@
 //! starts from the last factorisation instead of a new one.
 
 use crate::{NewtonError, NonlinearProblem, TangentCache};
-use nonlin3d_solver::{Analysis, LinearSolver, SolverKind, SymmetricMatrix};
+use nonlin3d_solver::{Analysis, LinearSolver, MixedStats, SolverKind, SymmetricMatrix};
 use std::sync::Arc;
 
 /// What [`PathSolver::start_tangent`] found.
@@ -40,6 +40,8 @@ pub struct PathSolver {
     analyses: usize,
     /// What the last symbolic analysis found (`None` while a deferred session waits).
     analysis: Option<Analysis>,
+    /// What mixed precision did in the solvers [`fit`](Self::fit) replaced (a new pattern).
+    replaced: Option<MixedStats>,
 }
 
 impl PathSolver {
@@ -57,6 +59,7 @@ impl PathSolver {
             pivots: None,
             analyses: 1,
             analysis: Some(analysis),
+            replaced: None,
         })
     }
 
@@ -75,13 +78,18 @@ impl PathSolver {
             pivots: None,
             analyses: 0,
             analysis: None,
+            replaced: None,
         }
     }
 
-    /// What the solver's mixed precision did since its last analysis (f32 factorisations,
-    /// f64 fall-backs, refinement steps, the last backward error); `None` for an f64 solver.
-    pub fn mixed_stats(&self) -> Option<nonlin3d_solver::MixedStats> {
-        self.solver.mixed_stats()
+    /// What the solver's mixed precision did over the session's life, every analysis
+    /// included (f32 factorisations, f64 fall-backs, refinement steps, the last backward
+    /// error); `None` for an f64 solver.
+    pub fn mixed_stats(&self) -> Option<MixedStats> {
+        match (self.replaced, self.solver.mixed_stats()) {
+            (Some(before), Some(now)) => Some(before.then(now)),
+            (before, now) => now.or(before),
+        }
     }
 
     /// Symbolic analyses this session made (1 unless the pattern or the solver kind changed
@@ -144,8 +152,10 @@ impl PathSolver {
             || !(Arc::ptr_eq(self.k.pattern(), &pattern) || **self.k.pattern() == *pattern)
         {
             let analyses = self.analyses;
+            let replaced = self.mixed_stats();
             *self = Self::new(problem, kind)?;
             self.analyses = analyses + 1;
+            self.replaced = replaced;
         } else if self.analysis.is_none() {
             self.analysis = Some(self.solver.analyze(&pattern)?);
             self.analyses += 1;
@@ -271,6 +281,45 @@ mod tests {
         let other = crate::problem::tests::bar_problem();
         session.fit(&other, settings.solver).unwrap();
         assert_eq!(session.analyses(), 2);
+    }
+
+    /// Mixed precision's counts are the session's, not its last analysis's: a new pattern
+    /// (a contact reserve that grew) makes the solver anew, and what the replaced one did is
+    /// kept and added to.
+    #[test]
+    fn mixed_precision_counts_survive_a_new_pattern() {
+        let settings = NewtonSettings {
+            solver: nonlin3d_solver::SolverKind::FaerLdltMixed(1),
+            ..NewtonSettings::default()
+        };
+        let factorisations = |s: &PathSolver| {
+            let m = s.mixed_stats().unwrap();
+            (
+                m.single_factorizations + m.double_factorizations,
+                m.refinement_steps,
+            )
+        };
+        let (mut problem, _, _) = compressed();
+        let mut session = PathSolver::new(&problem, settings.solver).unwrap();
+        let mut u = vec![0.0; problem.n()];
+        let report = session
+            .solve_at(&mut problem, &mut u, 0.3, &settings)
+            .unwrap();
+        assert!(report.converged());
+        let (first, steps) = factorisations(&session);
+        assert!(first > 0 && steps > 0);
+        // A bar pulled at its free end by a prescribed displacement.
+        let (mut other, _, end) = crate::problem::tests::bar();
+        other.prescribe_value(end[0], 1e-6).unwrap();
+        session.fit(&other, settings.solver).unwrap();
+        assert_eq!(session.analyses(), 2);
+        assert_eq!(factorisations(&session), (first, steps));
+        let mut v = vec![0.0; other.n()];
+        session
+            .solve_at(&mut other, &mut v, 1.0, &settings)
+            .unwrap();
+        let (total, more) = factorisations(&session);
+        assert!(total > first && more > steps, "{total} after {first}");
     }
 
     /// A deferred session analyses nothing until a call needs a factorisation, then once, and

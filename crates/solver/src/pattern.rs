@@ -221,6 +221,36 @@ impl SymmetricPattern {
         })
     }
 
+    /// A pattern from its lower triangle in compressed columns: `row_idx[col_ptr[j]..col_ptr[j +
+    /// 1]]` the rows of column j, increasing, the first of them j (the diagonal). Errors: a
+    /// column not so.
+    pub(crate) fn from_sorted_lower(
+        n: usize,
+        col_ptr: Vec<usize>,
+        row_idx: Vec<usize>,
+    ) -> Result<Self, SolverError> {
+        if col_ptr.len() != n + 1 || col_ptr[n] != row_idx.len() {
+            return Err(SolverError::DimensionMismatch {
+                what: "column pointers",
+                expected: n + 1,
+                got: col_ptr.len(),
+            });
+        }
+        for j in 0..n {
+            let rows = &row_idx[col_ptr[j]..col_ptr[j + 1]];
+            let sorted = rows.windows(2).all(|w| w[0] < w[1]);
+            if rows.first() != Some(&j) || !sorted || rows.last().is_some_and(|&i| i >= n) {
+                let bad = rows.first().copied().unwrap_or(j);
+                return Err(SolverError::PatternMismatch { row: bad, col: j });
+            }
+        }
+        Ok(Self {
+            n,
+            col_ptr,
+            row_idx,
+        })
+    }
+
     /// Dimension n.
     pub fn n(&self) -> usize {
         self.n

@@ -16,6 +16,45 @@ pub enum Mode {
     External,
 }
 
+/// Which candidate pairs the contact system's pattern holds: the couplings each pair's tie
+/// needs (its upper and lower nodes, and for a mid-edge pair those of its edge's end pairs,
+/// [`candidate_tie`](crate::candidate_tie)). A pair reserved couples the two crack faces in
+/// the pattern whether it is closed or not, so every reserved pair costs fill; a closed pair
+/// outside the reserve cannot be held without a new pattern. In [`Mode::External`] a closed
+/// pair is a prescribed height, which needs no coupling: nothing is reserved there.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Reserve {
+    /// Every candidate pair, once, when the system is built: any set fits and no set ever
+    /// costs a new pattern or symbolic analysis. Thesis model 6 (334 pairs): 6.42 GFLOP a
+    /// factorisation against 4.26 without the crack faces coupled.
+    All,
+    /// None when the system is built; when a set is installed with a closed pair outside the
+    /// reserve, every pair within `rings` rings of lower-face neighbours of a closed pair
+    /// ([`CrackFaces::within`](crate::CrackFaces::within)) and every pair whose gap is at most
+    /// `gap_share` of the largest gap at that state (where the faces are near each other, the
+    /// set spreads as the load grows) are reserved too, and the pattern is built again
+    /// ([`System::reserve_ties`](nonlin3d_assembly::System::reserve_ties); the solver analyses
+    /// it anew at its next factorisation). The reserve only grows.
+    Grow {
+        /// Rings of neighbours reserved around the closed pairs.
+        rings: usize,
+        /// Open pairs with a gap of at most this share of the largest gap are reserved too
+        /// (0: none; at a state with no open gap, every pair touching or overlapping).
+        gap_share: f64,
+    },
+}
+
+impl Reserve {
+    /// The default: grown, two rings, pairs within a tenth of the largest gap. On thesis model
+    /// 6 the contact system's pattern then grows once (the set's first install) and costs
+    /// 5.0 GFLOP a factorisation against 6.42 with every pair (docs/PERFORMANCE.md, "The
+    /// contact reserve grows").
+    pub const DEFAULT: Reserve = Reserve::Grow {
+        rings: 2,
+        gap_share: 0.1,
+    };
+}
+
 /// Settings of the contact loop.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ContactSettings {
@@ -49,6 +88,8 @@ pub struct ContactSettings {
     /// equilibrium, centre deflection 0.726 mm against the path's 0.674 mm, without
     /// sub-levels; with them on the path's.
     pub max_step: f64,
+    /// Which candidate pairs the pattern holds. Default [`Reserve::DEFAULT`].
+    pub reserve: Reserve,
 }
 
 impl ContactSettings {
@@ -98,6 +139,7 @@ impl Default for ContactSettings {
             mode: Mode::TwoBody,
             group: TieGroup(0xC0),
             max_step: 0.25,
+            reserve: Reserve::DEFAULT,
         }
     }
 }

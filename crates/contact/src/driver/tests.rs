@@ -5,7 +5,8 @@ use crate::pairs::tests::stacked;
 
 /// A level is split into the fewest equal steps of at most `max_step`: one level to λ = 1
 /// in four, the sweep's fifths and a step of exactly `max_step` whole; a step that is not
-/// positive and finite is refused by name.
+/// positive and finite is refused by name, and so is a reserve's gap share that is negative or
+/// not finite.
 #[test]
 fn long_levels_are_split_into_steps_of_at_most_max_step() {
     let (mesh, up, lo) = stacked();
@@ -34,6 +35,17 @@ fn long_levels_are_split_into_steps_of_at_most_max_step() {
         };
         let e = Contact::with_faces(faces.clone(), settings).unwrap_err();
         assert!(e.to_string().contains("max_step"), "{e}");
+        let settings = ContactSettings {
+            reserve: Reserve::Grow {
+                rings: 2,
+                gap_share: bad,
+            },
+            ..ContactSettings::default()
+        };
+        if bad != 0.0 {
+            let e = Contact::with_faces(faces.clone(), settings).unwrap_err();
+            assert!(e.to_string().contains("reserve.gap_share"), "{e}");
+        }
     }
 }
 

@@ -106,6 +106,21 @@ pub struct MixedStats {
     pub last_fallback: Option<&'static str>,
 }
 
+impl MixedStats {
+    /// These stats followed by `later`'s (another analysis of the same system): the counts
+    /// summed, the last backward error and fall-back the later ones (this one's fall-back if
+    /// the later made none).
+    pub fn then(self, later: MixedStats) -> MixedStats {
+        MixedStats {
+            single_factorizations: self.single_factorizations + later.single_factorizations,
+            double_factorizations: self.double_factorizations + later.double_factorizations,
+            refinement_steps: self.refinement_steps + later.refinement_steps,
+            last_backward_error: later.last_backward_error,
+            last_fallback: later.last_fallback.or(self.last_fallback),
+        }
+    }
+}
+
 /// Why an f32 factor whose inertia differs from the last factorisation's is not used (the
 /// one refusal that says nothing about the matrix's conditioning).
 const PIVOT_COUNT_CHANGED: &str = "the negative pivot count changed";

@@ -44,35 +44,42 @@ impl Half {
         for (k, &d) in dofs.iter().enumerate() {
             local[d] = k;
         }
-        let mut columns: Vec<Vec<usize>> = vec![Vec::new(); m];
-        for j in 0..n {
-            if local[j] == usize::MAX {
-                continue;
-            }
-            for &i in a.column(j) {
-                if local[i] != usize::MAX {
-                    let (r, c) = (local[i].max(local[j]), local[i].min(local[j]));
-                    columns[c].push(r);
+        // Mᵢ's lower triangle in compressed columns, built by counting: each entry of A's lower
+        // triangle between two DOFs of the half is one entry of Mᵢ (row max, column min of
+        // their local indices), kept with its position in A's values (the gather map).
+        let each = |visit: &mut dyn FnMut(usize, usize, usize)| {
+            for (j, &lj) in local.iter().enumerate() {
+                if lj == usize::MAX {
+                    continue;
                 }
-            }
-        }
-        let pattern = SymmetricPattern::from_lower_columns(m, &columns)?;
-        drop(columns);
-        let mut gather = vec![usize::MAX; pattern.nnz_lower()];
-        for j in 0..n {
-            if local[j] == usize::MAX {
-                continue;
-            }
-            let start = a.col_ptr()[j];
-            for (p, &i) in a.column(j).iter().enumerate() {
-                if local[i] != usize::MAX {
-                    let (r, c) = (local[i].max(local[j]), local[i].min(local[j]));
-                    if let Some(q) = pattern.position(r, c) {
-                        gather[q] = start + p;
+                let start = a.col_ptr()[j];
+                for (p, &i) in a.column(j).iter().enumerate() {
+                    let li = local[i];
+                    if li != usize::MAX {
+                        visit(li.max(lj), li.min(lj), start + p);
                     }
                 }
             }
+        };
+        let mut col_ptr = vec![0usize; m + 1];
+        each(&mut |_, c, _| col_ptr[c + 1] += 1);
+        for c in 0..m {
+            col_ptr[c + 1] += col_ptr[c];
         }
+        let mut entries = vec![(0usize, 0usize); col_ptr[m]];
+        let mut next = col_ptr.clone();
+        each(&mut |r, c, source| {
+            entries[next[c]] = (r, source);
+            next[c] += 1;
+        });
+        drop(next);
+        for c in 0..m {
+            entries[col_ptr[c]..col_ptr[c + 1]].sort_unstable_by_key(|e| e.0);
+        }
+        let gather: Vec<usize> = entries.iter().map(|e| e.1).collect();
+        let rows: Vec<usize> = entries.into_iter().map(|e| e.0).collect();
+        // A's diagonal is stored, so each column starts at its own.
+        let pattern = SymmetricPattern::from_sorted_lower(m, col_ptr, rows)?;
         let sym =
             SymbolicSparseColMatRef::new_checked(m, m, pattern.col_ptr(), None, pattern.row_idx());
         let params = CholeskySymbolicParams {
