@@ -4,10 +4,11 @@
 //!
 //! The pairs are one [`Contact`] (slave node = "upper", master node = "lower": the gap is
 //! g = n·(x_slave − x_master), n the outward normal of the deformed master face). The pattern
-//! reserves the pairs that have closed and their neighbours (`nonlin3d_contact::Reserve`): a set
-//! within them costs no new symbolic analysis, a pair closing outside them grows the reserve
-//! (one new pattern and analysis). An increment converged by Newton is followed by the contact crate's
-//! passes ([`Contact::settle`], the loop `run` uses: pairs whose weighted gap g̃ < −1e-9, in
+//! reserves the pairs that have closed, their neighbours and the pairs whose faces are near
+//! (`nonlin3d_contact::Reserve`): a set within them costs no new symbolic analysis, a pair
+//! closing outside them grows the reserve (one new pattern and analysis). An increment
+//! converged by Newton is followed by the contact crate's passes ([`Contact::settle`], the
+//! loop `run` uses: pairs whose weighted gap g̃ < −1e-9, in
 //! the deck's length unit, close; pairs whose recovered force f̂ is tensile beyond the Newton
 //! tolerance open — one complementarity, `nonlin3d_contact::update`; a stable set that
 //! overlaps along the current normals is held again with them), Newton re-run at the same

@@ -47,7 +47,7 @@ pub enum Reserve {
 impl Reserve {
     /// The default: grown, two rings, pairs within a tenth of the largest gap. On thesis model
     /// 6 the contact system's pattern then grows once (the set's first install) and costs
-    /// 5.0 GFLOP a factorisation against 6.42 with every pair (docs/PERFORMANCE.md, "The
+    /// 4.94 GFLOP a factorisation against 6.42 with every pair (docs/PERFORMANCE.md, "The
     /// contact reserve grows").
     pub const DEFAULT: Reserve = Reserve::Grow {
         rings: 2,
