@@ -141,16 +141,30 @@ impl PathSolver {
     }
 
     /// Made anew (analysis included) if `problem`'s pattern is not the one this solver was
-    /// analysed for, or if `kind` differs.
+    /// analysed for, or if `kind` differs; a pattern of the same size after an analysis is
+    /// taken as grown from it and analysed with the last analysis's choices
+    /// ([`LinearSolver::reanalyze`]).
     pub(crate) fn fit(
         &mut self,
         problem: &dyn NonlinearProblem,
         kind: SolverKind,
     ) -> Result<(), NewtonError> {
         let pattern = problem.pattern();
-        if kind != self.kind
-            || !(Arc::ptr_eq(self.k.pattern(), &pattern) || **self.k.pattern() == *pattern)
-        {
+        let same = Arc::ptr_eq(self.k.pattern(), &pattern) || **self.k.pattern() == *pattern;
+        let grown = kind == self.kind && self.analysis.is_some() && pattern.n() == self.k.n();
+        if !same && grown {
+            // The same equations with more couplings (a contact reserve that grew): the
+            // solver's own choices again (`LinearSolver::reanalyze`), a fresh start otherwise.
+            let replaced = self.mixed_stats();
+            self.analysis = None;
+            self.k = SymmetricMatrix::zeros(pattern.clone());
+            self.cache = TangentCache::new();
+            self.state.clear();
+            self.pivots = None;
+            self.analysis = Some(self.solver.reanalyze(&pattern)?);
+            self.analyses += 1;
+            self.replaced = replaced;
+        } else if kind != self.kind || !same {
             let analyses = self.analyses;
             let replaced = self.mixed_stats();
             *self = Self::new(problem, kind)?;

@@ -395,6 +395,23 @@ impl LinearSolver for FaerSolver {
         })
     }
 
+    /// With [`FaerOrdering::Auto`], the order the last analysis chose (METIS, nested
+    /// dissection or AMD) without comparing the others again; `Auto` itself if that order
+    /// fails or none was chosen yet.
+    fn reanalyze(&mut self, pattern: &Arc<SymmetricPattern>) -> Result<Analysis, SolverError> {
+        let auto = self.ordering;
+        let (FaerOrdering::Auto, Some(chosen)) = (auto, self.chosen) else {
+            return self.analyze(pattern);
+        };
+        self.ordering = chosen;
+        let analysis = self.analyze(pattern);
+        self.ordering = auto;
+        match analysis {
+            Err(SolverError::OutOfMemory { .. }) | Ok(_) => analysis,
+            Err(_) => self.analyze(pattern),
+        }
+    }
+
     fn factorize(&mut self, a: &SymmetricMatrix) -> Result<Factorization, SolverError> {
         let Some(pattern) = &self.pattern else {
             return Err(SolverError::NotReady("factorize called before analyze"));

@@ -77,6 +77,13 @@ pub trait LinearSolver: Send {
     fn name(&self) -> &'static str;
     /// Orders the equations and sets up the factor's structure for `pattern`.
     fn analyze(&mut self, pattern: &Arc<SymmetricPattern>) -> Result<Analysis, SolverError>;
+    /// [`analyze`](Self::analyze) for a pattern grown from the one analysed last (the same
+    /// equations, a few more couplings: a contact reserve that grew), making the choices the
+    /// last analysis made instead of making them again where the solver makes any
+    /// ([`crate::FaerOrdering::Auto`]'s comparison of orders). By default `analyze`.
+    fn reanalyze(&mut self, pattern: &Arc<SymmetricPattern>) -> Result<Analysis, SolverError> {
+        self.analyze(pattern)
+    }
     /// Factors `a`, which must be on the analysed pattern; reports the inertia.
     fn factorize(&mut self, a: &SymmetricMatrix) -> Result<Factorization, SolverError>;
     /// Overwrites the `nrhs` column-major right-hand sides in `b` (n·nrhs values) with A⁻¹b.

@@ -202,3 +202,33 @@ fn signal_dispositions_survive_a_call() {
     };
     assert_eq!(after, before);
 }
+
+/// A pattern grown from the analysed one is analysed with the order Auto chose for it
+/// (`reanalyze`): AMD on the chain, kept on the chain closed into a ring (the same flops as an
+/// AMD analysis of the ring), without comparing again; Auto itself is left as it was, so the
+/// next plain analysis compares the three orders again.
+#[test]
+fn a_grown_pattern_keeps_the_order_auto_chose() {
+    let n = 400;
+    let chain: Vec<Vec<usize>> = (0..n - 1).map(|k| vec![k, k + 1]).collect();
+    let mut ring = chain.clone();
+    ring.push(vec![0, n - 1]);
+    let chain = Arc::new(SymmetricPattern::from_dof_lists(n, &chain).unwrap());
+    let ring = Arc::new(SymmetricPattern::from_dof_lists(n, &ring).unwrap());
+    let (mut s, _) = analysed(&chain, FaerOrdering::Auto);
+    assert_eq!(s.chosen_ordering(), Some(FaerOrdering::Amd));
+    let grown = s.reanalyze(&ring).unwrap();
+    assert_eq!(s.chosen_ordering(), Some(FaerOrdering::Amd));
+    let (_, amd) = analysed(&ring, FaerOrdering::Amd);
+    assert_eq!(grown.flops, amd.flops);
+    assert_eq!(grown.ordering, amd.ordering);
+    let small = Arc::new(hex20(8, 8, 4));
+    let (fresh, _) = analysed(&small, FaerOrdering::Auto);
+    assert_ne!(fresh.chosen_ordering(), Some(FaerOrdering::Amd));
+    s.analyze(&small).unwrap();
+    assert_eq!(s.chosen_ordering(), fresh.chosen_ordering());
+    // A solver that has chosen nothing yet compares as Auto does.
+    let mut new = FaerSolver::new(FaerMode::Ldlt);
+    new.reanalyze(&small).unwrap();
+    assert_eq!(new.chosen_ordering(), fresh.chosen_ordering());
+}
