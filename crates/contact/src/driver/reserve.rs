@@ -12,7 +12,9 @@ use nonlin3d_newton::StructuralProblem;
 impl Contact {
     /// Reserves the couplings of the pairs in the reserve ([`Reserve`]: every candidate pair,
     /// or none yet) in the system to be built: both whole nodes of each pair and, for a
-    /// mid-edge pair, of the pairs at its edge's ends.
+    /// mid-edge pair, of the pairs at its edge's ends. The reserve grows with the one problem
+    /// the sets are installed in: a problem built from this contact before it grew lacks what
+    /// it grew by (installing such a set there fails with `AssemblyError::Unreserved`).
     pub fn reserve(&self, builder: SystemBuilder) -> SystemBuilder {
         builder.reserve_ties(&self.candidate_ties(&self.reserved))
     }
