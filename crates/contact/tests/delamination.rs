@@ -4,7 +4,7 @@
 //! is pulled away.
 
 use nonlin3d_assembly::{Assembler, Constraints};
-use nonlin3d_contact::{Contact, ContactSettings, LevelSettings, Reserve};
+use nonlin3d_contact::{Contact, ContactSettings, CrackFaces, LevelSettings, Reserve};
 use nonlin3d_element::{ElementKind, IntegrationRule, Kinematics};
 use nonlin3d_laminate::{ShearCoupling, materials};
 use nonlin3d_mesh::names::{CRACK_UPPER, X0, Y0, Z0};
@@ -14,10 +14,15 @@ use nonlin3d_newton::{NewtonSettings, NonlinearProblem, PathSolver, Stepping, St
 /// A 30 mm circle under a 0.4 mm sublaminate on a 2 mm base, W = 30 mm, Hex8, 2 slices, two
 /// rings inside the front: a few hundred nodes.
 fn mesh() -> Mesh {
+    mesh_of(2, 2)
+}
+
+/// [`mesh`] with `slices` slices and `rings` rings inside the front.
+fn mesh_of(slices: usize, rings: usize) -> Mesh {
     let p = EmbeddedParams {
         kind: ElementKind::Hex8,
-        slices: 2,
-        radial_inside: 2,
+        slices,
+        radial_inside: rings,
         radial_outside: 1,
         base: 2e-3,
         w: 30e-3,
@@ -25,6 +30,12 @@ fn mesh() -> Mesh {
         ..EmbeddedParams::thesis_reference()
     };
     embedded_delamination(&p).unwrap()
+}
+
+/// The distance of pair `i`'s upper node from the circle's centre (m).
+fn radius(mesh: &Mesh, faces: &CrackFaces, i: usize) -> f64 {
+    let x = mesh.nodes[faces.pairs()[i].upper];
+    x[0].hypot(x[1])
 }
 
 /// Steel; w = 0 on z = 0, symmetry on x = 0 and y = 0; `load` (N, +z up) spread over the
@@ -269,17 +280,7 @@ fn held_pairs_are_refreshed_until_the_penetration_is_within_the_tolerance() {
 /// bit for bit (the same element sums and folds; only the pattern's unused entries differ).
 #[test]
 fn the_reserve_grows_around_the_closed_pairs_only_when_a_set_leaves_it() {
-    let mesh = embedded_delamination(&EmbeddedParams {
-        kind: ElementKind::Hex8,
-        slices: 4,
-        radial_inside: 4,
-        radial_outside: 1,
-        base: 2e-3,
-        w: 30e-3,
-        base_layers: 1,
-        ..EmbeddedParams::thesis_reference()
-    })
-    .unwrap();
+    let mesh = mesh_of(4, 4);
     let with = |reserve| {
         let settings = ContactSettings {
             reserve,
@@ -298,23 +299,12 @@ fn the_reserve_grows_around_the_closed_pairs_only_when_a_set_leaves_it() {
     let n = faces.len();
     assert!(grown.reserved().iter().all(|&r| !r));
     assert!(all.reserved().iter().all(|&r| r));
-    let radius = |i: usize| {
-        let x = mesh.nodes[faces.pairs()[i].upper];
-        x[0].hypot(x[1])
-    };
-    let by_radius = |near: bool| {
-        (0..n)
-            .min_by(|&a, &b| {
-                let (ra, rb) = (radius(a), radius(b));
-                if near {
-                    ra.total_cmp(&rb)
-                } else {
-                    rb.total_cmp(&ra)
-                }
-            })
-            .unwrap()
-    };
-    let (centre, rim) = (by_radius(true), by_radius(false));
+    let by_radius =
+        |a: &usize, b: &usize| radius(&mesh, &faces, *a).total_cmp(&radius(&mesh, &faces, *b));
+    let (centre, rim) = (
+        (0..n).min_by(by_radius).unwrap(),
+        (0..n).max_by(by_radius).unwrap(),
+    );
     let only = |i: usize| (0..n).map(|j| j == i).collect::<Vec<bool>>();
     let u = vec![0.0; problem.system().n()];
     let builds = |p: &StructuralProblem| p.system().pattern_builds();
@@ -359,17 +349,7 @@ fn the_reserve_grows_around_the_closed_pairs_only_when_a_set_leaves_it() {
 /// share of the largest; with no open gap (u = 0, the faces touching everywhere) every pair.
 #[test]
 fn the_reserve_takes_the_pairs_whose_faces_are_near() {
-    let mesh = embedded_delamination(&EmbeddedParams {
-        kind: ElementKind::Hex8,
-        slices: 4,
-        radial_inside: 4,
-        radial_outside: 1,
-        base: 2e-3,
-        w: 30e-3,
-        base_layers: 1,
-        ..EmbeddedParams::thesis_reference()
-    })
-    .unwrap();
+    let mesh = mesh_of(4, 4);
     let share = 0.3;
     let settings = ContactSettings {
         reserve: Reserve::Grow {
@@ -382,10 +362,7 @@ fn the_reserve_takes_the_pairs_whose_faces_are_near() {
     let mut lifted = problem(&mesh, &contact, -100.0);
     let faces = contact.faces().clone();
     let n = faces.len();
-    let r = |i: usize| {
-        let x = mesh.nodes[faces.pairs()[i].upper];
-        x[0].hypot(x[1])
-    };
+    let r = |i: usize| radius(&mesh, &faces, i);
     let centre = (0..n).min_by(|&a, &b| r(a).total_cmp(&r(b))).unwrap();
     let only: Vec<bool> = (0..n).map(|j| j == centre).collect();
     let mut u = vec![0.0; lifted.system().n()];
