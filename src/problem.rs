@@ -102,7 +102,7 @@ pub fn settings(scene: &Scene) -> (NewtonSettings, Stepping) {
         quasi_newton: if a.newton == NewtonName::Bfgs { 20 } else { 0 },
         line_search: a.newton != NewtonName::Bfgs,
         refactor_ratio: if a.newton == NewtonName::Bfgs {
-            2.0
+            nonlin3d_newton::BFGS_REFACTOR_RATIO
         } else {
             0.5
         },

@@ -30,10 +30,10 @@ pub(crate) struct SolveArgs {
     pub(crate) solver: String,
     /// Factorisations in a static step: auto (bfgs in *STATIC, DIRECT steps, full where
     /// the increment size follows the iteration count), bfgs (the kept tangent updated by BFGS pairs,
-    /// factorised anew when ‖r‖ falls by less than half, and at each converged increment
-    /// for its negative pivots), modified (the same without BFGS pairs) or full (a
-    /// factorisation every iteration, as CalculiX). An increment bfgs or modified cannot
-    /// converge is redone by full Newton.
+    /// factorised anew when an iteration more than doubles ‖r‖, and at each converged increment
+    /// for its negative pivots), modified (the kept tangent without BFGS pairs, factorised anew
+    /// when ‖r‖ falls by less than half) or full (a factorisation every iteration, as
+    /// CalculiX). An increment bfgs or modified cannot converge is redone by full Newton.
     #[arg(long, default_value = "auto", value_parser = ["auto", "bfgs", "modified", "full"])]
     pub(crate) newton: String,
     /// Start of an increment without prescribed-value changes: the step's last converged

@@ -70,7 +70,7 @@ pub enum Strategy {
     /// iteration reduced ‖r‖∞ by less than half.
     Modified,
     /// The kept tangent updated by up to 20 BFGS pairs, factorised anew when an iteration
-    /// reduced ‖r‖∞ by less than half.
+    /// more than doubled ‖r‖∞ ([`nonlin3d_newton::BFGS_REFACTOR_RATIO`]).
     Bfgs,
 }
 
@@ -115,7 +115,7 @@ impl Strategy {
                 ..kept
             },
             Self::Bfgs => NewtonSettings {
-                refactor_ratio: 0.5,
+                refactor_ratio: nonlin3d_newton::BFGS_REFACTOR_RATIO,
                 quasi_newton: 20,
                 ..kept
             },

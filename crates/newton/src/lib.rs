@@ -102,7 +102,7 @@ pub use perturb::{
 pub use predict::{Guess, predicted_increment};
 pub use problem::{NonlinearProblem, StructuralProblem};
 pub use session::PathSolver;
-pub use settings::NewtonSettings;
+pub use settings::{BFGS_REFACTOR_RATIO, NewtonSettings};
 pub use solve::{
     Bifurcation, IncrementReport, IterationRecord, LINEAR_RESIDUAL, REACHABLE, Termination,
     negative_pivots_at, residual_tolerance, solve_increment, solve_increment_with,
