@@ -238,8 +238,9 @@ impl ContactStage {
     /// (src/analysis_seed.rs: a seeded level waiting for the companion's): a stage that can
     /// act (`auto`/`on`) and is not engaged builds it now, and its first engagement takes it
     /// instead of building one — the same system, so the same bits (with a reserve grown from
-    /// none, the symbolic analysis waits for the first set: `build`). Nothing changes for a stage that never engages but the CPU spent. A build that
-    /// fails is dropped: the engagement builds again and reports the error where it always did.
+    /// none, the symbolic analysis waits for the first set: `build`). Nothing changes for a
+    /// stage that never engages but the CPU spent. A build that fails is dropped: the
+    /// engagement builds again and reports the error where it always did.
     pub(crate) fn prepare(&mut self, scene: &Scene, model: &Model, newton: &NewtonSettings) {
         if !self.enabled() || self.engaged.is_some() || self.prepared.is_some() {
             return;

@@ -506,10 +506,11 @@ fn inexact_updates_reach_the_same_set_in_fewer_iterations() {
 
 /// A reserve that grows (issue 20: the crack faces coupled only where pairs close) against
 /// every pair reserved, on the point-loaded Hex20 plate started from the pairs near the centre
-/// and with no ring of neighbours and no gap rule, so that passes closing pairs outside the reserve grow it
-/// while the loop runs: the same passes and set, and the same state to the tolerance of the
-/// inexact test above (1e-6 of the largest displacement: two converged states of one set,
-/// solved on different patterns whose extra entries are zeros), each pattern analysed once.
+/// and with no ring of neighbours and no gap rule, so that passes closing pairs outside the
+/// reserve grow it while the loop runs: the same passes and set, and the same state to the
+/// tolerance of the inexact test above (1e-6 of the largest displacement: two converged states
+/// of one set, solved on different patterns whose extra entries are zeros), each pattern
+/// analysed once.
 /// (The passes here close every pair at some point, so the pattern ends as the full one:
 /// `tests/delamination.rs` shows a smaller one.)
 #[test]

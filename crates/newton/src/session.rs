@@ -260,7 +260,24 @@ impl std::fmt::Debug for PathSolver {
 #[cfg(test)]
 mod tests {
     use crate::perturb::tests::compressed;
-    use crate::{NewtonSettings, NonlinearProblem, PathSolver, solve_increment};
+    use crate::{
+        IncrementReport, NewtonSettings, NonlinearProblem, PathSolver, StructuralProblem,
+        solve_increment,
+    };
+
+    /// The compressed test problem solved at λ = 0.3 from rest through a new session.
+    fn solved_at_03(
+        settings: &NewtonSettings,
+    ) -> (PathSolver, StructuralProblem, Vec<f64>, IncrementReport) {
+        let (mut problem, _, _) = compressed();
+        let mut session = PathSolver::new(&problem, settings.solver).unwrap();
+        let mut u = vec![0.0; problem.n()];
+        let report = session
+            .solve_at(&mut problem, &mut u, 0.3, settings)
+            .unwrap();
+        assert!(report.converged());
+        (session, problem, u, report)
+    }
 
     /// A Newton solve at a fixed level through the session gives what a fresh solver gives
     /// (the same iterations on the same tangents: bitwise), records the state as accepted,
@@ -268,13 +285,7 @@ mod tests {
     #[test]
     fn a_solve_at_a_level_reuses_the_analysis() {
         let settings = NewtonSettings::default();
-        let (mut problem, _, _) = compressed();
-        let mut session = PathSolver::new(&problem, settings.solver).unwrap();
-        let mut u = vec![0.0; problem.n()];
-        let report = session
-            .solve_at(&mut problem, &mut u, 0.3, &settings)
-            .unwrap();
-        assert!(report.converged());
+        let (mut session, mut problem, u, report) = solved_at_03(&settings);
         assert_eq!(session.analyses(), 1);
         assert_eq!(session.pivots_at(&u), report.negative_pivots());
         let mut fresh = vec![0.0; problem.n()];
@@ -313,13 +324,7 @@ mod tests {
                 m.refinement_steps,
             )
         };
-        let (mut problem, _, _) = compressed();
-        let mut session = PathSolver::new(&problem, settings.solver).unwrap();
-        let mut u = vec![0.0; problem.n()];
-        let report = session
-            .solve_at(&mut problem, &mut u, 0.3, &settings)
-            .unwrap();
-        assert!(report.converged());
+        let (mut session, _, _, _) = solved_at_03(&settings);
         let (first, steps) = factorisations(&session);
         assert!(first > 0 && steps > 0);
         // A bar pulled at its free end by a prescribed displacement.
