@@ -274,8 +274,9 @@ impl LinearSolver for FaerSolver {
                 FaerSplit::Auto => n >= SPLIT_FROM_DOFS,
             };
         let kernel = self.kernel_par(n);
-        let top = std::cell::Cell::new(None);
-        let metis_order = std::cell::Cell::new(None);
+        // Written by the candidates `auto_choice` may make side by side (threads).
+        let top = std::sync::Mutex::new(None);
+        let metis_order = std::sync::Mutex::new(None);
         let symbolic_for = |ordering: SymmetricOrdering<'_, usize>| {
             factorize_symbolic_cholesky(a, Side::Lower, ordering, params).map_err(|e| match e {
                 faer::sparse::FaerError::OutOfMemory => SolverError::OutOfMemory {
@@ -288,14 +289,16 @@ impl LinearSolver for FaerSolver {
         let nested = || {
             let (perm, sides) = crate::nested::nested_dissection_top(pattern)?;
             let p = faer::perm::PermRef::new_checked(perm.forward(), perm.inverse(), n);
-            top.set(sides.map(|s| (perm.forward().to_vec(), s)));
+            *top.lock().unwrap_or_else(|e| e.into_inner()) =
+                sides.map(|s| (perm.forward().to_vec(), s));
             symbolic_for(SymmetricOrdering::Custom(p))
         };
         let metis = || {
             let perm = crate::metis_nested_dissection(pattern)?;
             let p = faer::perm::PermRef::new_checked(perm.forward(), perm.inverse(), n);
             if wants_split {
-                metis_order.set(Some(perm.forward().to_vec()));
+                *metis_order.lock().unwrap_or_else(|e| e.into_inner()) =
+                    Some(perm.forward().to_vec());
             }
             symbolic_for(SymmetricOrdering::Custom(p))
         };
@@ -311,9 +314,10 @@ impl LinearSolver for FaerSolver {
             .or(symbolic.solve_in_place_scratch::<f64>(RHS_BLOCK, kernel))
             .or(mixed::scratch(&symbolic, kernel));
         let sides = match chosen {
-            FaerOrdering::NestedDissection => top.take(),
+            FaerOrdering::NestedDissection => top.into_inner().unwrap_or_else(|e| e.into_inner()),
             FaerOrdering::Metis => metis_order
-                .take()
+                .into_inner()
+                .unwrap_or_else(|e| e.into_inner())
                 .and_then(|f| split::top_split(pattern, &f).map(|s| (f, s))),
             _ => None,
         };

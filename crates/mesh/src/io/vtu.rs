@@ -49,11 +49,14 @@ fn check(field: &Field<'_>, count: usize, owner: &str) -> Result<(), MeshError> 
     Ok(())
 }
 
+/// A Float64 array, each value in its shortest round-trip decimal form (`ryu`: the digits of
+/// Rust's `{:?}`, several times faster; the VTU's largest cost in a deck's output).
 fn data_array(s: &mut String, name: &str, components: usize, values: impl Iterator<Item = f64>) {
     let _ = write!(
         s,
         "        <DataArray type=\"Float64\" Name=\"{name}\" NumberOfComponents=\"{components}\" format=\"ascii\">\n          "
     );
+    let mut digits = ryu::Buffer::new();
     for (i, v) in values.enumerate() {
         if i > 0 {
             s.push_str(if i % components.max(1) == 0 {
@@ -62,7 +65,7 @@ fn data_array(s: &mut String, name: &str, components: usize, values: impl Iterat
                 " "
             });
         }
-        let _ = write!(s, "{v:?}");
+        s.push_str(digits.format(v));
     }
     s.push_str("\n        </DataArray>\n");
 }
@@ -323,5 +326,34 @@ mod tests {
             )
             .is_err()
         );
+    }
+
+    /// The values of a `data_array`, read back as a VTU reader does.
+    fn read_back(text: &str) -> Vec<f64> {
+        let body = &text[text.find('>').unwrap() + 1..text.rfind("</DataArray>").unwrap()];
+        body.split_whitespace()
+            .map(|w| w.parse().unwrap())
+            .collect()
+    }
+
+    proptest::proptest! {
+        /// Every value written reads back to the same bits: the text is exact whatever the
+        /// magnitude (subnormals, ±0, the extremes of f64).
+        #[test]
+        fn values_read_back_bit_for_bit(bits in proptest::collection::vec(proptest::num::u64::ANY, 1..40)) {
+            let values: Vec<f64> = bits
+                .iter()
+                .map(|&b| f64::from_bits(b))
+                .filter(|v| v.is_finite())
+                .chain([0.0, -0.0, 1.0, 1e-7, 1e16, 123456789.0, f64::MIN_POSITIVE, 5e-324, f64::MAX])
+                .collect();
+            let mut s = String::new();
+            data_array(&mut s, "v", 3, values.iter().copied());
+            let back = read_back(&s);
+            proptest::prop_assert_eq!(back.len(), values.len());
+            for (a, b) in back.iter().zip(&values) {
+                proptest::prop_assert_eq!(a.to_bits(), b.to_bits());
+            }
+        }
     }
 }

@@ -10,15 +10,16 @@ use faer::sparse::linalg::cholesky::{SymbolicCholesky, SymmetricOrdering};
 pub(super) type SymbolicResult = Result<SymbolicCholesky<usize>, SolverError>;
 
 /// [`FaerOrdering::Auto`]'s comparison: AMD (if `with_amd`), nested dissection and METIS, the
-/// symbolic factor with the fewest flops kept, earlier candidates winning ties. One symbolic
-/// factor is kept alive beside the one being made: a loser's structure is dropped at once
-/// (AMD's is rebuilt from its order if it wins). A METIS failure only removes METIS from the
+/// symbolic factor with the fewest flops kept, earlier candidates winning ties. The candidates
+/// are made side by side (`rayon::join`: each a pure function of the pattern, so the choice and
+/// its structure are the same on any number of threads); below `AUTO_METIS_ONLY_DOFS` their
+/// three structures fit beside each other. A METIS failure only removes METIS from the
 /// comparison. From [`super::AUTO_METIS_ONLY_DOFS`] DOFs on (`n`) METIS alone, nested
 /// dissection only if METIS fails.
 pub(super) fn auto_choice(
-    symbolic_for: &dyn Fn(SymmetricOrdering<'_, usize>) -> SymbolicResult,
-    nested: &dyn Fn() -> SymbolicResult,
-    metis: &dyn Fn() -> SymbolicResult,
+    symbolic_for: &(dyn Fn(SymmetricOrdering<'_, usize>) -> SymbolicResult + Sync),
+    nested: &(dyn Fn() -> SymbolicResult + Sync),
+    metis: &(dyn Fn() -> SymbolicResult + Sync),
     with_amd: bool,
     n: usize,
 ) -> Result<(SymbolicCholesky<usize>, FaerOrdering), SolverError> {
@@ -28,43 +29,30 @@ pub(super) fn auto_choice(
             Err(_) => Ok((nested()?, FaerOrdering::NestedDissection)),
         };
     }
-    let mut best_flops = f64::INFINITY;
-    let mut amd_perm: Option<Option<(Vec<usize>, Vec<usize>)>> = None;
-    if with_amd {
-        let amd = symbolic_for(SymmetricOrdering::Amd)?;
-        best_flops = factor_flops(&amd);
-        amd_perm = Some(
-            amd.perm()
-                .map(|p| (p.arrays().0.to_vec(), p.arrays().1.to_vec())),
-        );
-    }
+    let (amd, (nd, metis)) = rayon::join(
+        || with_amd.then(|| symbolic_for(SymmetricOrdering::Amd)),
+        || rayon::join(nested, metis),
+    );
     let mut best: Option<(SymbolicCholesky<usize>, FaerOrdering)> = None;
-    let nd = nested()?;
-    if factor_flops(&nd) < best_flops {
-        best_flops = factor_flops(&nd);
-        best = Some((nd, FaerOrdering::NestedDissection));
-    } else {
-        drop(nd);
+    let mut best_flops = f64::INFINITY;
+    for (candidate, ordering) in [
+        (amd.transpose()?, FaerOrdering::Amd),
+        (Some(nd?), FaerOrdering::NestedDissection),
+        (metis.ok(), FaerOrdering::Metis),
+    ] {
+        if let Some(c) = candidate
+            && factor_flops(&c) < best_flops
+        {
+            best_flops = factor_flops(&c);
+            best = Some((c, ordering));
+        }
     }
-    if let Ok(m) = metis()
-        && factor_flops(&m) < best_flops
-    {
-        best = Some((m, FaerOrdering::Metis));
-    }
-    match (best, amd_perm) {
-        (Some(b), _) => Ok(b),
-        (None, Some(Some((fwd, inv)))) => Ok((
-            symbolic_for(SymmetricOrdering::Custom(faer::perm::PermRef::new_checked(
-                &fwd, &inv, n,
-            )))?,
-            FaerOrdering::Amd,
-        )),
-        // AMD won with no permutation (faer's identity) — or nothing was compared, which
-        // cannot happen: nested dissection always gives a factor or an error. The identity
-        // goes in as a custom order: faer's `SymmetricOrdering::Identity` skips the step that
-        // reads `Side::Lower`, and would take our lower-triangle pattern as an upper one (a
-        // diagonal factor; `counts.rs`'s tests met it).
-        (None, _) => {
+    match best {
+        // AMD won with no permutation (faer's identity): it goes in as a custom order. faer's
+        // `SymmetricOrdering::Identity` skips the step that reads `Side::Lower`, and would take
+        // our lower-triangle pattern as an upper one (a diagonal factor; `counts.rs`'s tests
+        // met it).
+        Some((amd, FaerOrdering::Amd)) if amd.perm().is_none() => {
             let identity: Vec<usize> = (0..n).collect();
             Ok((
                 symbolic_for(SymmetricOrdering::Custom(faer::perm::PermRef::new_checked(
@@ -73,5 +61,10 @@ pub(super) fn auto_choice(
                 FaerOrdering::Amd,
             ))
         }
+        Some(b) => Ok(b),
+        // Nested dissection always gives a factor or an error, so something was compared.
+        None => Err(SolverError::Faer(
+            "no ordering gave a symbolic factor with finite flops".into(),
+        )),
     }
 }
