@@ -6,8 +6,9 @@
 //! it runs first on one thread and beside the sweep on two or more, staying ahead since it is
 //! smaller). The sweep solves each of this mesh's levels, from the first the companion
 //! perturbed at on, from the companion's state carried onto this mesh's nodes
-//! ([`nonlin3d_mesh::Transfer`]) with the companion's contact set mapped onto this mesh's pairs:
-//! one Newton solve at the level's λ, then the contact loop's passes, which end only on a
+//! ([`nonlin3d_mesh::Transfer`]) with a contact set from it (this mesh's own gaps at the
+//! carried state where the companion has [`CARRIED_SET_FROM_DOFS`] or more, else the
+//! companion's set mapped onto this mesh's pairs): one Newton solve at the level's λ, then the contact loop's passes, which end only on a
 //! converged state whose set does not change. Newton converges to the equilibrium nearest the
 //! start: the same one the path reaches (docs/PERFORMANCE.md, "Nested iteration from the
 //! companion": ten scenes, the same closed pairs and pivots at every level, G within 3.1e-5 of
@@ -60,6 +61,33 @@ const KEEP_SEEDING: f64 = 0.15;
 /// scene from 33 to 26 of this mesh's iterations and the 60 mm circle from 58 to 54, or left
 /// them unchanged; those of 1 773 DOF and less (2–4 coarse slices) cost 2–8 more.
 const SET_FROM_DOFS: usize = NESTED_FROM_DOFS;
+
+/// Companion DOFs from which a seeded level's contact set is read on this mesh's own pairs at
+/// the carried state ([`Seeds::carried_set`]) rather than taken from the companion's nearest
+/// pair ([`Seeds::set`]). The nearest pair closes this mesh's pairs out to the coarse zone's
+/// edge, one coarse spacing too far, and the contact loop then opens them ring by ring (model
+/// 6: 8–11 pairs too many at each seeded level, 3–4 passes). Measured (docs/PERFORMANCE.md,
+/// "A seeded level's set read on this mesh's pairs"): with companions of 3 951 and 7 581 DOF,
+/// this mesh's iterations 22 → 18 (model 6), 16 → 14 (reference circle) and 186 → 176 over
+/// seven random embedded ellipses on the default mesh; with the thesis mesh's 1 773-DOF
+/// companions 128 → 131 over its four contact scenes whose sets change (−10 to +10 each), so
+/// not there.
+const CARRIED_SET_FROM_DOFS: usize = 3_000;
+
+/// The gap, as a share of the largest gap over the pairs, up to which a pair counts as closed at
+/// a carried state ([`closed_at`]): the carried state interpolates the companion's, so this
+/// mesh's pairs inside the coarse zone are closed only to the interpolation's error. Model 6:
+/// 18 of this mesh's iterations at 1e-4 and at 5e-4 (22 with the nearest pair); the reference
+/// circle: 14 at 1e-4, 17 at 5e-4.
+const CARRIED_GAP_SHARE: f64 = 1e-4;
+
+/// Which pairs are closed at a state with (weighted) gaps `gaps` (m): g ≤ max(`tolerance`,
+/// `share`·max g). NaN gaps are open.
+fn closed_at(gaps: &[f64], tolerance: f64, share: f64) -> Vec<bool> {
+    let largest = gaps.iter().fold(0.0_f64, |m, &g| m.max(g));
+    let bound = tolerance.max(share * largest);
+    gaps.iter().map(|&g| g <= bound).collect()
+}
 
 /// One converged level of the companion, as the sweep needs it.
 #[derive(Debug, Clone)]
@@ -157,6 +185,8 @@ pub(crate) struct Seeds {
     nearest: Vec<usize>,
     /// The companion's crack faces (None: no crack pairs).
     faces: Option<CrackFaces>,
+    /// This mesh's crack faces (None: no crack pairs).
+    own: Option<CrackFaces>,
     /// The companion's levels received so far, in order.
     received: Vec<SeedLevel>,
     from: Receiver<SeedLevel>,
@@ -178,14 +208,16 @@ impl Seeds {
     ) -> Result<Self, Error> {
         let transfer = Transfer::between(&coarse.mesh, &model.mesh)?;
         let faces = crack_faces(coarse)?;
-        let nearest = match (&faces, crack_faces(model)?) {
-            (Some(c), Some(f)) => nearest_pairs(c, &coarse.mesh.nodes, &f, &model.mesh.nodes),
+        let own = crack_faces(model)?;
+        let nearest = match (&faces, &own) {
+            (Some(c), Some(f)) => nearest_pairs(c, &coarse.mesh.nodes, f, &model.mesh.nodes),
             _ => Vec::new(),
         };
         Ok(Self {
             transfer,
             nearest,
             faces,
+            own,
             received: Vec::new(),
             from,
             weighted: scene.contact.mode == ContactModeName::TwoBody,
@@ -246,6 +278,22 @@ impl Seeds {
             gaps
         };
         Ok(self.nearest.iter().map(|&c| gaps[c] <= tolerance).collect())
+    }
+
+    /// This mesh's contact set at `carried`, the companion's state carried onto this mesh: a
+    /// pair is closed where its own (weighted) gap is within `tolerance` (m) or
+    /// [`CARRIED_GAP_SHARE`] of the largest gap ([`closed_at`]).
+    fn carried_set(&self, carried: &[f64], tolerance: f64) -> Result<Vec<bool>, Error> {
+        let Some(faces) = &self.own else {
+            return Ok(Vec::new());
+        };
+        let gaps = faces.gaps(carried, &faces.normals(carried)?);
+        let gaps = if self.weighted {
+            faces.weighted_gaps(&gaps)
+        } else {
+            gaps
+        };
+        Ok(closed_at(&gaps, tolerance, CARRIED_GAP_SHARE))
     }
 }
 
@@ -364,17 +412,21 @@ pub(super) fn solve_seeded(
     let mark = stage.mark();
     let mut solved = Solved::default();
     let attempt = if level.contact {
-        seeds
-            .set(&level, scene.contact.tolerance() * 1e-3)
-            .and_then(|set| {
-                let stable = level.pivots == Some(0);
-                stage.seed(scene, model, &mut start, (&set, stable), lambda, newton)
-            })
-            .map(|(l, summary)| {
-                solved.attempts.extend(l.first.attempts);
-                solved.pivots = l.first.negative_pivots;
-                Some(summary)
-            })
+        let tolerance = scene.contact.tolerance() * 1e-3;
+        let set = if seeds.coarse_dofs >= CARRIED_SET_FROM_DOFS {
+            seeds.carried_set(&start, tolerance)
+        } else {
+            seeds.set(&level, tolerance)
+        };
+        set.and_then(|set| {
+            let stable = level.pivots == Some(0);
+            stage.seed(scene, model, &mut start, (&set, stable), lambda, newton)
+        })
+        .map(|(l, summary)| {
+            solved.attempts.extend(l.first.attempts);
+            solved.pivots = l.first.negative_pivots;
+            Some(summary)
+        })
     } else {
         plain(
             (problem, session, stage),
@@ -484,4 +536,32 @@ fn plain(
         (&mut solved, t),
     )?;
     Ok((solved, contact))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::closed_at;
+
+    /// Closed within the absolute tolerance or the share of the largest gap, whichever is
+    /// larger; overlaps are closed, NaN is open.
+    #[test]
+    fn a_pair_is_closed_within_the_share_of_the_largest_gap() {
+        let gaps = [-1e-9, 0.0, 5e-8, 1.5e-7, 1e-3, f64::NAN];
+        // 1e-4 of the largest gap (1e-3 m) is 1e-7 m.
+        assert_eq!(
+            closed_at(&gaps, 1e-9, 1e-4),
+            [true, true, true, false, false, false]
+        );
+        // A larger absolute tolerance wins over the share.
+        assert_eq!(
+            closed_at(&gaps, 2e-7, 1e-4),
+            [true, true, true, true, false, false]
+        );
+        // No gap open at all: the absolute tolerance alone.
+        assert_eq!(
+            closed_at(&[-1e-8, 0.0, 5e-10], 1e-9, 1e-4),
+            [true, true, true]
+        );
+        assert_eq!(closed_at(&[], 1e-9, 1e-4), Vec::<bool>::new());
+    }
 }

@@ -407,3 +407,34 @@ fn a_level_followed_from_the_companions_set_reaches_the_paths_state() {
     assert!(flags[..4].iter().all(|f| f.0), "{flags:?}");
     assert_same_states(&path, &nested);
 }
+
+/// A seeded level reads its contact set on this mesh's own pairs at the carried state where the
+/// companion has 3 000 DOF or more (src/analysis_seed.rs, `CARRIED_SET_FROM_DOFS`): the
+/// reference circle on the default mesh (companion 7 581 DOF) at ε = −0.003 and −0.005 reaches
+/// the path's states with 3 contact iterations a level, where the companion's set mapped pair by
+/// pair took 4 (it closed this mesh's pairs out to the coarse zone's edge, opened again pass by
+/// pass).
+#[test]
+fn a_seeded_level_reads_its_set_on_this_meshs_pairs() {
+    let text = committed("reference_circle_30mm.toml").replace(
+        "strains = [-0.001, -0.002, -0.003, -0.004, -0.005]",
+        "strains = [-0.003, -0.005]",
+    );
+    assert!(text.contains("strains = [-0.003, -0.005]"));
+    let (path, nested) = both(&text);
+    assert_eq!(nested.model.dofs, 18_444);
+    assert_eq!(
+        nested.accuracy.as_ref().and_then(|a| a.companion_dofs),
+        Some(7_581)
+    );
+    assert_same_states(&path, &nested);
+    for level in &nested.levels {
+        assert!(level.convergence.seeded, "level {}", level.value);
+        let contact = level.contact.as_ref().map(|c| c.iterations);
+        assert!(
+            contact.is_some_and(|i| i <= 3),
+            "level {}: {contact:?}",
+            level.value
+        );
+    }
+}
