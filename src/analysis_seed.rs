@@ -1,27 +1,26 @@
 //! Nested iteration (`[analysis] start = "companion"`): the levels past the buckling level start
 //! from the error estimate's companion mesh's converged states.
 //!
-//! The companion follows the path (the bifurcation, the §3.2 perturbation, the contact passes)
-//! on its coarser mesh and sends each converged level here ([`SeedLevel`], through a channel:
-//! it runs first on one thread and beside the sweep on two or more, staying ahead since it is
-//! smaller). The sweep solves each of this mesh's levels, from the first the companion
-//! perturbed at on, from the companion's state carried onto this mesh's nodes
-//! ([`nonlin3d_mesh::Transfer`]) with a contact set from it (this mesh's own gaps at the
-//! carried state where the companion has [`CARRIED_SET_FROM_DOFS`] or more, else the
-//! companion's set mapped onto this mesh's pairs): one Newton solve at the level's λ, then the contact loop's passes, which end only on a
-//! converged state whose set does not change. Newton converges to the equilibrium nearest the
-//! start: the same one the path reaches (docs/PERFORMANCE.md, "Nested iteration from the
-//! companion": ten scenes, the same closed pairs and pivots at every level, G within 3.1e-5 of
-//! G_T max). A start is dropped and the level followed on this mesh as without seeding when its
-//! contact set would change at more than a quarter of the pairs at the first read, needs more
-//! than 10 passes, or a pass converges with negative pivots where the companion is stable
-//! (src/contact.rs, `Contact::set_stable_only`); when it needs contact where the companion did
-//! not with another count of negative pivots than the companion's, when it does not converge,
-//! or when it converges on another branch than the companion's (a centre deflection of the
-//! other sign, or unstable where the companion is stable). After a seeded level, the next is seeded
-//! only if this one's start was close ([`KEEP_SEEDING`]); a level this mesh then follows
-//! itself starts from the companion's contact set at that level where the companion is fine
-//! enough to predict it ([`Seeds::followed_set`], [`SET_FROM_DOFS`]).
+//! The companion follows the path (the bifurcation, the §3.2 perturbation, the contact passes) on
+//! its coarser mesh and sends each converged level here ([`SeedLevel`], through a channel: it runs
+//! first on one thread and beside the sweep on two or more, staying ahead since it is smaller). The
+//! sweep solves each of this mesh's levels, from the first the companion perturbed at on, from the
+//! companion's state carried onto this mesh's nodes ([`nonlin3d_mesh::Transfer`]) with a contact
+//! set from it (this mesh's own gaps at the carried state where the companion has
+//! [`CARRIED_SET_FROM_DOFS`] or more, else the companion's set mapped onto this mesh's pairs): one
+//! Newton solve at the level's λ, then the contact loop's passes, which end only on a converged
+//! state whose set does not change. Newton converges to the equilibrium nearest the start: the same
+//! one the path reaches (docs/PERFORMANCE.md, "Nested iteration from the companion": ten scenes,
+//! the same closed pairs and pivots at every level, G within 3.1e-5 of G_T max). A start is dropped
+//! and the level followed on this mesh as without seeding when its contact set would change at more
+//! than a quarter of the pairs at the first read, needs more than 10 passes, or a pass converges
+//! with negative pivots where the companion is stable (src/contact.rs, `Contact::set_stable_only`);
+//! when it needs contact where the companion did not with another count of negative pivots than the
+//! companion's, when it does not converge, or when it converges on another branch than the
+//! companion's (a centre deflection of the other sign, or unstable where the companion is stable).
+//! After a seeded level, the next is seeded only if this one's start was close ([`KEEP_SEEDING`]);
+//! a level this mesh then follows itself starts from the companion's contact set at that level
+//! where the companion is fine enough to predict it ([`Seeds::followed_set`], [`SET_FROM_DOFS`]).
 //!
 //! **Nested companions.** A companion of [`NESTED_FROM_DOFS`] or more starts its own levels
 //! from a coarser companion of its own in the same way (its slices halved, the rest kept but
@@ -62,16 +61,15 @@ const KEEP_SEEDING: f64 = 0.15;
 /// them unchanged; those of 1 773 DOF and less (2–4 coarse slices) cost 2–8 more.
 const SET_FROM_DOFS: usize = NESTED_FROM_DOFS;
 
-/// Companion DOFs from which a seeded level's contact set is read on this mesh's own pairs at
-/// the carried state ([`Seeds::carried_set`]) rather than taken from the companion's nearest
-/// pair ([`Seeds::set`]). The nearest pair closes this mesh's pairs out to the coarse zone's
-/// edge, one coarse spacing too far, and the contact loop then opens them ring by ring (model
-/// 6: 8–11 pairs too many at each seeded level, 3–4 passes). Measured (docs/PERFORMANCE.md,
-/// "A seeded level's set read on this mesh's pairs"): with companions of 3 951 and 7 581 DOF,
-/// this mesh's iterations 22 → 18 (model 6), 16 → 14 (reference circle) and 186 → 176 over
-/// seven random embedded ellipses on the default mesh; with the thesis mesh's 1 773-DOF
-/// companions 128 → 131 over its four contact scenes whose sets change (−10 to +10 each), so
-/// not there.
+/// Companion DOFs from which a seeded level's contact set is read on this mesh's own pairs at the
+/// carried state ([`Seeds::carried_set`]) rather than taken from the companion's nearest pair
+/// ([`Seeds::set`]). The nearest pair closes this mesh's pairs out to the coarse zone's edge, one
+/// coarse spacing too far, and the contact loop then opens them ring by ring (model 6: 8–11 pairs
+/// too many at three of its four seeded levels, 3–4 passes). Measured (docs/PERFORMANCE.md, "A
+/// seeded level's set read on this mesh's pairs"): with companions of 3 951 and 7 581 DOF, this
+/// mesh's iterations 22 → 18 (model 6), 16 → 14 (reference circle) and 186 → 176 over seven random
+/// embedded ellipses on the default mesh; with the thesis mesh's 1 773-DOF companions 128 → 131
+/// over its four contact scenes whose sets change (−10 to +10 each), so not there.
 const CARRIED_SET_FROM_DOFS: usize = 3_000;
 
 /// The gap, as a share of the largest gap over the pairs, up to which a pair counts as closed at
@@ -557,7 +555,7 @@ mod tests {
             closed_at(&gaps, 2e-7, 1e-4),
             [true, true, true, true, false, false]
         );
-        // No gap open at all: the absolute tolerance alone.
+        // Every gap within the absolute tolerance: all closed.
         assert_eq!(
             closed_at(&[-1e-8, 0.0, 5e-10], 1e-9, 1e-4),
             [true, true, true]
