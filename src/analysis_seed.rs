@@ -268,14 +268,18 @@ impl Seeds {
         let Some(faces) = &self.faces else {
             return Ok(Vec::new());
         };
-        let u = &level.displacements;
+        let gaps = self.gaps(faces, &level.displacements)?;
+        Ok(self.nearest.iter().map(|&c| gaps[c] <= tolerance).collect())
+    }
+
+    /// The gaps of `faces`' pairs at state `u`, weighted (two-body) or plain (thesis mode), m.
+    fn gaps(&self, faces: &CrackFaces, u: &[f64]) -> Result<Vec<f64>, Error> {
         let gaps = faces.gaps(u, &faces.normals(u)?);
-        let gaps = if self.weighted {
+        Ok(if self.weighted {
             faces.weighted_gaps(&gaps)
         } else {
             gaps
-        };
-        Ok(self.nearest.iter().map(|&c| gaps[c] <= tolerance).collect())
+        })
     }
 
     /// This mesh's contact set at `carried`, the companion's state carried onto this mesh: a
@@ -285,13 +289,11 @@ impl Seeds {
         let Some(faces) = &self.own else {
             return Ok(Vec::new());
         };
-        let gaps = faces.gaps(carried, &faces.normals(carried)?);
-        let gaps = if self.weighted {
-            faces.weighted_gaps(&gaps)
-        } else {
-            gaps
-        };
-        Ok(closed_at(&gaps, tolerance, CARRIED_GAP_SHARE))
+        Ok(closed_at(
+            &self.gaps(faces, carried)?,
+            tolerance,
+            CARRIED_GAP_SHARE,
+        ))
     }
 }
 

@@ -46,6 +46,17 @@ fn committed(name: &str) -> String {
     .unwrap()
 }
 
+/// The reference circle on the default mesh at the strains `strains` (a TOML array) instead of
+/// its five levels.
+fn reference_circle_at(strains: &str) -> String {
+    let text = committed("reference_circle_30mm.toml").replace(
+        "strains = [-0.001, -0.002, -0.003, -0.004, -0.005]",
+        &format!("strains = {strains}"),
+    );
+    assert!(text.contains(&format!("strains = {strains}")));
+    text
+}
+
 /// This mesh's Newton iterations: each attempt's and each contact pass's (one factorisation
 /// each; the first contact solve is among the attempts).
 fn iterations(r: &Results) -> usize {
@@ -305,11 +316,7 @@ fn a_seeded_level_that_overlaps_where_the_companion_did_not_goes_on_in_the_conta
 fn nested_companions_serve_the_default_mesh_with_the_same_bits_on_any_thread_count() {
     let dir = std::env::temp_dir().join(format!("nonlin3d-nested-3-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    let text = committed("reference_circle_30mm.toml").replace(
-        "strains = [-0.001, -0.002, -0.003, -0.004, -0.005]",
-        "strains = [-0.004]",
-    );
-    assert!(text.contains("strains = [-0.004]"));
+    let text = reference_circle_at("[-0.004]");
     let file = dir.join("circle.toml");
     std::fs::write(&file, text).unwrap();
     let run = |threads: &str| {
@@ -355,11 +362,7 @@ fn nested_companions_serve_the_default_mesh_with_the_same_bits_on_any_thread_cou
 /// (src/analysis_seed.rs `Seeds::followed_set`), which no committed scene reaches now.
 #[test]
 fn two_seeded_levels_of_the_default_mesh_reach_the_paths_states() {
-    let text = committed("reference_circle_30mm.toml").replace(
-        "strains = [-0.001, -0.002, -0.003, -0.004, -0.005]",
-        "strains = [-0.002, -0.003]",
-    );
-    assert!(text.contains("strains = [-0.002, -0.003]"));
+    let text = reference_circle_at("[-0.002, -0.003]");
     let (path, nested) = both(&text);
     assert_same_states(&path, &nested);
     let flags: Vec<(bool, bool)> = nested
@@ -416,11 +419,7 @@ fn a_level_followed_from_the_companions_set_reaches_the_paths_state() {
 /// pass).
 #[test]
 fn a_seeded_level_reads_its_set_on_this_meshs_pairs() {
-    let text = committed("reference_circle_30mm.toml").replace(
-        "strains = [-0.001, -0.002, -0.003, -0.004, -0.005]",
-        "strains = [-0.003, -0.005]",
-    );
-    assert!(text.contains("strains = [-0.003, -0.005]"));
+    let text = reference_circle_at("[-0.003, -0.005]");
     let (path, nested) = both(&text);
     assert_eq!(nested.model.dofs, 18_444);
     assert_eq!(
