@@ -109,8 +109,9 @@ pub fn settings(scene: &Scene) -> (NewtonSettings, Stepping) {
         solver: match (a.solver, a.threads) {
             (SolverName::Profile, _) => SolverKind::Profile,
             (SolverName::Auto, n) if a.newton == NewtonName::Full => SolverKind::FaerLdltAuto(n),
-            (SolverName::Auto, 0) => SolverKind::FaerLdlt,
-            (SolverName::Auto, n) => SolverKind::FaerLdltThreads(n),
+            // A factorisation serves many directions, each solved to 1 % of ‖r‖
+            // (`nonlin3d_newton::KEPT_FORCING`): f32 from a smaller size.
+            (SolverName::Auto, n) => SolverKind::FaerLdltKept(n),
             // 0: the rayon pool's threads (`--threads N`); the bits do not depend on it.
             (SolverName::Faer, 0) => SolverKind::FaerLdlt,
             (SolverName::Faer, n) => SolverKind::FaerLdltThreads(n),
@@ -142,17 +143,17 @@ mod tests {
         settings(&Scene::from_toml(&text).unwrap()).0.solver
     }
 
-    /// `solver = "auto"` (the default): the size rule of mixed precision with full Newton, f64
-    /// with BFGS and modified Newton (a factorisation serves many solves there); named solvers
-    /// as named.
+    /// `solver = "auto"` (the default): the size rule of mixed precision with full Newton, the
+    /// kept tangent's (from a smaller size, directions to 1 % of ‖r‖) with BFGS and modified
+    /// Newton; named solvers as named.
     #[test]
-    fn the_default_solver_is_mixed_from_its_threshold_with_full_newton_only() {
+    fn the_default_solver_follows_the_newton_strategy() {
         assert_eq!(solver_of(""), SolverKind::FaerLdltAuto(0));
         assert_eq!(solver_of("threads = 1"), SolverKind::FaerLdltAuto(1));
-        assert_eq!(solver_of("newton = \"bfgs\""), SolverKind::FaerLdlt);
+        assert_eq!(solver_of("newton = \"bfgs\""), SolverKind::FaerLdltKept(0));
         assert_eq!(
             solver_of("newton = \"modified\"\nthreads = 2"),
-            SolverKind::FaerLdltThreads(2)
+            SolverKind::FaerLdltKept(2)
         );
         assert_eq!(solver_of("solver = \"faer\""), SolverKind::FaerLdlt);
         assert_eq!(

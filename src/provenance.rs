@@ -73,6 +73,15 @@ pub fn solver_names(kind: SolverKind) -> (String, String) {
             ),
             auto.clone(),
         ),
+        SolverKind::FaerLdltKept(n) => (
+            format!(
+                "faer LDLᵀ, f32 factor refined in f64 from {} DOF (f64 below; after a refused \
+                 f32 factor, f32 retried at the next factorisation), on {n} threads (0: all \
+                 cores; {split})",
+                nonlin3d_solver::KEPT_MIXED_FROM_DOFS
+            ),
+            auto.clone(),
+        ),
     }
 }
 

@@ -24,9 +24,12 @@ pub(crate) struct SolveArgs {
     /// with DIRECT (default: the deck's *STATIC initial increment).
     #[arg(long)]
     pub(crate) increment: Option<f64>,
-    /// Linear solver: faer (LDLᵀ, f64), faer-mixed (f32 factor refined in f64 to the same
-    /// residual; falls back to f64 where f32 is not enough) or profile (the thesis's skyline).
-    #[arg(long, default_value = "faer", value_parser = ["faer", "faer-mixed", "profile"])]
+    /// Linear solver: auto (faer-mixed from 4 000 DOF in NLGEOM steps that keep a
+    /// factorisation over many iterations — BFGS, modified Newton — with each direction solved
+    /// to 1 % of the residual; faer elsewhere), faer (LDLᵀ, f64), faer-mixed (f32 factor refined in f64 to the
+    /// same residual; falls back to f64 where f32 is not enough) or profile (the thesis's
+    /// skyline).
+    #[arg(long, default_value = "auto", value_parser = ["auto", "faer", "faer-mixed", "profile"])]
     pub(crate) solver: String,
     /// Factorisations in a static step: auto (bfgs in *STATIC, DIRECT steps, full where
     /// the increment size follows the iteration count), bfgs (the kept tangent updated by BFGS pairs,
@@ -115,22 +118,32 @@ pub(crate) fn solve(
         },
         None => NewtonSettings::default(),
     };
+    use nonlin3d::solver::SolverKind;
     newton.solver = match solver {
-        "faer-mixed" => nonlin3d::solver::SolverKind::FaerLdltMixed(0),
-        "profile" => nonlin3d::solver::SolverKind::Profile,
-        _ => nonlin3d::solver::SolverKind::FaerLdlt,
+        "faer-mixed" => SolverKind::FaerLdltMixed(0),
+        "profile" => SolverKind::Profile,
+        _ => SolverKind::FaerLdlt,
     };
+    let kept_solver = (solver == "auto").then_some(SolverKind::FaerLdltKept(0));
     let options = nonlin3d::deck::StepOptions {
         newton,
         initial_increment: increment,
         start: flags.start,
         strategy: flags.newton,
+        kept_solver,
     };
     // Bad input (no step, an inverted element, …) and an output folder that cannot be written
     // are found before anything is solved; each increment lands there as it converges.
     nonlin3d::deck::check(&model, &options).map_err(Failure::Input)?;
     let mut provenance =
         nonlin3d::provenance::Provenance::new(Some(input), None, options.newton.solver);
+    if let Some(kept) = kept_solver {
+        let (kept, _) = nonlin3d::provenance::solver_names(kept);
+        provenance.solver = format!(
+            "{kept}, in steps that keep a factorisation (BFGS, modified Newton); {} in the others",
+            provenance.solver
+        );
+    }
     provenance.stage("read_and_check", t0.elapsed().as_secs_f64());
     let mut output = nonlin3d::deck::DeckOutput::create(out, &model).map_err(Failure::Input)?;
     output.set_provenance(provenance).map_err(Failure::Run)?;

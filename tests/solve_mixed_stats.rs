@@ -56,3 +56,88 @@ fn the_f64_solver_records_no_mixed_statistics() {
     }
     assert!(!stdout.contains("f32 factor"), "{stdout}");
 }
+
+/// `solve`'s default solver (`auto`) on a kept tangent: the clamped plate of issue 20 at
+/// n = 8 (`tests/decks/plate_n8.inp`, 4 263 DOF, ten `*STATIC, DIRECT` increments run by BFGS,
+/// written by `cargo bench --bench plate_decks -- n=8 write=tests/decks/plate_n8.inp`) is at
+/// least `KEPT_MIXED_FROM_DOFS`, so its factorisations are f32 (`SolverKind::FaerLdltKept`).
+/// Each direction is solved to 1 % of the residual (`nonlin3d_newton::KEPT_FORCING`): one f32
+/// solve and its f64 check each (88 refinement steps in 86 iterations measured; to 1 % of the
+/// force tolerance it took 4–5 a direction). The same negative pivots as the f64 solver at every
+/// increment, and the same answer: both stop at ‖r‖∞ ≤ 1e-8 of the largest force (≈ 2.8 kN,
+/// so ≤ 3e-5 N), which with a tangent compliance below 3e-3 mm/N moves u by < 1e-7 mm, 1e-7 of
+/// w₀ ≈ 1.3 mm: 1e-6 of max |u| (as in tests/decks_strategy.rs).
+#[test]
+fn the_default_solver_factorises_a_kept_tangent_in_f32_for_the_same_answer() {
+    let run = |solver: &str, name: &str| {
+        let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
+        let _ = std::fs::remove_dir_all(&dir);
+        let deck = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/decks/plate_n8.inp");
+        let mut cmd = Command::new(env!("CARGO_BIN_EXE_nonlin3d"));
+        cmd.args(["solve", "-q", "--threads", "1", "--out"])
+            .arg(&dir);
+        if !solver.is_empty() {
+            cmd.args(["--solver", solver]);
+        }
+        let o = cmd.arg(&deck).output().unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap())
+                .unwrap();
+        let u: Vec<f64> = std::fs::read_to_string(dir.join("displacements.csv"))
+            .unwrap()
+            .lines()
+            .skip(1)
+            .flat_map(|l| {
+                l.split(',')
+                    .skip(1)
+                    .map(|v| v.trim().parse::<f64>().unwrap())
+                    .collect::<Vec<_>>()
+            })
+            .collect();
+        (json, u)
+    };
+    let (auto, u_auto) = run("", "kept-auto");
+    let (f64_run, u_f64) = run("faer", "kept-f64");
+    assert!(
+        auto["provenance"]["solver"]
+            .as_str()
+            .unwrap()
+            .contains("f32 factor refined in f64 from 4000 DOF"),
+        "{}",
+        auto["provenance"]["solver"]
+    );
+    let increments =
+        |j: &serde_json::Value| j["steps"][0]["increments"].as_array().unwrap().clone();
+    let (a, f) = (increments(&auto), increments(&f64_run));
+    assert_eq!((a.len(), f.len()), (10, 10));
+    let sum = |v: &[serde_json::Value], key: &str| -> u64 {
+        v.iter()
+            .map(|i| i["mixed_precision"][key].as_u64().unwrap())
+            .sum()
+    };
+    let (iterations, factorisations): (u64, u64) = a.iter().fold((0, 0), |(n, m), i| {
+        (
+            n + i["iterations"].as_u64().unwrap(),
+            m + i["factorisations"].as_u64().unwrap(),
+        )
+    });
+    assert!(sum(&a, "f32_factorisations") + 2 >= factorisations, "{a:?}");
+    let steps = sum(&a, "refinement_steps");
+    assert!(
+        10 * steps <= 11 * iterations,
+        "{steps} steps in {iterations} iterations"
+    );
+    for (x, y) in a.iter().zip(&f) {
+        assert_eq!(x["converged"], true, "{x}");
+        assert_eq!(x["negative_pivots"], 0, "{x}");
+        assert_eq!(x["negative_pivots"], y["negative_pivots"], "{x} {y}");
+    }
+    assert_eq!(u_auto.len(), u_f64.len());
+    let scale = u_f64.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let diff = u_auto
+        .iter()
+        .zip(&u_f64)
+        .fold(0.0f64, |m, (p, q)| m.max((p - q).abs()));
+    assert!(diff <= 1e-6 * scale, "{diff} against {scale}");
+}

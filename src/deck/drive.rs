@@ -102,13 +102,22 @@ pub(crate) fn run_step(
 ) -> Result<(), Error> {
     let step = &model.steps[k];
     let p = &step.procedure;
-    let base = newton_settings(&options.newton, options.start.line_search, step);
+    let strategy = options.strategy.in_step(p.direct || !step.nlgeom);
+    let mut base = newton_settings(&options.newton, options.start.line_search, step);
+    // An NLGEOM step that keeps a tangent takes `kept_solver`, its full-Newton redos too (one
+    // solver per step: a different kind would be analysed anew). A linear step solves once,
+    // exactly: `newton.solver`.
+    if let (Some(kind), true) = (
+        options.kept_solver,
+        step.nlgeom && strategy != Strategy::Full,
+    ) {
+        base.solver = kind;
+    }
     let full = Strategy::Full.apply(&base);
     // A kept-tangent attempt stops at CalculiX's divergence test from its fourth iteration
     // (CalculiX's default I_0) unless the deck sets I_0, and the increment is then redone by
     // full Newton (docs/PERFORMANCE.md: from the second iteration, the plate's second
     // increment was redone for nothing).
-    let strategy = options.strategy.in_step(p.direct || !step.nlgeom);
     let quick = (strategy != Strategy::Full).then(|| NewtonSettings {
         divergence_check_from: match base.divergence_check_from {
             0 => 4,

@@ -50,6 +50,12 @@ pub struct StepOptions {
     pub start: IncrementStart,
     /// How often the tangent is factorised in the increments of a static step.
     pub strategy: Strategy,
+    /// The solver of the NLGEOM static steps whose strategy keeps a tangent (BFGS, modified
+    /// Newton: each factorisation serves many directions); None: `newton.solver` in every
+    /// step.
+    /// `nonlin3d solve --solver auto` (the default) gives
+    /// [`SolverKind::FaerLdltKept`](nonlin3d_solver::SolverKind::FaerLdltKept) here.
+    pub kept_solver: Option<nonlin3d_solver::SolverKind>,
 }
 
 /// How often the tangent is factorised in a static deck step (thesis §2.1: full or modified
@@ -250,21 +256,30 @@ impl MixedPrecision {
     /// A line for the terminal: "f32 factor held (1 factorisation, 3 refinement steps,
     /// backward error 2.1e-15)" or "f64 fall-back: … (…)".
     pub fn line(&self) -> String {
+        let counted = |n: usize, what: &str| match n {
+            1 => format!("1 {what}"),
+            n => format!("{n} {what}s"),
+        };
         let refined = match self.backward_error {
             Some(e) => format!(
-                ", {} refinement steps, backward error {e:.1e}",
-                self.refinement_steps
+                ", {}, backward error {e:.1e}",
+                counted(self.refinement_steps, "refinement step")
             ),
             None => String::new(),
         };
         match &self.fallback {
             None => format!(
-                "f32 factor held ({} factorisations{refined})",
-                self.f32_factorisations
+                "f32 factor held ({}{refined})",
+                counted(self.f32_factorisations, "factorisation")
             ),
             Some(why) => format!(
-                "f64 fall-back ({why}): {} f64 and {} f32 factorisations{refined}",
-                self.f64_factorisations, self.f32_factorisations
+                "f64 fall-back ({why}): {} f64 and {} f32 {}{refined}",
+                self.f64_factorisations,
+                self.f32_factorisations,
+                match self.f64_factorisations + self.f32_factorisations {
+                    1 => "factorisation",
+                    _ => "factorisations",
+                }
             ),
         }
     }

@@ -104,6 +104,6 @@ pub use problem::{NonlinearProblem, StructuralProblem};
 pub use session::PathSolver;
 pub use settings::{BFGS_REFACTOR_RATIO, NewtonSettings};
 pub use solve::{
-    Bifurcation, IncrementReport, IterationRecord, LINEAR_RESIDUAL, REACHABLE, Termination,
-    negative_pivots_at, residual_tolerance, solve_increment, solve_increment_with,
+    Bifurcation, IncrementReport, IterationRecord, KEPT_FORCING, LINEAR_RESIDUAL, REACHABLE,
+    Termination, negative_pivots_at, residual_tolerance, solve_increment, solve_increment_with,
 };

@@ -94,6 +94,28 @@ pub const REACHABLE: f64 = 1e-14;
 /// solver stops refining there, [`LinearSolver::solve_to_residual`]).
 pub const LINEAR_RESIDUAL: f64 = 0.01;
 
+/// The forcing term η of an iteration on a tangent not refreshed at every iteration (BFGS,
+/// modified Newton: `keep_tangent` or `refactor_every` > 1). Its direction is solved to
+/// ‖K₀ d + r‖∞ ≤ max(η‖r‖∞, [`LINEAR_RESIDUAL`]·tol): inexact Newton (Dembo, Eisenstat &
+/// Steihaug 1982), the linear residual adds at most η‖r‖ to the next residual. K₀ is an older
+/// tangent, so the direction is already off by ‖(K − K₀)d‖, far more than 1 % of ‖r‖; a
+/// mixed-precision solver then stops after one f32 solve where cond(K₀)·ε₃₂ ≲ 0.01 instead of
+/// refining to the tolerance. Full Newton keeps `LINEAR_RESIDUAL`·tol (its quadratic tail
+/// needs the exact step). Measured on the plate decks in docs/PERFORMANCE.md ("f32 factors
+/// for kept tangents").
+pub const KEPT_FORCING: f64 = 0.01;
+
+/// The residual bound of an iteration's direction: [`LINEAR_RESIDUAL`] of the force
+/// tolerance, or on a tangent not refreshed at every iteration [`KEPT_FORCING`] of ‖r‖∞ if
+/// that is larger.
+pub(crate) fn direction_bound(settings: &NewtonSettings, tolerance: f64, norm: f64) -> f64 {
+    let floor = LINEAR_RESIDUAL * tolerance;
+    match settings.keep_tangent || settings.refactor_every > 1 {
+        true => floor.max(KEPT_FORCING * norm),
+        false => floor,
+    }
+}
+
 /// The residual tolerance at a state of force scale `scale` (N): max(force_tolerance,
 /// relative_tolerance·F), refused below [`REACHABLE`]·F. F = 0 (no load, no reaction) gives 0:
 /// only an exactly zero residual converges then, which a zero-load increment has.
@@ -315,7 +337,8 @@ fn iterations(
         };
         cache.age += 1;
         let bfgs_pairs = cache.pairs.len();
-        let mut du = match cache.direction(&r, solver, Some(LINEAR_RESIDUAL * tolerance)) {
+        let bound = direction_bound(settings, tolerance, norm);
+        let mut du = match cache.direction(&r, solver, Some(bound)) {
             Ok(d) => d,
             Err(e) => {
                 cache.invalidate();

@@ -30,7 +30,8 @@ pub use directions::FaerDirections;
 pub use mixed::{FaerPrecision, MixedStats};
 pub use options::{
     AUTO_METIS_ONLY_DOFS, AUTO_WITHOUT_AMD_DOFS, FaerMode, FaerOrdering, FaerSplit, FaerStructure,
-    KERNEL_THREADS_FROM_DOFS, MIXED_FROM_DOFS, SPLIT_FROM_DOFS,
+    KEPT_MIXED_FROM_DOFS, KEPT_RETRY_F32_AFTER, KERNEL_THREADS_FROM_DOFS, MIXED_FROM_DOFS,
+    SPLIT_FROM_DOFS,
 };
 pub use split::{SchurComplement, SchurOutcome};
 
@@ -65,6 +66,10 @@ pub struct FaerSolver {
     /// With [`FaerPrecision::Mixed`]: f64 for matrices of fewer DOFs than this (0, the
     /// default: mixed at any size; [`MIXED_FROM_DOFS`] for [`crate::SolverKind::FaerLdltAuto`]).
     pub mixed_from_dofs: usize,
+    /// With [`FaerPrecision::Mixed`]: f64 factorisations after f32 was given up before f32 is
+    /// tried again, doubled at each refused retry (`RETRY_F32_AFTER` = 8 by default;
+    /// [`KEPT_RETRY_F32_AFTER`] for [`crate::SolverKind::FaerLdltKept`]).
+    pub retry_f32_after: usize,
     /// The analysed matrix is below `mixed_from_dofs`: f64 whatever `precision` says.
     below_mixed: bool,
     /// Tree-level split of the LDLᵀ ([`FaerSplit`]).
@@ -120,6 +125,7 @@ impl FaerSolver {
             directions_l32: Vec::new(),
             split_state: None,
             mixed_from_dofs: 0,
+            retry_f32_after: mixed::RETRY_F32_AFTER,
             below_mixed: false,
             split_fallback: None,
             pattern: None,

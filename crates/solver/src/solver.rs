@@ -143,6 +143,12 @@ pub enum SolverKind {
     /// many threads, 0: the rayon pool's): the default of scenes solved by full Newton, where
     /// each factorisation serves one solve.
     FaerLdltAuto(usize),
+    /// `FaerLdltMixed` from [`crate::KEPT_MIXED_FROM_DOFS`] DOFs on, `FaerLdltThreads` below
+    /// (this many threads, 0: the rayon pool's), f32 retried at the next factorisation after
+    /// it was given up ([`crate::KEPT_RETRY_F32_AFTER`]): for paths that keep a factorisation
+    /// over many directions (BFGS, modified Newton; `nonlin3d solve`'s `auto`), where each
+    /// direction needs one f32 solve and one f64 product (`nonlin3d_newton::KEPT_FORCING`).
+    FaerLdltKept(usize),
 }
 
 impl SolverKind {
@@ -161,7 +167,7 @@ impl SolverKind {
             Self::FaerLdltThreads(n) => {
                 Box::new(crate::FaerSolver::new(crate::FaerMode::Ldlt).with_threads(n))
             }
-            Self::FaerLdltMixed(n) | Self::FaerLdltAuto(n) => {
+            Self::FaerLdltMixed(n) | Self::FaerLdltAuto(n) | Self::FaerLdltKept(n) => {
                 let threads = if n == 0 {
                     rayon::current_num_threads()
                 } else {
@@ -169,8 +175,13 @@ impl SolverKind {
                 };
                 let mut s = crate::FaerSolver::new(crate::FaerMode::Ldlt).with_threads(threads);
                 s.precision = crate::FaerPrecision::mixed();
-                if let Self::FaerLdltAuto(_) = self {
-                    s.mixed_from_dofs = crate::MIXED_FROM_DOFS;
+                match self {
+                    Self::FaerLdltAuto(_) => s.mixed_from_dofs = crate::MIXED_FROM_DOFS,
+                    Self::FaerLdltKept(_) => {
+                        s.mixed_from_dofs = crate::KEPT_MIXED_FROM_DOFS;
+                        s.retry_f32_after = crate::KEPT_RETRY_F32_AFTER;
+                    }
+                    _ => {}
                 }
                 Box::new(s)
             }

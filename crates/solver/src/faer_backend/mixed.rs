@@ -172,11 +172,12 @@ impl MixedState {
         };
     }
 
-    /// While f32 is given up: whether this factorisation retries it ([`RETRY_F32_AFTER`],
-    /// the wait doubling at each retry), else counts it as one more in f64.
-    fn retry_now(&mut self) -> bool {
+    /// While f32 is given up: whether this factorisation retries it (after `first_wait` f64
+    /// ones, [`RETRY_F32_AFTER`] by default, the wait doubling at each retry), else counts it
+    /// as one more in f64.
+    fn retry_now(&mut self, first_wait: usize) -> bool {
         let wait = if self.wait == 0 {
-            RETRY_F32_AFTER
+            first_wait
         } else {
             self.wait
         };
@@ -249,7 +250,9 @@ impl FaerSolver {
         a: &SymmetricMatrix,
     ) -> Result<Factorization, SolverError> {
         self.mixed.single = false;
-        if self.mixed.refused_in_a_row >= REFUSALS_BEFORE_F64 && !self.mixed.retry_now() {
+        if self.mixed.refused_in_a_row >= REFUSALS_BEFORE_F64
+            && !self.mixed.retry_now(self.retry_f32_after)
+        {
             // f64 for now: no copy of A for refinement is needed.
             return self.fall_back(a, GIVEN_UP);
         }

@@ -112,6 +112,21 @@ pub const SPLIT_FROM_DOFS: usize = 5_000;
 /// first f32 factor is refused, the 3.4 k through-width strip, the 2.8 k thin film).
 pub const MIXED_FROM_DOFS: usize = 10_000;
 
+/// From this many DOFs on, [`crate::SolverKind::FaerLdltKept`] factorises in f32: paths that
+/// keep a factorisation over many directions (BFGS, modified Newton), each solved to 1 % of
+/// the residual (one f32 solve and one f64 product where cond·ε₃₂ ≲ 0.01). Measured on the
+/// plate decks of issue 20 (docs/PERFORMANCE.md, "f32 factors for kept tangents"): one
+/// thread's CPU 0.76–0.96 of f64's at 4 263 DOF, 0.78–0.86 at 9 117 and 0.78–0.92 at 24 297;
+/// the same negative pivots, the centre deflection within 1e-9 of w₀.
+pub const KEPT_MIXED_FROM_DOFS: usize = 4_000;
+
+/// [`crate::SolverKind::FaerLdltKept`]'s wait after f32 is given up: the next factorisation
+/// tries f32 again (then 2, 4, … as retries are refused). A kept tangent is factorised a few
+/// times per path, and the plate's tangent at rest is too ill-conditioned for f32 while every
+/// later one (membrane-stiffened) is not: the scenes' wait of `RETRY_F32_AFTER` = 8 kept the
+/// 24 k-DOF plate deck in f64 for 8 of its 12 factorisations.
+pub const KEPT_RETRY_F32_AFTER: usize = 1;
+
 /// Below this many DOFs faer's own dense kernels run on one thread whatever
 /// [`super::FaerSolver::par`] says (the split's halves still take two): two threads inside
 /// faer's kernels cost 1.16× the wall time of one at 6 789 DOF, 1.27× at 18 393 DOF and

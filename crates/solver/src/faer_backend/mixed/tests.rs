@@ -237,6 +237,25 @@ fn auto_precision_is_f64_below_its_threshold_and_f32_from_it() {
     );
 }
 
+/// `SolverKind::FaerLdltKept`'s size rule: f64 below `KEPT_MIXED_FROM_DOFS` (the f64
+/// solver's bits), an f32 factor from it on; the same shifted chains as above.
+#[test]
+fn kept_precision_is_f64_below_its_threshold_and_f32_from_it() {
+    let mut s = crate::SolverKind::FaerLdltKept(1).build();
+    let below = chain(crate::KEPT_MIXED_FROM_DOFS - 1, 1.0, -1.0);
+    let (x, _) = solve(&mut *s, &below);
+    assert_eq!(s.mixed_stats(), None);
+    let (y, _) = solve(&mut *crate::SolverKind::FaerLdltThreads(1).build(), &below);
+    assert!(x.iter().zip(&y).all(|(p, q)| p.to_bits() == q.to_bits()));
+    solve(&mut *s, &chain(crate::KEPT_MIXED_FROM_DOFS, 1.0, -1.0));
+    let m = s.mixed_stats().unwrap();
+    assert_eq!(
+        (m.single_factorizations, m.double_factorizations),
+        (1, 0),
+        "{m:?}"
+    );
+}
+
 /// Entries beyond f32's range (3.4e38) go to f64 and give the f64 answer.
 #[test]
 fn entries_beyond_f32_go_to_f64() {
@@ -251,22 +270,30 @@ fn entries_beyond_f32_go_to_f64() {
     assert_eq!(x, x64);
 }
 
-/// Given up, f32 is tried again after `RETRY_F32_AFTER` f64 factorisations, the wait doubling
-/// after each refused retry: a matrix f32 can never serve (a 1e-30 refinement target) makes
-/// 1 + 3 f32 attempts in 1 + 8 + 1 + 16 + 1 + 32 + 1 factorisations; one that was refused
-/// only at first (a stall, then a matrix f32 serves) is back in f32 at the first retry and
-/// stays there.
+/// Given up, f32 is tried again after `RETRY_F32_AFTER` f64 factorisations (or the solver's
+/// `retry_f32_after`: `KEPT_RETRY_F32_AFTER` = 1 for `SolverKind::FaerLdltKept`), the wait
+/// doubling after each refused retry: a matrix f32 can never serve (a 1e-30 refinement target)
+/// makes 1 + 3 f32 attempts in 1 + r + 1 + 2r + 1 + 4r + 1 factorisations; one that was
+/// refused only at first (a stall, then a matrix f32 serves) is back in f32 at the first retry
+/// and stays there.
 #[test]
 fn f32_given_up_is_retried_after_a_doubling_wait() {
+    for r in [RETRY_F32_AFTER, crate::KEPT_RETRY_F32_AFTER] {
+        retried_after(r);
+    }
+}
+
+fn retried_after(r: usize) {
     let a = chain(300, 1.0, 0.0);
     let never = FaerPrecision::Mixed {
         tolerance: 1e-30,
         pivot_floor: SINGLE_PIVOT_FLOOR,
     };
     let mut s = solver(never);
+    s.retry_f32_after = r;
     s.analyze(a.pattern()).unwrap();
     let mut b = vec![1.0; a.n()];
-    let total = 1 + RETRY_F32_AFTER + 1 + 2 * RETRY_F32_AFTER + 1 + 4 * RETRY_F32_AFTER + 1;
+    let total = 1 + r + 1 + 2 * r + 1 + 4 * r + 1;
     let mut singles = Vec::new();
     for k in 0..total {
         let before = s.mixed_stats().single_factorizations;
@@ -276,11 +303,11 @@ fn f32_given_up_is_retried_after_a_doubling_wait() {
             singles.push(k);
         }
     }
-    let r = RETRY_F32_AFTER;
-    assert_eq!(singles, [0, r + 1, 3 * r + 2, 7 * r + 3]);
+    assert_eq!(singles, [0, r + 1, 3 * r + 2, 7 * r + 3], "wait {r}");
     assert_eq!(s.mixed_stats().double_factorizations, total);
     // Refused at first only: the stall, then the default target f32 reaches.
     let mut s = solver(never);
+    s.retry_f32_after = r;
     s.analyze(a.pattern()).unwrap();
     s.factorize(&a).unwrap();
     s.solve_in_place(&mut b, 1).unwrap();
@@ -293,6 +320,6 @@ fn f32_given_up_is_retried_after_a_doubling_wait() {
     assert_eq!(
         (m.single_factorizations, m.double_factorizations),
         (1 + r, 1 + r),
-        "{m:?}"
+        "wait {r}: {m:?}"
     );
 }
