@@ -52,8 +52,7 @@ pub struct StepOptions {
     pub strategy: Strategy,
     /// The solver of the NLGEOM static steps whose strategy keeps a tangent (BFGS, modified
     /// Newton: each factorisation serves many directions); None: `newton.solver` in every
-    /// step.
-    /// `nonlin3d solve --solver auto` (the default) gives
+    /// step. `nonlin3d solve --solver auto` (the default) gives
     /// [`SolverKind::FaerLdltKept`](nonlin3d_solver::SolverKind::FaerLdltKept) here.
     pub kept_solver: Option<nonlin3d_solver::SolverKind>,
 }
@@ -256,30 +255,24 @@ impl MixedPrecision {
     /// A line for the terminal: "f32 factor held (1 factorisation, 3 refinement steps,
     /// backward error 2.1e-15)" or "f64 fall-back: … (…)".
     pub fn line(&self) -> String {
-        let counted = |n: usize, what: &str| match n {
-            1 => format!("1 {what}"),
-            n => format!("{n} {what}s"),
-        };
+        let s = |n: usize| if n == 1 { "" } else { "s" };
         let refined = match self.backward_error {
             Some(e) => format!(
-                ", {}, backward error {e:.1e}",
-                counted(self.refinement_steps, "refinement step")
+                ", {} refinement step{}, backward error {e:.1e}",
+                self.refinement_steps,
+                s(self.refinement_steps)
             ),
             None => String::new(),
         };
+        let (single, double) = (self.f32_factorisations, self.f64_factorisations);
         match &self.fallback {
             None => format!(
-                "f32 factor held ({}{refined})",
-                counted(self.f32_factorisations, "factorisation")
+                "f32 factor held ({single} factorisation{}{refined})",
+                s(single)
             ),
             Some(why) => format!(
-                "f64 fall-back ({why}): {} f64 and {} f32 {}{refined}",
-                self.f64_factorisations,
-                self.f32_factorisations,
-                match self.f64_factorisations + self.f32_factorisations {
-                    1 => "factorisation",
-                    _ => "factorisations",
-                }
+                "f64 fall-back ({why}): {double} f64 and {single} f32 factorisation{}{refined}",
+                s(single + double)
             ),
         }
     }

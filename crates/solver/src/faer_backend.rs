@@ -11,7 +11,7 @@ use faer::sparse::SymbolicSparseColMatRef;
 use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::linalg::cholesky::{
     CholeskySymbolicParams, LdltRef, LltRef, SymbolicCholesky, SymbolicCholeskyRaw,
-    SymmetricOrdering, factorize_symbolic_cholesky, supernodal,
+    SymmetricOrdering, factorize_symbolic_cholesky,
 };
 use faer::{Conj, MatMut, Par, Side};
 use std::sync::Arc;
@@ -25,6 +25,7 @@ mod mixed;
 mod options;
 mod permuted;
 mod pivots;
+use pivots::{factor_diagonal, pivot_position};
 mod split;
 pub use directions::FaerDirections;
 pub use mixed::{FaerPrecision, MixedStats};
@@ -183,44 +184,6 @@ impl FaerSolver {
         self.symbolic
             .as_ref()
             .map(|s| matches!(s.raw(), SymbolicCholeskyRaw::Supernodal(_)))
-    }
-}
-
-/// The diagonal D in factorisation order (LDLᵀ), or the diagonal of L (LLᵀ), of the factor
-/// `values` (f64 or f32) on `symbolic`.
-fn factor_diagonal<T>(symbolic: &SymbolicCholesky<usize>, values: &[T]) -> Vec<f64>
-where
-    T: faer::traits::ComplexField + Copy + Into<f64>,
-{
-    let mut d = Vec::with_capacity(symbolic.nrows());
-    match symbolic.raw() {
-        SymbolicCholeskyRaw::Simplicial(s) => {
-            // Column k of the simplicial factor starts with its diagonal entry.
-            let cp = s.col_ptr();
-            for k in 0..s.nrows() {
-                d.push(values[cp[k]].into());
-            }
-        }
-        SymbolicCholeskyRaw::Supernodal(s) => {
-            let f = supernodal::SupernodalLdltRef::new(s, values);
-            for k in 0..s.n_supernodes() {
-                let v = f.supernode(k).val();
-                for c in 0..v.ncols() {
-                    d.push(v[(c, c)].into());
-                }
-            }
-        }
-    }
-    d
-}
-
-/// The factor position of the pivot a faer factorisation failed at: its simplicial kernel
-/// reports the position plus one (the count of columns done), the supernodal one the position.
-fn pivot_position(simplicial: bool, index: usize) -> usize {
-    if simplicial {
-        index.saturating_sub(1)
-    } else {
-        index
     }
 }
 

@@ -3,6 +3,8 @@
 //! eigenvalues, Sylvester's law of inertia) judged against |a_kk| of the original matrix.
 
 use crate::SolverError;
+use faer::sparse::linalg::cholesky::supernodal;
+use faer::sparse::linalg::cholesky::{SymbolicCholesky, SymbolicCholeskyRaw};
 
 /// A factorisation's outcome: the factor, or why it cannot be trusted (the caller takes
 /// another path), or an error of A itself.
@@ -74,4 +76,42 @@ pub(super) fn negative_pivots(
         }
     }
     Ok(Ok(negative))
+}
+
+/// The diagonal D in factorisation order (LDLᵀ), or the diagonal of L (LLᵀ), of the factor
+/// `values` (f64 or f32) on `symbolic`.
+pub(super) fn factor_diagonal<T>(symbolic: &SymbolicCholesky<usize>, values: &[T]) -> Vec<f64>
+where
+    T: faer::traits::ComplexField + Copy + Into<f64>,
+{
+    let mut d = Vec::with_capacity(symbolic.nrows());
+    match symbolic.raw() {
+        SymbolicCholeskyRaw::Simplicial(s) => {
+            // Column k of the simplicial factor starts with its diagonal entry.
+            let cp = s.col_ptr();
+            for k in 0..s.nrows() {
+                d.push(values[cp[k]].into());
+            }
+        }
+        SymbolicCholeskyRaw::Supernodal(s) => {
+            let f = supernodal::SupernodalLdltRef::new(s, values);
+            for k in 0..s.n_supernodes() {
+                let v = f.supernode(k).val();
+                for c in 0..v.ncols() {
+                    d.push(v[(c, c)].into());
+                }
+            }
+        }
+    }
+    d
+}
+
+/// The factor position of the pivot a faer factorisation failed at: its simplicial kernel
+/// reports the position plus one (the count of columns done), the supernodal one the position.
+pub(super) fn pivot_position(simplicial: bool, index: usize) -> usize {
+    if simplicial {
+        index.saturating_sub(1)
+    } else {
+        index
+    }
 }
