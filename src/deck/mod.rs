@@ -220,6 +220,9 @@ pub struct MixedPrecision {
     pub f64_factorisations: usize,
     /// Iterative-refinement steps (one f32 solve and one f64 product each).
     pub refinement_steps: usize,
+    /// Of those, conjugate-gradient steps (the f32 factor as preconditioner) where plain
+    /// refinement stalled.
+    pub conjugate_gradient_steps: usize,
     /// The normwise backward error ‖b − A x‖∞ / (‖A‖∞‖x‖∞ + ‖b‖∞) the last refined
     /// solution reached (null if none was refined).
     pub backward_error: Option<f64>,
@@ -240,10 +243,14 @@ impl MixedPrecision {
             .unwrap_or_default();
         let f64_factorisations = now.double_factorizations - b.double_factorizations;
         let refinement_steps = now.refinement_steps - b.refinement_steps;
+        let conjugate_gradient_steps = now
+            .conjugate_gradient_steps
+            .saturating_sub(b.conjugate_gradient_steps);
         Self {
             f32_factorisations: now.single_factorizations - b.single_factorizations,
             f64_factorisations,
             refinement_steps,
+            conjugate_gradient_steps,
             backward_error: (refinement_steps > 0).then_some(now.last_backward_error),
             fallback: now
                 .last_fallback
@@ -258,9 +265,13 @@ impl MixedPrecision {
         let s = |n: usize| if n == 1 { "" } else { "s" };
         let refined = match self.backward_error {
             Some(e) => format!(
-                ", {} refinement step{}, backward error {e:.1e}",
+                ", {} refinement step{}{}, backward error {e:.1e}",
                 self.refinement_steps,
-                s(self.refinement_steps)
+                s(self.refinement_steps),
+                match self.conjugate_gradient_steps {
+                    0 => String::new(),
+                    cg => format!(" ({cg} by conjugate gradients)"),
+                }
             ),
             None => String::new(),
         };

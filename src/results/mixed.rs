@@ -5,7 +5,7 @@ use serde::Serialize;
 /// The factorisations of a run's solvers (the level loop's and the contact system's, each
 /// since its last symbolic analysis) by precision: the f32 factor refined in f64, or the f64
 /// factor where f32 was refused (an entry beyond f32, a pivot too small to trust its sign, a
-/// changed negative pivot count, refinement stalling; and for 8, 16, 32, … factorisations
+/// changed negative pivot count, refinement and then conjugate gradients stalling; and for 8, 16, 32, … factorisations
 /// before f32 is tried again, once f32 was refused before it served, or twice in a row).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct MixedSummary {
@@ -15,6 +15,9 @@ pub struct MixedSummary {
     pub f64_factorisations: usize,
     /// Refinement steps over all solves (one f32 solve and one f64 product each).
     pub refinement_steps: usize,
+    /// Of those, conjugate-gradient steps (the f32 factor as preconditioner) where plain
+    /// refinement stalled.
+    pub conjugate_gradient_steps: usize,
     /// Why the last f64 factorisation was made, if one was.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub last_fallback: Option<String>,
@@ -30,11 +33,13 @@ impl MixedSummary {
                 f32_factorisations: 0,
                 f64_factorisations: 0,
                 refinement_steps: 0,
+                conjugate_gradient_steps: 0,
                 last_fallback: None,
             });
             s.f32_factorisations += m.single_factorizations;
             s.f64_factorisations += m.double_factorizations;
             s.refinement_steps += m.refinement_steps;
+            s.conjugate_gradient_steps += m.conjugate_gradient_steps;
             if let Some(r) = m.last_fallback {
                 s.last_fallback = Some(r.to_string());
             }

@@ -49,8 +49,9 @@ pub use error::SolverError;
 pub use faer_backend::{
     AUTO_METIS_ONLY_DOFS, AUTO_WITHOUT_AMD_DOFS, FaerDirections, FaerMode, FaerOrdering,
     FaerPrecision, FaerSolver, FaerSplit, FaerStructure, KEPT_MIXED_FROM_DOFS,
-    KEPT_RETRY_F32_AFTER, KERNEL_THREADS_FROM_DOFS, MIXED_FROM_DOFS, MixedStats, SPLIT_FROM_DOFS,
-    SchurComplement, SchurOutcome,
+    KEPT_RETRY_F32_AFTER, KERNEL_THREADS_FROM_DOFS, MAX_CONJUGATE_GRADIENT_STEPS,
+    MAX_REFINEMENT_STEPS, MIXED_FROM_DOFS, MixedStats, SPLIT_FROM_DOFS, SchurComplement,
+    SchurOutcome,
 };
 pub use matrix::SymmetricMatrix;
 pub use metis::{METIS_SEED, metis_nested_dissection};

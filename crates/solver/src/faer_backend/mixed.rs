@@ -11,8 +11,9 @@
 //!   inertia the path following reads (thesis §3, Sylvester's law) changes only on an f64
 //!   factor, and the next f32 factor must agree with it to be used;
 //! - refinement stalls (the backward error falls by less than half in a step) or has not
-//!   reached the tolerance in [`MAX_REFINEMENT_STEPS`]: A is too ill-conditioned for f32
-//!   (cond(A)·ε₃₂ ≳ 0.5);
+//!   reached the tolerance in [`MAX_REFINEMENT_STEPS`] (cond(A)·ε₃₂ ≳ 0.5), and conjugate
+//!   gradients preconditioned by the f32 factor (when all its pivots are positive) do not
+//!   reach it in [`MAX_CONJUGATE_GRADIENT_STEPS`] either: A is too ill-conditioned for f32;
 //! - f32 was refused for one of the conditioning reasons above before any f32 factor served
 //!   since the analysis, or [`REFUSALS_BEFORE_F64`] times in a row: f64 for the next
 //!   [`RETRY_F32_AFTER`] factorisations, then f32 is tried once more (the wait doubled each
@@ -28,13 +29,13 @@ use faer::dyn_stack::{MemStack, StackReq};
 use faer::sparse::linalg::cholesky::{LdltRef, SymbolicCholesky};
 use faer::{Conj, MatMut, Par};
 
+mod refine;
+pub use refine::{MAX_CONJUGATE_GRADIENT_STEPS, MAX_REFINEMENT_STEPS};
+use refine::{System, Target, refine_column};
+
 /// f32 pivots smaller than this fraction of their diagonal entry send the factorisation to
 /// f64 (about 800 ε₃₂: the sign of such a pivot could be rounding's).
 pub const SINGLE_PIVOT_FLOOR: f64 = 1e-4;
-
-/// Refinement steps before falling back to f64 (cond(A)·ε₃₂ = 0.1 needs about 7 from
-/// ε₃₂ to 1e-14).
-pub const MAX_REFINEMENT_STEPS: usize = 20;
 
 /// f32 attempts refused in a row for the matrix's conditioning (any reason but a change of
 /// the negative pivot count: an entry beyond f32, an f32 zero pivot, a pivot below the floor,
@@ -100,6 +101,8 @@ pub struct MixedStats {
     pub double_factorizations: usize,
     /// Refinement steps over all solves (one f32 solve and one f64 product each).
     pub refinement_steps: usize,
+    /// Of those, the steps of conjugate gradients where refinement stalled.
+    pub conjugate_gradient_steps: usize,
     /// The backward error the last refined solution reached.
     pub last_backward_error: f64,
     /// Why the last f64 factorisation was made, if one was.
@@ -115,6 +118,8 @@ impl MixedStats {
             single_factorizations: self.single_factorizations + later.single_factorizations,
             double_factorizations: self.double_factorizations + later.double_factorizations,
             refinement_steps: self.refinement_steps + later.refinement_steps,
+            conjugate_gradient_steps: self.conjugate_gradient_steps
+                + later.conjugate_gradient_steps,
             last_backward_error: later.last_backward_error,
             last_fallback: later.last_fallback.or(self.last_fallback),
         }
@@ -412,7 +417,11 @@ impl FaerSolver {
             let Some(a) = self.mixed.a.take() else {
                 return Err(SolverError::NotReady("solve called before factorize"));
             };
-            let done = self.fall_back(&a, "refinement stalled");
+            let why = match self.mixed.last_negative {
+                Some(0) => "refinement and conjugate gradients stalled",
+                _ => "refinement stalled",
+            };
+            let done = self.fall_back(&a, why);
             self.mixed.a = Some(a);
             done?;
             self.factored = true;
@@ -435,11 +444,17 @@ impl FaerSolver {
         let Some(a) = &self.mixed.a else {
             return Err(SolverError::NotReady("solve called before factorize"));
         };
-        let (a_norm, par, stats) = (self.mixed.a_norm, self.par, &mut self.mixed.stats);
+        let system = System {
+            a,
+            a_norm: self.mixed.a_norm,
+            target,
+            definite: self.mixed.last_negative == Some(0),
+        };
+        let (par, stats) = (self.par, &mut self.mixed.stats);
         if let Some(split) = self.split_state.as_mut().filter(|s| s.is_factored()) {
             // The split's solve reads its f32 halves into f64 sums: no scaling needed.
             let correct = |r: &mut [f64]| split.solve_column(r, par);
-            return refine_column(col, a, a_norm, target, stats, correct);
+            return refine_column(col, system, stats, correct);
         }
         let (Some(symbolic), Some(buffer)) = (&self.symbolic, &mut self.buffer) else {
             return Err(SolverError::NotReady("solve called before factorize"));
@@ -463,65 +478,8 @@ impl FaerSolver {
                 *ri = f64::from(*ci) * scale;
             }
         };
-        refine_column(col, a, a_norm, target, stats, correct)
+        refine_column(col, system, stats, correct)
     }
-}
-
-/// Where [`refine_column`] stops: the first of the two reached.
-#[derive(Debug, Clone, Copy)]
-struct Target {
-    /// The normwise backward error ‖b − A x‖∞ / (‖A‖∞‖x‖∞ + ‖b‖∞).
-    backward_error: f64,
-    /// ‖b − A x‖∞ in b's units (0: none): what the caller can use
-    /// ([`LinearSolver::solve_to_residual`](crate::LinearSolver::solve_to_residual)).
-    residual: f64,
-}
-
-/// Iterative refinement of `col` (b in, x out): x ← x + C(b − A x) with `correct` applying
-/// the approximate inverse C = (L̃D̃L̃ᵀ)⁻¹ in place, until the normwise backward error
-/// ‖b − A x‖∞ / (‖A‖∞‖x‖∞ + ‖b‖∞) or the residual ‖b − A x‖∞ meets its `target`
-/// (`true`), or it stalls: the backward error falls by less than half in a step, or
-/// [`MAX_REFINEMENT_STEPS`] pass (`false`).
-fn refine_column(
-    col: &mut [f64],
-    a: &SymmetricMatrix,
-    a_norm: f64,
-    target: Target,
-    stats: &mut MixedStats,
-    mut correct: impl FnMut(&mut [f64]),
-) -> Result<bool, SolverError> {
-    let n = col.len();
-    let b = col.to_vec();
-    let b_norm = max_abs(&b);
-    col.fill(0.0);
-    if b_norm == 0.0 {
-        return Ok(true);
-    }
-    let mut r = b.clone();
-    let mut ax = vec![0.0; n];
-    let mut previous = f64::INFINITY;
-    for _ in 0..MAX_REFINEMENT_STEPS {
-        correct(&mut r);
-        for (xi, ci) in col.iter_mut().zip(&r) {
-            *xi += ci;
-        }
-        a.matvec(col, &mut ax)?;
-        for ((ri, bi), axi) in r.iter_mut().zip(&b).zip(&ax) {
-            *ri = bi - axi;
-        }
-        let residual = max_abs(&r);
-        let omega = residual / (a_norm * max_abs(col) + b_norm);
-        stats.refinement_steps += 1;
-        stats.last_backward_error = omega;
-        if omega <= target.backward_error || residual <= target.residual {
-            return Ok(true);
-        }
-        if !omega.is_finite() || omega > 0.5 * previous {
-            return Ok(false);
-        }
-        previous = omega;
-    }
-    Ok(false)
 }
 
 #[cfg(test)]

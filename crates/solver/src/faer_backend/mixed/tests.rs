@@ -102,6 +102,25 @@ fn refinement_reaches_the_f64_solution() {
     }
 }
 
+/// Conjugate gradients need a positive definite preconditioner: on the chain shifted to be
+/// indefinite (shift 0.01 puts the lowest eigenvalues of tridiag(−1, 2, −1), 2 − 2cos(kπ/301)
+/// ≈ (kπ/301)², below zero for k ≤ 9, so the factor has 9 negative pivots), a target below
+/// f64's rounding stalls refinement and the solver falls back without trying them.
+#[test]
+fn an_indefinite_factor_falls_back_without_conjugate_gradients() {
+    let a = chain(300, 1.0, 0.01);
+    let mut s = solver(FaerPrecision::Mixed {
+        tolerance: 1e-30,
+        pivot_floor: 0.0,
+    });
+    let (_, neg) = solve(&mut s, &a);
+    let m = s.mixed_stats();
+    assert_eq!(neg, 9, "{m:?}");
+    assert_eq!(m.last_fallback, Some("refinement stalled"), "{m:?}");
+    assert_eq!(m.conjugate_gradient_steps, 0, "{m:?}");
+    assert!(m.refinement_steps >= 2, "{m:?}");
+}
+
 /// A tolerance below f64's own rounding floor (backward errors of ~1e-17 here): refinement
 /// stops gaining and must fall back; the answer is then the f64 factor's, bit for bit.
 #[test]
@@ -114,7 +133,11 @@ fn a_stalled_refinement_falls_back_to_f64() {
     });
     let (x, _) = solve(&mut s, &a);
     let m = s.mixed_stats();
-    assert_eq!(m.last_fallback, Some("refinement stalled"), "{m:?}");
+    assert_eq!(
+        m.last_fallback,
+        Some("refinement and conjugate gradients stalled"),
+        "{m:?}"
+    );
     assert_eq!((m.single_factorizations, m.double_factorizations), (1, 1));
     assert!(x.iter().zip(&x64).all(|(p, q)| p.to_bits() == q.to_bits()));
 }

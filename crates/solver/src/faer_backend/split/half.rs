@@ -269,7 +269,8 @@ impl Half {
     /// z ← D⁻¹L⁻¹z over the interior columns; the separator rows of z collect −Lₛᵢ y
     /// (= −Aₛᵢ Aᵢᵢ⁻¹ bᵢ when z's separator rows start at zero). Per supernode: a unit lower
     /// triangular solve and a product with the rows below (faer's dense kernels, one thread);
-    /// the supernode that straddles the interior's end column by column.
+    /// in the supernode that straddles the interior's end, its interior columns only, their
+    /// rows below being its separator columns' rows, then its pattern.
     pub(super) fn forward<T: Real>(&self, l: &[T], z: &mut [T]) {
         let ni = self.interior;
         let sn = self.supernodal();
@@ -282,33 +283,22 @@ impl Half {
             }
             let s = f.supernode(k);
             let val = s.val();
-            let w = e - b;
-            if e <= ni {
-                let (top, bottom) = val.split_at_row(w);
-                let mut x = MatMut::from_column_major_slice_mut(&mut z[b..e], w, 1);
-                solve_unit_lower_triangular_in_place(top, x.rb_mut(), Par::Seq);
-                tmp.clear();
-                tmp.resize(bottom.nrows(), T::narrow(0.0));
-                let t = MatMut::from_column_major_slice_mut(&mut tmp, bottom.nrows(), 1);
-                matmul(t, Accum::Replace, bottom, x.rb(), T::narrow(1.0), Par::Seq);
-                for (&row, &v) in s.pattern().iter().zip(&tmp) {
-                    z[row] -= v;
-                }
-            } else {
-                for c in b..ni {
-                    let col = c - b;
-                    let y: f64 = z[c].into();
-                    let v = val.col(col);
-                    let update = |zr: &mut T, l: T| *zr = T::narrow((*zr).into() - l.into() * y);
-                    for r in col + 1..w {
-                        update(&mut z[b + r], v[r]);
-                    }
-                    for (t, &row) in s.pattern().iter().enumerate() {
-                        update(&mut z[row], v[w + t]);
-                    }
-                }
+            // The supernode's interior columns b..m: all of it, or up to the separator.
+            let m = e.min(ni);
+            let top = val.submatrix(0, 0, m - b, m - b);
+            let below = val.submatrix(m - b, 0, val.nrows() - (m - b), m - b);
+            let mut x = MatMut::from_column_major_slice_mut(&mut z[b..m], m - b, 1);
+            solve_unit_lower_triangular_in_place(top, x.rb_mut(), Par::Seq);
+            tmp.clear();
+            tmp.resize(below.nrows(), T::narrow(0.0));
+            let t = MatMut::from_column_major_slice_mut(&mut tmp, below.nrows(), 1);
+            matmul(t, Accum::Replace, below, x.rb(), T::narrow(1.0), Par::Seq);
+            // The rows below: the supernode's own separator columns m..e, then its pattern.
+            let rows = (m..e).chain(s.pattern().iter().copied());
+            for (row, &v) in rows.zip(&tmp) {
+                z[row] -= v;
             }
-            for c in b..e.min(ni) {
+            for c in b..m {
                 z[c] /= val[(c - b, c - b)];
             }
         }
@@ -328,36 +318,22 @@ impl Half {
             }
             let s = f.supernode(k);
             let val = s.val();
-            let w = e - b;
-            if e <= ni {
-                let (top, bottom) = val.split_at_row(w);
-                tmp.clear();
-                tmp.extend(s.pattern().iter().map(|&row| z[row]));
-                let t = faer::MatRef::from_column_major_slice(&tmp, bottom.nrows(), 1);
-                let mut x = MatMut::from_column_major_slice_mut(&mut z[b..e], w, 1);
-                matmul(
-                    x.rb_mut(),
-                    Accum::Add,
-                    bottom.transpose(),
-                    t,
-                    T::narrow(-1.0),
-                    Par::Seq,
-                );
-                solve_unit_upper_triangular_in_place(top.transpose(), x, Par::Seq);
-            } else {
-                for c in (b..ni).rev() {
-                    let col = c - b;
-                    let v = val.col(col);
-                    let mut acc: f64 = z[c].into();
-                    for r in col + 1..w {
-                        acc -= v[r].into() * z[b + r].into();
-                    }
-                    for (t, &row) in s.pattern().iter().enumerate() {
-                        acc -= v[w + t].into() * z[row].into();
-                    }
-                    z[c] = T::narrow(acc);
-                }
-            }
+            let m = e.min(ni);
+            let top = val.submatrix(0, 0, m - b, m - b);
+            let below = val.submatrix(m - b, 0, val.nrows() - (m - b), m - b);
+            tmp.clear();
+            tmp.extend((m..e).chain(s.pattern().iter().copied()).map(|row| z[row]));
+            let t = faer::MatRef::from_column_major_slice(&tmp, below.nrows(), 1);
+            let mut x = MatMut::from_column_major_slice_mut(&mut z[b..m], m - b, 1);
+            matmul(
+                x.rb_mut(),
+                Accum::Add,
+                below.transpose(),
+                t,
+                T::narrow(-1.0),
+                Par::Seq,
+            );
+            solve_unit_upper_triangular_in_place(top.transpose(), x, Par::Seq);
         }
     }
 }
