@@ -5,8 +5,9 @@ use serde::Serialize;
 /// The factorisations of a run's solvers (the level loop's and the contact system's, each
 /// since its last symbolic analysis) by precision: the f32 factor refined in f64, or the f64
 /// factor where f32 was refused (an entry beyond f32, a pivot too small to trust its sign, a
-/// changed negative pivot count, refinement and then conjugate gradients stalling; and for 8, 16, 32, … factorisations
-/// before f32 is tried again, once f32 was refused before it served, or twice in a row).
+/// changed negative pivot count, refinement and then conjugate gradients stalling; and for 8,
+/// 16, 32, … factorisations before f32 is tried again, once f32 was refused before it
+/// served, or twice in a row).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct MixedSummary {
     /// Factorisations kept in f32.
