@@ -1,6 +1,8 @@
 //! The f64 solution from the f32 factor: iterative refinement, and conjugate gradients
-//! preconditioned by the same factor where refinement stalls (Carson & Higham 2017: Krylov
-//! refinement converges for cond(A)·ε₃₂ ≳ 1, where plain refinement no longer contracts).
+//! preconditioned by the same factor where refinement stalls. Carson & Higham (SIAM J. Sci.
+//! Comput. 39, 2017) refine by GMRES preconditioned with the low-precision factors, which
+//! still converges where cond(A)·ε₃₂ ≳ 1 stops plain refinement; with A and L̃D̃L̃ᵀ symmetric
+//! positive definite, CG does that work with short recurrences.
 
 use super::{MixedStats, max_abs};
 use crate::{SolverError, SymmetricMatrix};
