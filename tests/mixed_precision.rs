@@ -55,6 +55,25 @@ fn solve(a: &SymmetricMatrix, precision: FaerPrecision) -> (Vec<f64>, f64, FaerS
     (x.clone(), inf(&r) / (inf(&rows) * inf(&x) + inf(&b)), s)
 }
 
+/// Mixed precision refined to `tolerance`, the pivot floor off (to exercise refinement alone).
+fn mixed(tolerance: f64) -> FaerPrecision {
+    FaerPrecision::Mixed {
+        tolerance,
+        pivot_floor: 0.0,
+    }
+}
+
+/// max |x − x64| / max |x64|.
+fn relative_difference(x: &[f64], x64: &[f64]) -> f64 {
+    let scale = x64.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let diff = x
+        .iter()
+        .zip(x64)
+        .fold(0.0f64, |m, (p, q)| m.max((p - q).abs()));
+    eprintln!("relative difference {:.1e}", diff / scale);
+    diff / scale
+}
+
 /// 4:1 cells: the f32 factor is kept (pivot floor off, to exercise refinement alone) and
 /// refinement reaches the 1e-14 backward error target. Both solutions then have backward error
 /// ≤ 1e-14, so they differ by at most 2·cond(A)·1e-14 relative; refinement converging at all
@@ -63,24 +82,12 @@ fn solve(a: &SymmetricMatrix, precision: FaerPrecision) -> (Vec<f64>, f64, FaerS
 fn refinement_reaches_the_f64_solution_on_a_laminate() {
     let a = laminate(4.0);
     let (x64, omega64, _) = solve(&a, FaerPrecision::Double);
-    let (x, omega, s) = solve(
-        &a,
-        FaerPrecision::Mixed {
-            tolerance: 1e-14,
-            pivot_floor: 0.0,
-        },
-    );
+    let (x, omega, s) = solve(&a, mixed(1e-14));
     let m = s.mixed_stats();
     eprintln!("f64 backward error {omega64:.1e}, mixed {omega:.1e}, {m:?}");
     assert_eq!((m.single_factorizations, m.double_factorizations), (1, 0));
     assert!(omega <= 1e-14, "{omega}");
-    let scale = x64.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-    let diff = x
-        .iter()
-        .zip(&x64)
-        .fold(0.0f64, |m, (p, q)| m.max((p - q).abs()));
-    eprintln!("relative difference {:.1e}", diff / scale);
-    assert!(diff <= 1e-6 * scale);
+    assert!(relative_difference(&x, &x64) <= 1e-6);
 }
 
 /// 16:1 cells: refinement stalls (each step multiplies the error by about cond(A)·ε₃₂ ≳ 0.5),
@@ -93,26 +100,14 @@ fn refinement_reaches_the_f64_solution_on_a_laminate() {
 fn conjugate_gradients_take_over_where_refinement_stalls_on_a_thin_laminate() {
     let a = laminate(16.0);
     let (x64, _, _) = solve(&a, FaerPrecision::Double);
-    let (x, omega, s) = solve(
-        &a,
-        FaerPrecision::Mixed {
-            tolerance: 1e-14,
-            pivot_floor: 0.0,
-        },
-    );
+    let (x, omega, s) = solve(&a, mixed(1e-14));
     let m = s.mixed_stats();
     eprintln!("{m:?}");
     assert_eq!((m.single_factorizations, m.double_factorizations), (1, 0));
     assert!(m.conjugate_gradient_steps >= 1, "{m:?}");
     assert!(m.refinement_steps > m.conjugate_gradient_steps, "{m:?}");
     assert!(omega <= 1e-14, "{omega}");
-    let scale = x64.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-    let diff = x
-        .iter()
-        .zip(&x64)
-        .fold(0.0f64, |m, (p, q)| m.max((p - q).abs()));
-    eprintln!("relative difference {:.1e}", diff / scale);
-    assert!(diff <= 1e-5 * scale);
+    assert!(relative_difference(&x, &x64) <= 1e-5);
 }
 
 /// The same laminate with a target below f64's rounding (1e-30): refinement and then
@@ -122,13 +117,7 @@ fn conjugate_gradients_take_over_where_refinement_stalls_on_a_thin_laminate() {
 fn a_thin_laminate_falls_back_to_f64_when_both_stall() {
     let a = laminate(16.0);
     let (x64, _, _) = solve(&a, FaerPrecision::Double);
-    let (x, _, s) = solve(
-        &a,
-        FaerPrecision::Mixed {
-            tolerance: 1e-30,
-            pivot_floor: 0.0,
-        },
-    );
+    let (x, _, s) = solve(&a, mixed(1e-30));
     let m = s.mixed_stats();
     eprintln!("{m:?}");
     assert_eq!(

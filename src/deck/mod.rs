@@ -239,13 +239,12 @@ impl MixedPrecision {
                 b.single_factorizations <= now.single_factorizations
                     && b.double_factorizations <= now.double_factorizations
                     && b.refinement_steps <= now.refinement_steps
+                    && b.conjugate_gradient_steps <= now.conjugate_gradient_steps
             })
             .unwrap_or_default();
         let f64_factorisations = now.double_factorizations - b.double_factorizations;
         let refinement_steps = now.refinement_steps - b.refinement_steps;
-        let conjugate_gradient_steps = now
-            .conjugate_gradient_steps
-            .saturating_sub(b.conjugate_gradient_steps);
+        let conjugate_gradient_steps = now.conjugate_gradient_steps - b.conjugate_gradient_steps;
         Self {
             f32_factorisations: now.single_factorizations - b.single_factorizations,
             f64_factorisations,

@@ -240,18 +240,17 @@ fn f32_refused_before_it_served_or_twice_in_a_row_goes_to_f64() {
     assert_eq!(s.mixed_stats().single_factorizations, 1);
 }
 
-/// `SolverKind::FaerLdltAuto`'s size rule: f64 below `MIXED_FROM_DOFS` (no mixed stats,
-/// the f64 solver's bits), an f32 factor from it on. The chains are shifted by I
-/// (eigenvalues in [1, 5]) so that f32 suffices at any length.
-#[test]
-fn auto_precision_is_f64_below_its_threshold_and_f32_from_it() {
-    let mut s = crate::SolverKind::FaerLdltAuto(1).build();
-    let below = chain(crate::MIXED_FROM_DOFS - 1, 1.0, -1.0);
+/// A mixed `kind`'s size rule: f64 below `threshold` DOFs (no mixed stats, the f64 solver's
+/// bits), an f32 factor from it on. The chains are shifted by I (eigenvalues in [1, 5]) so
+/// that f32 suffices at any length.
+fn f64_below_and_f32_from(kind: crate::SolverKind, threshold: usize) {
+    let mut s = kind.build();
+    let below = chain(threshold - 1, 1.0, -1.0);
     let (x, _) = solve(&mut *s, &below);
     assert_eq!(s.mixed_stats(), None);
     let (y, _) = solve(&mut *crate::SolverKind::FaerLdltThreads(1).build(), &below);
     assert!(x.iter().zip(&y).all(|(p, q)| p.to_bits() == q.to_bits()));
-    solve(&mut *s, &chain(crate::MIXED_FROM_DOFS, 1.0, -1.0));
+    solve(&mut *s, &chain(threshold, 1.0, -1.0));
     let m = s.mixed_stats().unwrap();
     assert_eq!(
         (m.single_factorizations, m.double_factorizations),
@@ -260,22 +259,18 @@ fn auto_precision_is_f64_below_its_threshold_and_f32_from_it() {
     );
 }
 
-/// `SolverKind::FaerLdltKept`'s size rule: f64 below `KEPT_MIXED_FROM_DOFS` (the f64
-/// solver's bits), an f32 factor from it on; the same shifted chains as above.
+/// `SolverKind::FaerLdltAuto`'s size rule, at `MIXED_FROM_DOFS`.
+#[test]
+fn auto_precision_is_f64_below_its_threshold_and_f32_from_it() {
+    f64_below_and_f32_from(crate::SolverKind::FaerLdltAuto(1), crate::MIXED_FROM_DOFS);
+}
+
+/// `SolverKind::FaerLdltKept`'s size rule, at `KEPT_MIXED_FROM_DOFS`.
 #[test]
 fn kept_precision_is_f64_below_its_threshold_and_f32_from_it() {
-    let mut s = crate::SolverKind::FaerLdltKept(1).build();
-    let below = chain(crate::KEPT_MIXED_FROM_DOFS - 1, 1.0, -1.0);
-    let (x, _) = solve(&mut *s, &below);
-    assert_eq!(s.mixed_stats(), None);
-    let (y, _) = solve(&mut *crate::SolverKind::FaerLdltThreads(1).build(), &below);
-    assert!(x.iter().zip(&y).all(|(p, q)| p.to_bits() == q.to_bits()));
-    solve(&mut *s, &chain(crate::KEPT_MIXED_FROM_DOFS, 1.0, -1.0));
-    let m = s.mixed_stats().unwrap();
-    assert_eq!(
-        (m.single_factorizations, m.double_factorizations),
-        (1, 0),
-        "{m:?}"
+    f64_below_and_f32_from(
+        crate::SolverKind::FaerLdltKept(1),
+        crate::KEPT_MIXED_FROM_DOFS,
     );
 }
 
