@@ -110,5 +110,24 @@ fn bench_dense(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, bench_dense, bench_solvers);
+/// y = A x over the pattern's 3×3 node blocks (`matvec`) against the column loop it
+/// reproduces bit for bit (`matvec_by_columns`): the product mixed precision's refinement
+/// and conjugate gradients run once per step.
+fn bench_matvec(c: &mut Criterion) {
+    let k = common::clamped_box_stiffness([30, 30, 4], [2e-3, 2e-3, 0.125e-3]);
+    let n = k.n();
+    let x: Vec<f64> = (0..n).map(|i| ((i * 7) % 13) as f64 - 6.0).collect();
+    let mut y = vec![0.0; n];
+    let mut group = c.benchmark_group("matvec_hex20_laminate_54k");
+    group.throughput(Throughput::Elements(2 * k.values().len() as u64));
+    group.bench_function("node_blocks", |b| {
+        b.iter(|| k.matvec(black_box(&x), &mut y).unwrap())
+    });
+    group.bench_function("columns", |b| {
+        b.iter(|| k.matvec_by_columns(black_box(&x), &mut y).unwrap())
+    });
+    group.finish();
+}
+
+criterion_group!(benches, bench_dense, bench_solvers, bench_matvec);
 criterion_main!(benches);

@@ -2,6 +2,10 @@
 
 use crate::SolverError;
 use crate::budget::{try_filled, try_room};
+use std::sync::OnceLock;
+
+mod nodes;
+pub(crate) use nodes::NodeBlocks;
 
 /// The lower triangle (diagonal included) of a symmetric n×n sparsity pattern in compressed
 /// sparse columns: column j holds rows `row_idx[col_ptr[j]..col_ptr[j + 1]]`, sorted, the first
@@ -10,12 +14,23 @@ use crate::budget::{try_filled, try_room};
 ///
 /// Invariants (checked in every constructor): sorted unique rows ≥ j in each column, the
 /// diagonal first, all indices < n.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone)]
 pub struct SymmetricPattern {
     n: usize,
     col_ptr: Vec<usize>,
     row_idx: Vec<usize>,
+    /// The 3×3 node blocks, read off the columns at the first product (`nodes.rs`).
+    nodes: OnceLock<Option<NodeBlocks>>,
 }
+
+/// Two patterns are equal when their entries are (the node blocks are derived from them).
+impl PartialEq for SymmetricPattern {
+    fn eq(&self, other: &Self) -> bool {
+        self.n == other.n && self.col_ptr == other.col_ptr && self.row_idx == other.row_idx
+    }
+}
+
+impl Eq for SymmetricPattern {}
 
 impl SymmetricPattern {
     /// The pattern of Σ_e (DOFs of e) × (DOFs of e) for `n` DOFs, from one DOF list per element.
@@ -94,6 +109,7 @@ impl SymmetricPattern {
             n,
             col_ptr,
             row_idx,
+            nodes: OnceLock::new(),
         })
     }
 
@@ -188,6 +204,7 @@ impl SymmetricPattern {
             n,
             col_ptr,
             row_idx,
+            nodes: OnceLock::new(),
         }))
     }
 
@@ -218,6 +235,7 @@ impl SymmetricPattern {
             n,
             col_ptr,
             row_idx,
+            nodes: OnceLock::new(),
         })
     }
 
@@ -248,6 +266,7 @@ impl SymmetricPattern {
             n,
             col_ptr,
             row_idx,
+            nodes: OnceLock::new(),
         })
     }
 
@@ -269,6 +288,11 @@ impl SymmetricPattern {
     /// Row indices, column after column.
     pub fn row_idx(&self) -> &[usize] {
         &self.row_idx
+    }
+
+    /// The node blocks, when the columns come in threes of the node shape (`nodes.rs`).
+    pub(crate) fn nodes(&self) -> Option<&NodeBlocks> {
+        self.nodes.get_or_init(|| NodeBlocks::of(self)).as_ref()
     }
 
     /// Rows of column j (sorted, j first).
