@@ -1,12 +1,11 @@
 //! A state's VTU (nodal strains and stresses recovered from every cell, then about thirty
 //! Float64 values per point as shortest round-trip text): what a deck solve writes at every
-//! converged increment. The cells are evaluated and the arrays formatted side by side on the
-//! pool's threads, with the same bytes on any number of them; 1 and 2 threads. Figures go to
-//! docs/PERFORMANCE.md.
+//! converged increment, on the main thread between increments. Figures go to
+//! docs/PERFORMANCE.md ("What the second thread waits for").
 //!
 //! Run: `cargo bench --bench output`.
 
-use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use nonlin3d::assembly::StressRules;
 use nonlin3d::element::{IntegrationRule, Kinematics};
 use nonlin3d::fields::{Units, state_vtu};
@@ -39,26 +38,10 @@ fn bench_state_vtu(c: &mut Criterion) {
     let n = 3 * mesh.nodes.len();
     let u: Vec<f64> = (0..n).map(|i| 1e-5 * (0.37 * i as f64).sin()).collect();
     group.throughput(Throughput::Elements(mesh.cells.len() as u64));
-    let mut lengths = Vec::new();
-    for threads in [1usize, 2] {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap_or_else(|e| panic!("{e}"));
-        let text = pool
-            .install(|| state_vtu(&mesh, &rules, &u, None, Units::MM_MPA_N))
-            .unwrap_or_else(|e| panic!("{e}"));
-        lengths.push(text.len());
-        let label = format!("plate_10k_{}_dof", n);
-        group.bench_function(BenchmarkId::new(format!("threads_{threads}"), label), |b| {
-            b.iter(|| {
-                pool.install(|| state_vtu(black_box(&mesh), &rules, &u, None, Units::MM_MPA_N))
-            })
-        });
-    }
+    group.bench_function(format!("plate_10k_{n}_dof"), |b| {
+        b.iter(|| state_vtu(black_box(&mesh), &rules, &u, None, Units::MM_MPA_N))
+    });
     group.finish();
-    // The same document on one thread and on two.
-    assert_eq!(lengths[0], lengths[1]);
 }
 
 criterion_group!(benches, bench_state_vtu);

@@ -58,7 +58,7 @@ fn flat6(v: &[[f64; 6]], f: f64) -> Vec<f64> {
 /// the `crack_upper`/`crack_lower` sets, global x, y, z; only when the mesh has them), each
 /// with the units' suffix; cell fields `material`, `ply_angle_deg` and the cell means of the
 /// strain and stresses under the same names.
-pub fn state_vtu<M: Copy + Into<Material> + Sync>(
+pub fn state_vtu<M: Copy + Into<Material>>(
     mesh: &Mesh,
     rules: &StressRules<'_, M>,
     u: &[f64],

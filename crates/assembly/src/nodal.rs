@@ -26,7 +26,6 @@ use nonlin3d_element::{
     evaluate,
 };
 use nonlin3d_mesh::Mesh;
-use rayon::prelude::*;
 use std::collections::BTreeMap;
 
 /// Nodal fields of one state, on the mesh split along material regions.
@@ -163,82 +162,17 @@ fn complete(values: &mut [[f64; 6]], table: &ShapeTable) {
     }
 }
 
-/// Cells evaluated side by side before their stations are summed in cell order.
-const CELLS_PER_CHUNK: usize = 4096;
-
-/// A kind's shape table and a thread's workspace for it.
 struct KindData {
     kind: ElementKind,
     table: ShapeTable,
     ws: Workspace,
     eo: ElementOutput,
-}
-
-/// One cell's internal forces (three per node) and its strain E (tensor shears), S and σ at
-/// its stations, the components a station does not integrate completed.
-struct CellStations {
-    forces: Vec<f64>,
-    fields: [Vec<[f64; 6]>; 3],
-}
-
-/// Evaluates cell `c` at state `u` with this thread's `kinds` (a kind's table and workspace
-/// made at its first cell).
-fn cell_stations<M: Copy + Into<Material>>(
-    mesh: &Mesh,
-    rules: &StressRules<'_, M>,
-    u: &[f64],
-    c: usize,
-    kinds: &mut Vec<KindData>,
-) -> Result<CellStations, AssemblyError> {
-    let cell = &mesh.cells[c];
-    let material = cell_material(mesh, rules, c)?;
-    let k = match kinds.iter().position(|t| t.kind == cell.kind) {
-        Some(k) => k,
-        None => {
-            let rule = match cell.kind {
-                ElementKind::Hex20 => rules.hex20_rule,
-                ElementKind::Hex8 => rules.hex8_rule,
-            };
-            let table = ShapeTable::new(cell.kind, rule)?;
-            kinds.push(KindData {
-                kind: cell.kind,
-                ws: Workspace::new(&table),
-                eo: ElementOutput::new(&table),
-                table,
-            });
-            kinds.len() - 1
-        }
-    };
-    let KindData { table, ws, eo, .. } = &mut kinds[k];
-    let x = mesh.cell_coordinates(c);
-    let d = mesh.cell_displacements(c, u);
-    evaluate(table, &x, &d, &material, rules.kinematics, false, ws, eo)
-        .map_err(|e| e.at_element(c))?;
-    let mut strain: Vec<[f64; 6]> = eo
-        .strains
-        .iter()
-        .map(|e| [e[0], e[1], e[2], 0.5 * e[3], 0.5 * e[4], 0.5 * e[5]])
-        .collect();
-    let mut pk2 = eo.stresses.clone();
-    complete(&mut strain, table);
-    complete(&mut pk2, table);
-    let sigma: Vec<[f64; 6]> = match rules.kinematics {
-        Kinematics::Linear => pk2.clone(),
-        Kinematics::Nonlinear => pk2
-            .iter()
-            .enumerate()
-            .map(|(g, s)| cauchy(s, &deformation_gradient(table, g, &x, &d)))
-            .collect(),
-    };
-    Ok(CellStations {
-        forces: eo.forces.clone(),
-        fields: [strain, pk2, sigma],
-    })
+    extrapolate: Vec<Vec<f64>>,
 }
 
 /// Strains, stresses and internal forces of state `u` (three displacements per node) at the
 /// nodes of `mesh`, extrapolated and averaged per region as the module says.
-pub fn nodal_fields<M: Copy + Into<Material> + Sync>(
+pub fn nodal_fields<M: Copy + Into<Material>>(
     mesh: &Mesh,
     rules: &StressRules<'_, M>,
     u: &[f64],
@@ -292,54 +226,78 @@ pub fn nodal_fields<M: Copy + Into<Material> + Sync>(
         Vec::with_capacity(mesh.cells.len()),
     ];
     let mut forces = vec![[0.0; 3]; mesh.nodes.len()];
-    let mut extrapolations: Vec<(ElementKind, Vec<Vec<f64>>)> = Vec::new();
-    // The cells' stations evaluated side by side, a chunk at a time (bounded memory), then
-    // summed in cell order: the same bits on any number of threads.
-    for first in (0..mesh.cells.len()).step_by(CELLS_PER_CHUNK) {
-        let last = (first + CELLS_PER_CHUNK).min(mesh.cells.len());
-        let evaluated: Vec<Result<CellStations, AssemblyError>> = (first..last)
-            .into_par_iter()
-            .map_init(Vec::new, |kinds, c| cell_stations(mesh, rules, u, c, kinds))
+    let mut kinds: Vec<KindData> = Vec::new();
+    for (c, cell) in mesh.cells.iter().enumerate() {
+        let material = cell_material(mesh, rules, c)?;
+        let k = match kinds.iter().position(|t| t.kind == cell.kind) {
+            Some(k) => k,
+            None => {
+                let rule = match cell.kind {
+                    ElementKind::Hex20 => rules.hex20_rule,
+                    ElementKind::Hex8 => rules.hex8_rule,
+                };
+                let table = ShapeTable::new(cell.kind, rule)?;
+                kinds.push(KindData {
+                    kind: cell.kind,
+                    ws: Workspace::new(&table),
+                    eo: ElementOutput::new(&table),
+                    extrapolate: extrapolation(cell.kind, rule),
+                    table,
+                });
+                kinds.len() - 1
+            }
+        };
+        let KindData {
+            table,
+            ws,
+            eo,
+            extrapolate,
+            ..
+        } = &mut kinds[k];
+        let x = mesh.cell_coordinates(c);
+        let d = mesh.cell_displacements(c, u);
+        evaluate(table, &x, &d, &material, rules.kinematics, false, ws, eo)
+            .map_err(|e| e.at_element(c))?;
+        for (a, &n) in cell.nodes.iter().enumerate() {
+            for r in 0..3 {
+                forces[n][r] += eo.forces[3 * a + r];
+            }
+        }
+        let mut strain: Vec<[f64; 6]> = eo
+            .strains
+            .iter()
+            .map(|e| [e[0], e[1], e[2], 0.5 * e[3], 0.5 * e[4], 0.5 * e[5]])
             .collect();
-        for (c, stations) in (first..last).zip(evaluated) {
-            let CellStations { forces: f, fields } = stations?;
-            let cell = &mesh.cells[c];
-            let extrapolate = match extrapolations.iter().position(|(k, _)| *k == cell.kind) {
-                Some(k) => &extrapolations[k].1,
-                None => {
-                    let rule = match cell.kind {
-                        ElementKind::Hex20 => rules.hex20_rule,
-                        ElementKind::Hex8 => rules.hex8_rule,
-                    };
-                    extrapolations.push((cell.kind, extrapolation(cell.kind, rule)));
-                    &extrapolations[extrapolations.len() - 1].1
-                }
-            };
-            for (a, &n) in cell.nodes.iter().enumerate() {
-                for r in 0..3 {
-                    forces[n][r] += f[3 * a + r];
+        let mut pk2 = eo.stresses.clone();
+        complete(&mut strain, table);
+        complete(&mut pk2, table);
+        let sigma: Vec<[f64; 6]> = match rules.kinematics {
+            Kinematics::Linear => pk2.clone(),
+            Kinematics::Nonlinear => pk2
+                .iter()
+                .enumerate()
+                .map(|(g, s)| cauchy(s, &deformation_gradient(table, g, &x, &d)))
+                .collect(),
+        };
+        for (f, station) in [&strain, &pk2, &sigma].into_iter().enumerate() {
+            let mut mean = [0.0; 6];
+            for v in station {
+                for i in 0..6 {
+                    mean[i] += v[i] / station.len() as f64;
                 }
             }
-            for (f, station) in fields.iter().enumerate() {
-                let mut mean = [0.0; 6];
-                for v in station {
+            cell_means[f].push(mean);
+            for (a, row) in extrapolate.iter().enumerate() {
+                let p = split.cells[c].nodes[a];
+                for (w, v) in row.iter().zip(station) {
                     for i in 0..6 {
-                        mean[i] += v[i] / station.len() as f64;
-                    }
-                }
-                cell_means[f].push(mean);
-                for (a, row) in extrapolate.iter().enumerate() {
-                    let p = split.cells[c].nodes[a];
-                    for (w, v) in row.iter().zip(station) {
-                        for i in 0..6 {
-                            sums[f][p][i] += w * v[i];
-                        }
+                        sums[f][p][i] += w * v[i];
                     }
                 }
             }
-            for &p in &split.cells[c].nodes {
-                count[p] += 1;
-            }
+        }
+        for &p in &split.cells[c].nodes {
+            count[p] += 1;
         }
     }
     for f in sums.iter_mut() {
@@ -402,60 +360,6 @@ mod tests {
             let got: f64 = row.iter().zip(&v).map(|(w, v)| w * v).sum();
             assert!((got - q(xi)).abs() < 1e-12);
         }
-    }
-
-    /// The cells are evaluated side by side and summed in cell order: the same bits on one
-    /// thread and on three, over more cells than one chunk (two regions, large rotations).
-    #[test]
-    fn fields_are_the_same_on_any_number_of_threads() {
-        let mut mesh = structured_box(&BoxParams::new(
-            ElementKind::Hex8,
-            [17, 17, 15],
-            [1.0, 1.0, 0.5],
-        ))
-        .unwrap();
-        assert!(mesh.cells.len() > CELLS_PER_CHUNK);
-        for c in mesh.cells.iter_mut().step_by(3) {
-            c.material = 1;
-        }
-        let steel = materials::steel().stiffness().unwrap();
-        let soft =
-            nonlin3d_laminate::Stiffness::new(steel.c().map(|r| r.map(|v| 0.5 * v))).unwrap();
-        let u: Vec<f64> = (0..3 * mesh.nodes.len())
-            .map(|i| 0.05 * (0.37 * i as f64).sin())
-            .collect();
-        let rules = StressRules {
-            materials: &[steel, soft],
-            coupling: ShearCoupling::Exact,
-            hex20_rule: IntegrationRule::Gauss3,
-            hex8_rule: IntegrationRule::Gauss2,
-            kinematics: Kinematics::Nonlinear,
-        };
-        let on = |threads: usize| {
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .unwrap();
-            pool.install(|| nodal_fields(&mesh, &rules, &u)).unwrap()
-        };
-        let (one, three) = (on(1), on(3));
-        let bits =
-            |v: &[[f64; 6]]| -> Vec<u64> { v.iter().flatten().map(|x| x.to_bits()).collect() };
-        for (a, b) in [
-            (&one.strain, &three.strain),
-            (&one.pk2, &three.pk2),
-            (&one.cauchy, &three.cauchy),
-            (&one.cell_strain, &three.cell_strain),
-            (&one.cell_pk2, &three.cell_pk2),
-            (&one.cell_cauchy, &three.cell_cauchy),
-        ] {
-            assert_eq!(bits(a), bits(b));
-        }
-        let force_bits = |f: &NodalFields| -> Vec<u64> {
-            f.forces.iter().flatten().map(|x| x.to_bits()).collect()
-        };
-        assert_eq!(force_bits(&one), force_bits(&three));
-        assert_eq!(one.point_node, three.point_node);
     }
 
     /// Two regions (materials 0 and 1 side by side along x) under u = e·x: the interface nodes

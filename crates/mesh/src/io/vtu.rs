@@ -8,7 +8,6 @@
 
 use crate::{Mesh, MeshError};
 use nonlin3d_element::ElementKind;
-use rayon::prelude::*;
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -92,29 +91,9 @@ pub fn vtu_string(
         mesh.nodes.len(),
         mesh.cells.len()
     );
-    // The Float64 arrays formatted side by side, then written in their order: the same bytes
-    // on any number of threads.
-    let ply: Vec<f64> = mesh.cells.iter().map(|c| c.ply_angle_deg).collect();
-    let points: Vec<f64> = mesh.nodes.iter().flatten().copied().collect();
-    let mut arrays: Vec<(&str, usize, &[f64])> = point_fields
-        .iter()
-        .map(|f| (f.name, f.components, f.values))
-        .collect();
-    arrays.push(("ply_angle_deg", 1, &ply));
-    arrays.extend(cell_fields.iter().map(|f| (f.name, f.components, f.values)));
-    arrays.push(("Points", 3, &points));
-    let texts: Vec<String> = arrays
-        .par_iter()
-        .map(|&(name, components, values)| {
-            let mut t = String::with_capacity(20 * values.len() + 128);
-            data_array(&mut t, name, components, values.iter().copied());
-            t
-        })
-        .collect();
-    let (point_texts, rest) = texts.split_at(point_fields.len());
     s.push_str("      <PointData>\n");
-    for t in point_texts {
-        s.push_str(t);
+    for f in point_fields {
+        data_array(&mut s, f.name, f.components, f.values.iter().copied());
     }
     s.push_str("      </PointData>\n      <CellData>\n");
     let _ = write!(
@@ -125,13 +104,17 @@ pub fn vtu_string(
         let _ = write!(s, "{}{}", if i > 0 { " " } else { "" }, c.material);
     }
     s.push_str("\n        </DataArray>\n");
-    // ply_angle_deg and the cell fields, then the points (the last array).
-    let (cell_texts, points_text) = rest.split_at(rest.len() - 1);
-    for t in cell_texts {
-        s.push_str(t);
+    data_array(
+        &mut s,
+        "ply_angle_deg",
+        1,
+        mesh.cells.iter().map(|c| c.ply_angle_deg),
+    );
+    for f in cell_fields {
+        data_array(&mut s, f.name, f.components, f.values.iter().copied());
     }
     s.push_str("      </CellData>\n      <Points>\n");
-    s.push_str(&points_text[0]);
+    data_array(&mut s, "Points", 3, mesh.nodes.iter().flatten().copied());
     s.push_str("      </Points>\n      <Cells>\n        <DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n");
     for c in &mesh.cells {
         s.push_str("          ");
@@ -267,53 +250,6 @@ pub fn pvd_string(steps: &[(f64, String)]) -> Result<String, MeshError> {
 mod tests {
     use super::*;
     use crate::{BoxParams, structured_box};
-
-    /// The arrays are formatted side by side and written in their order: the same document on
-    /// one thread and on three, the arrays in the order given.
-    #[test]
-    fn vtu_is_the_same_on_any_number_of_threads() {
-        let m = structured_box(&BoxParams::new(
-            ElementKind::Hex20,
-            [3, 2, 2],
-            [3.0, 2.0, 1.0],
-        ))
-        .unwrap();
-        let values: Vec<Vec<f64>> = (1..=4)
-            .map(|k| {
-                (0..6 * m.nodes.len())
-                    .map(|i| (k * i) as f64 / 7.0)
-                    .collect()
-            })
-            .collect();
-        let fields: Vec<Field<'_>> = ["a", "b", "c", "d"]
-            .iter()
-            .zip(&values)
-            .map(|(&name, v)| Field {
-                name,
-                components: 6,
-                values: v,
-            })
-            .collect();
-        let cell: Vec<f64> = (0..m.cells.len()).map(|c| c as f64 * 0.1).collect();
-        let cells = [Field {
-            name: "e",
-            components: 1,
-            values: &cell,
-        }];
-        let on = |threads: usize| {
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .unwrap();
-            pool.install(|| vtu_string(&m, &fields, &cells)).unwrap()
-        };
-        let (one, three) = (on(1), on(3));
-        assert_eq!(one, three);
-        let at = |name: &str| one.find(&format!("Name=\"{name}\"")).unwrap();
-        assert!(at("a") < at("b") && at("b") < at("c") && at("c") < at("d"));
-        assert!(at("d") < at("material") && at("material") < at("ply_angle_deg"));
-        assert!(at("ply_angle_deg") < at("e") && at("e") < at("Points"));
-    }
 
     #[test]
     fn vtu_has_the_counts_types_and_values() {
