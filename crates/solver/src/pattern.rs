@@ -380,6 +380,21 @@ mod tests {
         ));
     }
 
+    /// Lists of whole nodes (DOFs 3b, 3b + 1, 3b + 2) of `nodes` nodes from raw node numbers
+    /// (taken modulo `nodes`); shared with `nodes.rs`'s tests.
+    pub(super) fn node_lists(nodes: usize, raw: &[Vec<usize>]) -> Vec<Vec<usize>> {
+        raw.iter()
+            .map(|l| {
+                l.iter()
+                    .flat_map(|&a| {
+                        let b = a % nodes;
+                        [3 * b, 3 * b + 1, 3 * b + 2]
+                    })
+                    .collect()
+            })
+            .collect()
+    }
+
     proptest::proptest! {
         /// Lists of whole nodes (some repeated, some nodes in no list) give the DOF path's
         /// pattern on the node path; one loose DOF sends them back to the DOF path.
@@ -389,13 +404,7 @@ mod tests {
             raw in proptest::collection::vec(proptest::collection::vec(0usize..1000, 1..9), 0..30),
             loose in proptest::bool::ANY,
         ) {
-            let mut lists: Vec<Vec<usize>> = raw
-                .iter()
-                .map(|l| l.iter().flat_map(|&a| {
-                    let b = a % nodes;
-                    [3 * b, 3 * b + 1, 3 * b + 2]
-                }).collect())
-                .collect();
+            let mut lists = node_lists(nodes, &raw);
             if loose {
                 lists.push(vec![3 * nodes - 1]);
             }

@@ -130,22 +130,9 @@ impl NodeBlocks {
 #[cfg(test)]
 #[allow(clippy::unwrap_used)]
 mod tests {
+    use crate::pattern::tests::node_lists;
     use crate::{SymmetricMatrix, SymmetricPattern};
     use std::sync::Arc;
-
-    /// Lists of whole nodes of `nodes` nodes from raw node numbers.
-    fn node_lists(nodes: usize, raw: &[Vec<usize>]) -> Vec<Vec<usize>> {
-        raw.iter()
-            .map(|l| {
-                l.iter()
-                    .flat_map(|&a| {
-                        let b = a % nodes;
-                        [3 * b, 3 * b + 1, 3 * b + 2]
-                    })
-                    .collect()
-            })
-            .collect()
-    }
 
     proptest::proptest! {
         /// On patterns of whole nodes (nodes in no list among them) the node-block product
