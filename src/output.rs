@@ -20,9 +20,9 @@ use crate::model::Model;
 use crate::results::{LevelResult, ModelSummary, Provenance, Results, Timings};
 use std::collections::BTreeMap;
 use std::path::{Component, Path, PathBuf};
-use std::sync::{Arc, Mutex};
-use std::time::Instant;
+use std::sync::{Arc, Condvar, Mutex};
 use std::time::SystemTime;
+use std::time::{Duration, Instant};
 
 fn io(path: &Path) -> impl FnOnce(std::io::Error) -> Error + '_ {
     move |source| Error::Io {
@@ -365,6 +365,7 @@ impl RunOutput {
     pub fn interrupt_handle(&self) -> InterruptHandle {
         InterruptHandle {
             pending: self.pending.clone(),
+            backlog: Arc::default(),
         }
     }
 
@@ -397,6 +398,64 @@ impl RunOutput {
 #[derive(Debug, Clone)]
 pub struct InterruptHandle {
     pending: Arc<Mutex<Pending>>,
+    /// Writes handed to another thread and not yet done, waited for by [`stop`](Self::stop).
+    backlog: Arc<Backlog>,
+}
+
+/// How long [`InterruptHandle::stop`] waits for a writer thread's backlog (at most two
+/// increments' files) before it writes the stopped state as it stands.
+const BACKLOG_WAIT: Duration = Duration::from_secs(60);
+
+/// Writes handed to a writer thread and not yet done (`nonlin3d solve` on two or more threads,
+/// `crate::deck::BackgroundOutput`): [`InterruptHandle::stop`] waits for those handed over
+/// before the signal, so that an interrupt keeps every increment that had converged.
+#[derive(Debug, Default)]
+pub struct Backlog {
+    counts: Mutex<BacklogCounts>,
+    changed: Condvar,
+}
+
+#[derive(Debug, Default)]
+struct BacklogCounts {
+    sent: u64,
+    done: u64,
+    /// The writer has ended (no more writes will be done).
+    closed: bool,
+}
+
+impl Backlog {
+    fn update(&self, f: impl FnOnce(&mut BacklogCounts)) {
+        let mut c = self.counts.lock().unwrap_or_else(|e| e.into_inner());
+        f(&mut c);
+        self.changed.notify_all();
+    }
+
+    /// One write more handed over.
+    pub fn sent(&self) {
+        self.update(|c| c.sent += 1);
+    }
+
+    /// One write done.
+    pub fn done(&self) {
+        self.update(|c| c.done += 1);
+    }
+
+    /// The writer has ended: nothing more will be done.
+    pub fn close(&self) {
+        self.update(|c| c.closed = true);
+    }
+
+    /// Waits until every write handed over before the call is done or the writer has ended,
+    /// for at most `limit`; whether nothing handed over was left undone.
+    pub fn wait(&self, limit: Duration) -> bool {
+        let c = self.counts.lock().unwrap_or_else(|e| e.into_inner());
+        let target = c.sent;
+        let (c, _) = self
+            .changed
+            .wait_timeout_while(c, limit, |c| c.done < target && !c.closed)
+            .unwrap_or_else(|e| e.into_inner());
+        c.done >= target
+    }
 }
 
 impl InterruptHandle {
@@ -408,7 +467,13 @@ impl InterruptHandle {
                 path: path.to_path_buf(),
                 stopped_json: None,
             })),
+            backlog: Arc::default(),
         }
+    }
+
+    /// The backlog [`stop`](Self::stop) waits for: a writer thread counts its writes in it.
+    pub fn backlog(&self) -> Arc<Backlog> {
+        self.backlog.clone()
     }
 
     /// Under the lock [`stop`](Self::stop) takes: runs `write` (the state's other files),
@@ -430,11 +495,16 @@ impl InterruptHandle {
         after()
     }
 
-    /// Waits for any `results.json` write in progress, then writes the run's state with
+    /// Waits for a writer thread's backlog ([`Backlog`], at most a minute) and any
+    /// `results.json` write in progress, then writes the run's state with
     /// `"stopped": "interrupted by SIGNAL"` (nothing after a finished run) and keeps the lock,
     /// so that the run writes nothing more: call it only to exit. Returns whether a file was
     /// written.
     pub fn stop(&self, signal: &str) -> bool {
+        // The increments converged before the signal, still in a writer thread's queue, are
+        // written first ([`Backlog`]); the solve goes on meanwhile, and what it publishes by
+        // then is in the stopped state too.
+        self.backlog.wait(BACKLOG_WAIT);
         let Ok(pending) = self.pending.lock() else {
             return false;
         };
@@ -458,6 +528,29 @@ impl InterruptHandle {
 #[allow(clippy::unwrap_used)]
 mod tests {
     use super::*;
+
+    /// [`Backlog::wait`] returns once every write handed over before it is done, at once when
+    /// the writer has ended, and false after its limit with a write still undone.
+    #[test]
+    fn a_stop_waits_for_the_writes_handed_over_before_it() {
+        let backlog = Arc::new(Backlog::default());
+        backlog.sent();
+        backlog.sent();
+        let writer = backlog.clone();
+        let t = std::thread::spawn(move || {
+            for _ in 0..2 {
+                std::thread::sleep(Duration::from_millis(20));
+                writer.done();
+            }
+        });
+        assert!(backlog.wait(Duration::from_secs(60)));
+        assert_eq!(backlog.counts.lock().unwrap().done, 2);
+        t.join().unwrap();
+        backlog.sent();
+        assert!(!backlog.wait(Duration::from_millis(1)));
+        backlog.close();
+        assert!(!backlog.wait(Duration::from_secs(60)));
+    }
 
     #[test]
     fn only_our_file_names_are_cleaned() {

@@ -154,7 +154,9 @@ pub(crate) fn solve(
     for n in &model.not_used {
         lock(&monitor).say(&format!("not used: {}, {}: {}", n.at, n.keyword, n.reason));
     }
-    let outcome = nonlin3d::deck::solve_deck_with(&model, &options, &mut |p| {
+    // The status lines on this thread as each report comes; the files on a thread of their own
+    // when the solve has two or more (`write_in_background`), else here.
+    let report = |p: Progress<'_>| {
         let mut m = lock(&monitor);
         match p {
             Progress::Increment(r) => {
@@ -209,10 +211,24 @@ pub(crate) fn solve(
             }
             Progress::Failed(_) => {}
         }
-        drop(m);
-        output.progress(p)
-    });
+    };
+    let (outcome, written) = if rayon::current_num_threads() >= 2 {
+        nonlin3d::deck::write_in_background(&mut output, |write| {
+            nonlin3d::deck::solve_deck_with(&model, &options, &mut |p| {
+                report(p);
+                write(p)
+            })
+        })
+    } else {
+        let outcome = nonlin3d::deck::solve_deck_with(&model, &options, &mut |p| {
+            report(p);
+            output.progress(p)
+        });
+        (outcome, Ok(()))
+    };
     let status_error = lock(&monitor).finish();
+    // A write that failed after the last report fails the solve as one before it would.
+    let outcome = outcome.and_then(|r| written.map(|()| r));
     let results = match outcome {
         Ok(r) => r,
         Err(e) => {

@@ -41,8 +41,10 @@ fn solve(deck: &Path, out: &Path) -> Output {
     command(deck, out).output().unwrap()
 }
 
-fn start(deck: &Path, out: &Path) -> Child {
+fn start(deck: &Path, out: &Path, threads: usize) -> Child {
     command(deck, out)
+        .arg("--threads")
+        .arg(threads.to_string())
         .stdout(Stdio::null())
         .stderr(Stdio::piped())
         .spawn()
@@ -249,10 +251,33 @@ fn a_failed_step_keeps_the_converged_ones() {
     files_agree_with_summary(&out, &v);
 }
 
-/// Sends SIG`name` once step 1 is complete and once step 2 is under way: exit `code`,
-/// summary.json parses, says `"complete": false` and names the signal, every increment
-/// converged before is there and every file is whole and agrees with it.
-fn interrupted(name: &str, code: i32) {
+/// Increments status.sta lists as converged: written on the solving thread as each converges,
+/// before its files (on two or more threads, the files are written by a thread of their own).
+fn converged_in_status(out: &Path) -> usize {
+    std::fs::read_to_string(out.join("status.sta"))
+        .unwrap()
+        .lines()
+        .filter(|l| l.split(',').nth(5) == Some("converged"))
+        .count()
+}
+
+/// Increments summary.json lists as converged.
+fn converged_in_summary(v: &serde_json::Value) -> usize {
+    v["steps"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .flat_map(|s| s["increments"].as_array().unwrap())
+        .filter(|i| i["converged"] == true)
+        .count()
+}
+
+/// Sends SIG`name` to a solve on `threads` threads once step 1 is complete and once step 2 is
+/// under way: exit `code`, summary.json parses, says `"complete": false` and names the
+/// signal, every increment converged before the signal (status.sta) is there (on two threads:
+/// the writer thread's backlog written before the stopped state) and every file is whole and
+/// agrees with it.
+fn interrupted(name: &str, code: i32, threads: usize) {
     for (point, ready) in [
         (
             "after step 1",
@@ -261,9 +286,10 @@ fn interrupted(name: &str, code: i32) {
         ("within step 2", within_step_2),
     ] {
         let out = tmp(&format!("signal-{name}-{}", point.replace(' ', "-"))).join("out");
-        let mut child = start(Path::new(SLOW), &out);
+        let mut child = start(Path::new(SLOW), &out, threads);
         wait_until(&out, &mut child, point, ready);
         let v0 = summary(&out);
+        let converged = converged_in_status(&out);
         signal(&child, name);
         let status = child.wait().unwrap();
         assert_eq!(status.code(), Some(code), "SIG{name} {point}");
@@ -284,6 +310,12 @@ fn interrupted(name: &str, code: i32) {
                 .sum()
         };
         assert!(count(&v) >= count(&v0), "{point}");
+        assert!(
+            converged_in_summary(&v) >= converged,
+            "{point}: {} converged increments in summary.json, {converged} in status.sta \
+             before SIG{name}",
+            converged_in_summary(&v)
+        );
         all_files_whole(&out);
         files_agree_with_summary(&out, &v);
     }
@@ -291,19 +323,21 @@ fn interrupted(name: &str, code: i32) {
 
 #[test]
 fn sigint_keeps_the_converged_increments() {
-    interrupted("INT", 130);
+    // Two threads: the files written by a thread of their own.
+    interrupted("INT", 130, 2);
 }
 
 #[test]
 fn sigterm_keeps_the_converged_increments() {
-    interrupted("TERM", 143);
+    // One thread: the files written where each increment is reported.
+    interrupted("TERM", 143, 1);
 }
 
 /// SIGKILL cannot be caught: whatever is on disk parses and does not claim to be complete.
 #[test]
 fn sigkill_leaves_nothing_that_claims_to_be_complete() {
     let out = tmp("signal-KILL").join("out");
-    let mut child = start(Path::new(SLOW), &out);
+    let mut child = start(Path::new(SLOW), &out, 2);
     wait_until(&out, &mut child, "within step 2", within_step_2);
     child.kill().unwrap();
     child.wait().unwrap();
@@ -369,4 +403,74 @@ fn an_output_folder_that_cannot_be_written_exits_2() {
             .lines()
             .all(|l| !l.starts_with("step "))
     );
+}
+
+/// Every file of a solve, by path under `out` (summary.json without its provenance and thread
+/// count; status.sta and convergence.cvg without their wall-clock column).
+fn files_of(out: &Path) -> std::collections::BTreeMap<PathBuf, String> {
+    let mut files = std::collections::BTreeMap::new();
+    let mut folders = vec![out.to_path_buf()];
+    while let Some(dir) = folders.pop() {
+        for entry in std::fs::read_dir(&dir).unwrap() {
+            let path = entry.unwrap().path();
+            if path.is_dir() {
+                folders.push(path);
+                continue;
+            }
+            let name = path.file_name().unwrap().to_string_lossy().into_owned();
+            let text = std::fs::read_to_string(&path).unwrap();
+            let text = match name.as_str() {
+                "summary.json" => {
+                    let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
+                    v["provenance"] = serde_json::Value::Null;
+                    v["threads"] = serde_json::Value::Null;
+                    v.to_string()
+                }
+                "status.sta" | "convergence.cvg" => {
+                    let header = text.lines().next().unwrap();
+                    let wall = header.split(',').position(|c| c == "wall_s").unwrap();
+                    text.lines()
+                        .map(|l| {
+                            let mut cells: Vec<&str> = l.split(',').collect();
+                            cells.remove(wall);
+                            cells.join(",") + "\n"
+                        })
+                        .collect()
+                }
+                _ => text,
+            };
+            files.insert(path.strip_prefix(out).unwrap().to_path_buf(), text);
+        }
+    }
+    files
+}
+
+/// On two threads the files are written by a thread of their own while the solve goes on; on
+/// one, where each increment is reported. Both write the same files with the same bytes (the
+/// VTUs, the print tables, the displacements, summary.json but for its timings).
+#[test]
+fn the_files_are_the_same_whether_written_beside_the_solve_or_in_it() {
+    let deck = Path::new("tests/decks/el_print_nlgeom.inp");
+    let outs: Vec<PathBuf> = [1, 2]
+        .iter()
+        .map(|threads| {
+            let out = tmp(&format!("writer-threads-{threads}")).join("out");
+            let o = command(deck, &out)
+                .args(["-q", "--threads", &threads.to_string()])
+                .output()
+                .unwrap();
+            assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+            out
+        })
+        .collect();
+    let (one, two) = (files_of(&outs[0]), files_of(&outs[1]));
+    assert!(one.keys().any(|p| p.to_string_lossy().ends_with(".vtu")));
+    assert!(one.keys().any(|p| p.starts_with("step-1")));
+    assert_eq!(
+        one.keys().collect::<Vec<_>>(),
+        two.keys().collect::<Vec<_>>()
+    );
+    for (path, text) in &one {
+        assert!(text == &two[path], "{} differs", path.display());
+    }
 }

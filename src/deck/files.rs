@@ -147,6 +147,9 @@ pub struct DeckOutput<'a> {
     /// When the folder was made, and the seconds spent writing since.
     started: std::time::Instant,
     output_s: f64,
+    /// Written by a thread of its own ([`super::write_in_background`]): the writes overlap
+    /// the solve, whose stage time is then the whole wall time.
+    background: bool,
 }
 
 impl<'a> DeckOutput<'a> {
@@ -180,6 +183,7 @@ impl<'a> DeckOutput<'a> {
             provenance: None,
             started: std::time::Instant::now(),
             output_s: 0.0,
+            background: false,
         };
         out.publish(|| Ok(()))?;
         Ok(out)
@@ -209,8 +213,21 @@ impl<'a> DeckOutput<'a> {
     }
 
     /// Writes what `p` brings: the tables that grew, the step's displacements when it is
-    /// complete, and `summary.json`.
+    /// complete, and `summary.json`. A signal's stop waits for a write in progress (counted
+    /// in the interrupt handle's [`Backlog`](crate::output::Backlog); a writer thread counts
+    /// its own), so that the increment being written is kept.
     pub fn progress(&mut self, p: Progress<'_>) -> Result<(), Error> {
+        if self.background {
+            return self.write_progress(p);
+        }
+        let backlog = self.handle.backlog();
+        backlog.sent();
+        let written = self.write_progress(p);
+        backlog.done();
+        written
+    }
+
+    fn write_progress(&mut self, p: Progress<'_>) -> Result<(), Error> {
         let r = match p {
             Progress::Increment(r) | Progress::Step(r) | Progress::Failed(r) => r,
         };
@@ -304,6 +321,11 @@ impl<'a> DeckOutput<'a> {
         Ok(Some((format!("model_{}.vtu", self.vtu_steps.len()), text)))
     }
 
+    /// Whether a writer thread of its own writes the files ([`super::write_in_background`]).
+    pub(super) fn set_background(&mut self, on: bool) {
+        self.background = on;
+    }
+
     /// The solve failed: `summary.json` keeps every step and increment so far, `"complete":
     /// false` and the error in `"stopped"`.
     pub fn failed(&mut self, error: &Error) -> Result<(), Error> {
@@ -333,7 +355,14 @@ impl<'a> DeckOutput<'a> {
         if let Some(p) = &mut self.provenance {
             let total = self.started.elapsed().as_secs_f64();
             p.stage("output", self.output_s);
-            p.stage("solve", total - self.output_s);
+            p.stage(
+                "solve",
+                if self.background {
+                    total
+                } else {
+                    total - self.output_s
+                },
+            );
             p.finish(total);
         }
         let not_used: Vec<serde_json::Value> = self

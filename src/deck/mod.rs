@@ -12,6 +12,7 @@
 //! cylindrical one (`nonlin3d_element::Material::Cylindrical`). NLGEOM steps use the nonlinear kernels (total Lagrangian, St.
 //! Venant–Kirchhoff), other steps the linear kernels (one Newton iteration solves them).
 
+mod background;
 mod check;
 mod contact;
 mod drive;
@@ -20,6 +21,7 @@ mod loads;
 mod output;
 mod riks;
 
+pub use background::write_in_background;
 pub use check::check;
 pub use contact::IncrementContact;
 pub use files::DeckOutput;

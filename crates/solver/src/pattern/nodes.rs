@@ -68,61 +68,48 @@ impl NodeBlocks {
     }
 
     /// y = A x for the lower-triangle values `v` of a matrix on the pattern these blocks were
-    /// read from (`cp` its column pointers; lengths checked by the caller). Node by node, each
-    /// neighbour block as three columns of three rows; y(i) receives column j's a_ij·x_j in
-    /// increasing j, and column j's own sum a_jj·x_j + Σ_{i>j} a_ij·x_i runs in increasing
-    /// i, as in the column loop, so the result is bit for bit the same.
+    /// read from (`cp` its column pointers; lengths checked by the caller). Node by node, its
+    /// three columns one after the other, each read as the column loop reads it but with one
+    /// node index per three rows: y(i) receives column j's a_ij·x_j in increasing j, and
+    /// column j's own sum a_jj·x_j + Σ_{i>j} a_ij·x_i runs in increasing i, so the result is
+    /// bit for bit the column loop's. (Taking the three columns together, one neighbour block
+    /// at a time, was 2.1× slower than the column loop on this machine's AMD EPYC on
+    /// 2026-11-30 at 53 847 DOF; one column at a time is 1.37× faster: docs/PERFORMANCE.md.)
     pub(crate) fn matvec(&self, cp: &[usize], v: &[f64], x: &[f64], y: &mut [f64]) {
         y.fill(0.0);
         for (b, &full) in self.full.iter().enumerate() {
             let j = 3 * b;
-            let (x0, x1, x2) = (x[j], x[j + 1], x[j + 2]);
             if !full {
                 for k in 0..3 {
                     y[j + k] += v[cp[j + k]] * x[j + k];
                 }
                 continue;
             }
-            let (p0, p1, p2) = (cp[j], cp[j + 1], cp[j + 2]);
-            // The diagonal block: column j's rows j + 1, j + 2, then column j + 1's row j + 2.
-            y[j + 1] += v[p0 + 1] * x0;
-            y[j + 2] += v[p0 + 2] * x0;
-            y[j + 2] += v[p1 + 1] * x1;
-            let mut acc0 = v[p0] * x0;
-            acc0 += v[p0 + 1] * x1;
-            acc0 += v[p0 + 2] * x2;
-            let mut acc1 = v[p1] * x1;
-            acc1 += v[p1 + 1] * x2;
-            let mut acc2 = v[p2] * x2;
             let neighbours = &self.next[self.next_ptr[b]..self.next_ptr[b + 1]];
-            let (t0, t1, t2) = (&v[p0 + 3..], &v[p1 + 2..], &v[p2 + 1..]);
-            for (k, &c) in neighbours.iter().enumerate() {
-                let i = 3 * c as usize;
-                let (a0, a1, a2) = (
-                    &t0[3 * k..3 * k + 3],
-                    &t1[3 * k..3 * k + 3],
-                    &t2[3 * k..3 * k + 3],
-                );
-                let xi = &x[i..i + 3];
-                let yi = &mut y[i..i + 3];
-                for r in 0..3 {
-                    yi[r] += a0[r] * x0;
-                    yi[r] += a1[r] * x1;
-                    yi[r] += a2[r] * x2;
+            // Column j + q: its diagonal, the 2 − q rows below it in the diagonal block, then
+            // three rows per neighbour, as the column loop takes them.
+            for q in 0..3 {
+                let col = j + q;
+                let s = cp[col];
+                let xj = x[col];
+                let mut acc = v[s] * xj;
+                for d in 1..3 - q {
+                    y[col + d] += v[s + d] * xj;
+                    acc += v[s + d] * x[col + d];
                 }
-                for r in 0..3 {
-                    acc0 += a0[r] * xi[r];
+                let tail = &v[s + 3 - q..s + 3 - q + 3 * neighbours.len()];
+                for (a, &c) in tail.chunks_exact(3).zip(neighbours) {
+                    let i = 3 * c as usize;
+                    let (xi, yi) = (&x[i..i + 3], &mut y[i..i + 3]);
+                    yi[0] += a[0] * xj;
+                    acc += a[0] * xi[0];
+                    yi[1] += a[1] * xj;
+                    acc += a[1] * xi[1];
+                    yi[2] += a[2] * xj;
+                    acc += a[2] * xi[2];
                 }
-                for r in 0..3 {
-                    acc1 += a1[r] * xi[r];
-                }
-                for r in 0..3 {
-                    acc2 += a2[r] * xi[r];
-                }
+                y[col] += acc;
             }
-            y[j] += acc0;
-            y[j + 1] += acc1;
-            y[j + 2] += acc2;
         }
     }
 }
