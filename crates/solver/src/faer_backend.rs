@@ -389,12 +389,14 @@ impl LinearSolver for FaerSolver {
         let Some(pattern) = &self.pattern else {
             return Err(SolverError::NotReady("factorize called before analyze"));
         };
-        a.check_for(pattern)?;
+        a.check_pattern(pattern)?;
         self.factored = false;
         self.directions_l32.clear();
         if self.uses_mixed() {
+            // Checks the values for NaN and infinity in its one pass over them.
             self.factorize_mixed(a)
         } else {
+            a.check_finite()?;
             self.factorize_f64(a)
         }
     }

@@ -53,6 +53,12 @@ impl SymmetricMatrix {
     /// Checks that this matrix lives on `pattern` (the one a solver analysed) and holds only
     /// finite values.
     pub fn check_for(&self, pattern: &Arc<SymmetricPattern>) -> Result<(), SolverError> {
+        self.check_pattern(pattern)?;
+        self.check_finite()
+    }
+
+    /// Checks that this matrix lives on `pattern` (the values are not read).
+    pub(crate) fn check_pattern(&self, pattern: &Arc<SymmetricPattern>) -> Result<(), SolverError> {
         if !Arc::ptr_eq(pattern, &self.pattern) && **pattern != *self.pattern {
             return Err(SolverError::DimensionMismatch {
                 what: "matrix pattern (not the analysed one)",
@@ -60,7 +66,7 @@ impl SymmetricMatrix {
                 got: self.pattern.nnz_lower(),
             });
         }
-        self.check_finite()
+        Ok(())
     }
 
     /// Lower-triangle values in the pattern's order.

@@ -138,6 +138,10 @@ pub(super) struct MixedState {
     /// The last factorised matrix (f64), for residuals and the f64 fallback.
     a: Option<SymmetricMatrix>,
     a_norm: f64,
+    /// max |a_ij| of that matrix.
+    a_max: f64,
+    /// ‖A‖∞'s row sums (kept between factorisations).
+    rows: Vec<f64>,
     /// The active factor is the f32 one.
     single: bool,
     last_negative: Option<usize>,
@@ -222,20 +226,42 @@ pub(super) fn try_zeros_f32(len: usize) -> Result<Vec<f32>, SolverError> {
     Ok(v)
 }
 
-/// ‖A‖∞ of a symmetric matrix stored by its lower triangle.
-fn inf_norm(a: &SymmetricMatrix) -> f64 {
+/// One pass over A's values for an f32 factorisation, each read once: copies them into
+/// `copy`, sums |a_ij| by row into `rows` for ‖A‖∞ (row i takes column j's |a_ij| in
+/// increasing j, then its own column's in increasing row) and finds max |a_ij| (whether A
+/// fits f32). Returns (‖A‖∞, max |a_ij|); a NaN or infinite value is
+/// [`SolverError::NonFinite`], named as [`SymmetricMatrix::check_finite`] names it.
+fn take_values(
+    a: &SymmetricMatrix,
+    copy: &mut [f64],
+    rows: &mut Vec<f64>,
+) -> Result<(f64, f64), SolverError> {
     let p = a.pattern();
-    let mut rows = vec![0.0f64; p.n()];
+    rows.clear();
+    rows.resize(p.n(), 0.0);
     let (cp, ri, v) = (p.col_ptr(), p.row_idx(), a.values());
+    let mut largest = 0.0f64;
+    let mut finite = true;
     for j in 0..p.n() {
-        for k in cp[j]..cp[j + 1] {
-            rows[ri[k]] += v[k].abs();
-            if ri[k] != j {
-                rows[j] += v[k].abs();
+        let (s, e) = (cp[j], cp[j + 1]);
+        // Row j's sum so far, then its own column's values in order (the diagonal first).
+        let mut own = rows[j];
+        for ((&i, &x), c) in ri[s..e].iter().zip(&v[s..e]).zip(&mut copy[s..e]) {
+            *c = x;
+            let m = x.abs();
+            finite &= m.is_finite();
+            largest = largest.max(m);
+            own += m;
+            if i != j {
+                rows[i] += m;
             }
         }
+        rows[j] = own;
     }
-    rows.into_iter().fold(0.0, f64::max)
+    if !finite {
+        a.check_finite()?;
+    }
+    Ok((rows.iter().copied().fold(0.0, f64::max), largest))
 }
 
 fn max_abs(v: &[f64]) -> f64 {
@@ -259,15 +285,15 @@ impl FaerSolver {
             && !self.mixed.retry_now(self.retry_f32_after)
         {
             // f64 for now: no copy of A for refinement is needed.
+            a.check_finite()?;
             return self.fall_back(a, GIVEN_UP);
         }
-        match &mut self.mixed.a {
-            Some(m) if std::sync::Arc::ptr_eq(m.pattern(), a.pattern()) => {
-                m.values_mut().copy_from_slice(a.values());
-            }
-            slot => *slot = Some(a.clone()),
-        }
-        self.mixed.a_norm = inf_norm(a);
+        let mixed = &mut self.mixed;
+        let copy = match &mut mixed.a {
+            Some(m) if std::sync::Arc::ptr_eq(m.pattern(), a.pattern()) => m,
+            slot => slot.insert(SymmetricMatrix::try_zeros(a.pattern().clone())?),
+        };
+        (mixed.a_norm, mixed.a_max) = take_values(a, copy.values_mut(), &mut mixed.rows)?;
         match self.factorize_single(a)? {
             Ok(f) => Ok(f),
             Err(reason) => {
@@ -309,9 +335,10 @@ impl FaerSolver {
         Ok(f)
     }
 
-    /// The f32 factorisation (split or not): `Ok(Err(reason))` when it cannot be trusted.
+    /// The f32 factorisation (split or not) of `a`, read by [`take_values`] just before:
+    /// `Ok(Err(reason))` when it cannot be trusted.
     fn factorize_single(&mut self, a: &SymmetricMatrix) -> Attempt<Factorization> {
-        if a.values().iter().any(|v| v.abs() > f64::from(f32::MAX)) {
+        if self.mixed.a_max > f64::from(f32::MAX) {
             return Ok(Err("an entry does not fit f32"));
         }
         let rule = PivotRule::Single {

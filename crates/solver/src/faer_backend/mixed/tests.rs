@@ -288,6 +288,38 @@ fn entries_beyond_f32_go_to_f64() {
     assert_eq!(x, x64);
 }
 
+/// The one pass over A before an f32 factorisation refuses a NaN or an infinity by its place
+/// (the first in column order, as `check_finite` names it), in f32 and once f32 is given up,
+/// and gives ‖A‖∞ (max row sum of |a_ij| over both triangles) and max |a_ij|.
+#[test]
+fn the_pass_over_a_refuses_non_finite_values_and_gives_the_norms() {
+    let a = chain(40, 1.0, 0.0);
+    let (mut copy, mut rows) = (vec![0.0; a.values().len()], Vec::new());
+    let (norm, largest) = take_values(&a, &mut copy, &mut rows).unwrap();
+    // Rows 1..n−2 hold 1 + 2 + 1.
+    assert_eq!((norm, largest), (4.0, 2.0));
+    assert_eq!(copy, a.values());
+    for given_up in [false, true] {
+        let mut s = solver(FaerPrecision::mixed());
+        s.analyze(a.pattern()).unwrap();
+        if given_up {
+            s.mixed.refused_in_a_row = REFUSALS_BEFORE_F64;
+        }
+        for bad in [f64::NAN, f64::NEG_INFINITY] {
+            let mut b = a.clone();
+            // Column 6's entry in row 7 and column 3's diagonal: the first in column order is named.
+            let p = b.pattern().position(7, 6).unwrap();
+            b.values_mut()[p] = bad;
+            let q = b.pattern().position(3, 3).unwrap();
+            b.values_mut()[q] = bad;
+            match s.factorize(&b) {
+                Err(SolverError::NonFinite { row: 3, col: 3, .. }) => {}
+                other => panic!("given up {given_up}, {bad}: {other:?}"),
+            }
+        }
+    }
+}
+
 /// Given up, f32 is tried again after `RETRY_F32_AFTER` f64 factorisations (or the solver's
 /// `retry_f32_after`: `KEPT_RETRY_F32_AFTER` = 1 for `SolverKind::FaerLdltKept`), the wait
 /// doubling after each refused retry: a matrix f32 can never serve (a 1e-30 refinement target)
