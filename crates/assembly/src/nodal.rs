@@ -218,14 +218,15 @@ pub fn nodal_fields<M: Copy + Into<Material>>(
             *n = pairs[&(*n, region_of[c])];
         }
     }
-    let mut sums = [vec![[0.0; 6]; np], vec![[0.0; 6]; np], vec![[0.0; 6]; np]];
-    let mut count = vec![0usize; np];
+    // Summed into: zeroed by writing (`crate::zeroed_by_writing`).
+    let mut sums: [Vec<[f64; 6]>; 3] = std::array::from_fn(|_| crate::zeroed_by_writing(np));
+    let mut count: Vec<usize> = crate::zeroed_by_writing(np);
     let mut cell_means = [
         Vec::with_capacity(mesh.cells.len()),
         Vec::with_capacity(mesh.cells.len()),
         Vec::with_capacity(mesh.cells.len()),
     ];
-    let mut forces = vec![[0.0; 3]; mesh.nodes.len()];
+    let mut forces: Vec<[f64; 3]> = crate::zeroed_by_writing(mesh.nodes.len());
     let mut kinds: Vec<KindData> = Vec::new();
     for (c, cell) in mesh.cells.iter().enumerate() {
         let material = cell_material(mesh, rules, c)?;

@@ -106,15 +106,6 @@ pub(crate) fn block_offsets(
     Ok(out)
 }
 
-/// `len` zero words written one by one, so that every page is first touched by a write (a
-/// fresh page of `vec![0; len]` is first mapped to the shared zero page when read).
-#[allow(clippy::slow_vector_initialization)]
-fn zeroed_by_writing(len: usize) -> Vec<u64> {
-    let mut v = Vec::new();
-    v.resize(len, 0);
-    v
-}
-
 /// Sets [`FIRST`] on the offset of every node pair at the first cell (in `cells`' order, the
 /// sweep order) that reaches it, and returns the tangent positions of the pattern that no
 /// cell reaches (their values are zeroed by the assembly). `cells` yields each cell's nodes
@@ -124,11 +115,8 @@ pub(crate) fn mark_first<'c>(
     cells: impl Iterator<Item = (&'c [usize], &'c mut [u32])>,
 ) -> Vec<usize> {
     let col_ptr = pattern.col_ptr();
-    // Reached node pairs, by the position of their first entry (3I, 3J): one bit each,
-    // zeroed by writing. (`vec![false; nnz]` came as untouched zero pages: each page's first
-    // read mapped the shared zero page and its first write then flushed the TLBs of every
-    // thread, 2.5 % of a model-6 run's samples.)
-    let mut reached = zeroed_by_writing(pattern.nnz_lower().div_ceil(64));
+    // Reached node pairs, by the position of their first entry (3I, 3J): one bit each.
+    let mut reached: Vec<u64> = crate::zeroed_by_writing(pattern.nnz_lower().div_ceil(64));
     let bit = |p: usize| (p / 64, 1u64 << (p % 64));
     for (nodes, offsets) in cells {
         let nn = nodes.len();
