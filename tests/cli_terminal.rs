@@ -77,10 +77,11 @@ fn frames(chunks: &[(f64, Vec<u8>)]) -> Vec<(f64, String)> {
 #[test]
 fn the_bar_moves_during_a_long_level_and_shows_the_iterations() {
     let dir = tmp("long");
-    // 20 slices on one thread: the test takes 3.6–3.8 s on a quiet machine (12 slices gave a
-    // level of 1.49 s once the companion's seeds and METIS came in, under the 1.5 s asked for
-    // below; 16 slices 2.5 s in all), long enough for the tick to show on a faster machine.
-    let scene = scene(&dir, 20, "-0.004");
+    // 32 slices on one thread: the run takes 2.7 s on the machine of 2026-11-30 (20 slices
+    // had taken 3.6–3.8 s on an earlier, slower one, and there a level of 1.42 s, under the
+    // 1.5 s asked for below; 12 and 16 slices fell short before), long enough for the tick to
+    // show on a machine faster still.
+    let scene = scene(&dir, 32, "-0.004");
     let out = dir.join("out");
     let (code, chunks) = in_terminal(&[
         "--threads",
