@@ -407,7 +407,7 @@ pub struct InterruptHandle {
 const BACKLOG_WAIT: Duration = Duration::from_secs(60);
 
 /// Writes handed to a writer thread and not yet done (`nonlin3d solve` on two or more threads,
-/// `crate::deck::BackgroundOutput`): [`InterruptHandle::stop`] waits for those handed over
+/// [`crate::deck::write_in_background`]): [`InterruptHandle::stop`] waits for those handed over
 /// before the signal, so that an interrupt keeps every increment that had converged.
 #[derive(Debug, Default)]
 pub struct Backlog {
