@@ -84,7 +84,9 @@ pub trait LinearSolver: Send {
     fn reanalyze(&mut self, pattern: &Arc<SymmetricPattern>) -> Result<Analysis, SolverError> {
         self.analyze(pattern)
     }
-    /// Factors `a`, which must be on the analysed pattern; reports the inertia.
+    /// Factors `a`, which must be on the analysed pattern; reports the inertia. After an
+    /// error (a NaN in `a`, a zero pivot) no earlier factor is to be solved with: factor
+    /// again first (`FaerSolver` refuses such solves; Newton's caches drop their tangent).
     fn factorize(&mut self, a: &SymmetricMatrix) -> Result<Factorization, SolverError>;
     /// Overwrites the `nrhs` column-major right-hand sides in `b` (n·nrhs values) with A⁻¹b.
     fn solve_in_place(&mut self, b: &mut [f64], nrhs: usize) -> Result<(), SolverError>;

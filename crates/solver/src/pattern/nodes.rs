@@ -3,9 +3,9 @@
 //! A pattern built from lists of whole nodes ([`SymmetricPattern::from_dof_lists`] on the
 //! generators' cells) holds, for node b with DOFs 3b, 3b + 1, 3b + 2, the columns
 //! {3b + k, …, 3b + 2} ∪ {3c, 3c + 1, 3c + 2 : c ∈ N(b), c > b}: one neighbour list serves
-//! the three columns. The product then reads one node index per nine values instead of one
-//! DOF index per value, and x and y three at a time, in exactly the column loop's order of
-//! operations, so that both give the same bits.
+//! the three columns. The product then reads one node index per three values instead of one
+//! DOF index per value, in exactly the column loop's order of operations, so that both give
+//! the same bits.
 
 use super::SymmetricPattern;
 
@@ -73,8 +73,8 @@ impl NodeBlocks {
     /// node index per three rows: y(i) receives column j's a_ij·x_j in increasing j, and
     /// column j's own sum a_jj·x_j + Σ_{i>j} a_ij·x_i runs in increasing i, so the result is
     /// bit for bit the column loop's. (Taking the three columns together, one neighbour block
-    /// at a time, was 2.1× slower than the column loop on this machine's AMD EPYC on
-    /// 2026-11-30 at 53 847 DOF; one column at a time is 1.37× faster: docs/PERFORMANCE.md.)
+    /// at a time, was 2.2× slower than the column loop on the AMD EPYC of 2026-11-30 at
+    /// 53 847 DOF; one column at a time is 1.14–1.37× faster: docs/PERFORMANCE.md.)
     pub(crate) fn matvec(&self, cp: &[usize], v: &[f64], x: &[f64], y: &mut [f64]) {
         y.fill(0.0);
         for (b, &full) in self.full.iter().enumerate() {

@@ -290,7 +290,8 @@ fn entries_beyond_f32_go_to_f64() {
 
 /// The one pass over A before an f32 factorisation refuses a NaN or an infinity by its place
 /// (the first in column order, as `check_finite` names it), in f32 and once f32 is given up,
-/// and gives ‖A‖∞ (max row sum of |a_ij| over both triangles) and max |a_ij|.
+/// leaving no factor to solve with, and gives ‖A‖∞ (max row sum of |a_ij| over both
+/// triangles) and max |a_ij|.
 #[test]
 fn the_pass_over_a_refuses_non_finite_values_and_gives_the_norms() {
     let a = chain(40, 1.0, 0.0);
@@ -312,10 +313,17 @@ fn the_pass_over_a_refuses_non_finite_values_and_gives_the_norms() {
             b.values_mut()[p] = bad;
             let q = b.pattern().position(3, 3).unwrap();
             b.values_mut()[q] = bad;
+            s.factorize(&a).unwrap();
             match s.factorize(&b) {
                 Err(SolverError::NonFinite { row: 3, col: 3, .. }) => {}
                 other => panic!("given up {given_up}, {bad}: {other:?}"),
             }
+            // The factor of `a` before it is not solved with.
+            let mut x = vec![1.0; a.n()];
+            assert!(matches!(
+                s.solve_in_place(&mut x, 1),
+                Err(SolverError::NotReady(_))
+            ));
         }
     }
 }
