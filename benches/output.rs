@@ -1,5 +1,5 @@
 //! A state's VTU (nodal strains and stresses recovered from every cell, then about thirty
-//! Float64 values per point as shortest round-trip text): what a deck solve writes at every
+//! Float64 values per point as inline binary): what a deck solve writes at every
 //! converged increment, on the main thread between increments. Figures go to
 //! docs/PERFORMANCE.md ("What the second thread waits for").
 //!

@@ -14,6 +14,46 @@ fn tmp(name: &str) -> PathBuf {
     d
 }
 
+/// RFC 4648 base64, padded (VTK's inline binary data).
+fn base64_decode(text: &str) -> Vec<u8> {
+    let alphabet = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    let mut out = Vec::new();
+    for quad in text.as_bytes().chunks(4) {
+        let pad = quad.iter().filter(|&&c| c == b'=').count();
+        let v = quad.iter().fold(0u32, |v, &c| {
+            let d = alphabet.iter().position(|&a| a == c).unwrap_or(0) as u32;
+            (v << 6) | d
+        });
+        out.extend_from_slice(&v.to_be_bytes()[1..4 - pad]);
+    }
+    out
+}
+
+/// An inline binary `DataArray`'s values as f64: its base64 stream decoded, the UInt64 byte
+/// count (the file's `header_type`) checked against the bytes after it, read as `vtk_type`.
+fn binary_values(vtk_type: &str, body: &str) -> Vec<f64> {
+    let bytes = base64_decode(body);
+    let count = u64::from_le_bytes(bytes[..8].try_into().unwrap()) as usize;
+    assert_eq!(count, bytes.len() - 8, "a DataArray's byte count");
+    let data = &bytes[8..];
+    match vtk_type {
+        "Float64" => data
+            .chunks(8)
+            .map(|b| f64::from_le_bytes(b.try_into().unwrap()))
+            .collect(),
+        "Int64" => data
+            .chunks(8)
+            .map(|b| i64::from_le_bytes(b.try_into().unwrap()) as f64)
+            .collect(),
+        "Int32" => data
+            .chunks(4)
+            .map(|b| f64::from(i32::from_le_bytes(b.try_into().unwrap())))
+            .collect(),
+        "UInt8" => data.iter().map(|&b| f64::from(b)).collect(),
+        other => panic!("DataArray type {other}"),
+    }
+}
+
 /// A VTU file's arrays: (section, name) → (components, values); section "PointData",
 /// "CellData" or "Points".
 struct Vtu {
@@ -51,10 +91,7 @@ impl Vtu {
                 } else {
                     1
                 };
-                let values: Vec<f64> = body
-                    .split_whitespace()
-                    .map(|v| v.parse().unwrap())
-                    .collect();
+                let values = binary_values(&attr(tag, "type"), body.trim());
                 arrays.insert((section.clone(), attr(tag, "Name")), (components, values));
             }
             rest = &rest[end..];

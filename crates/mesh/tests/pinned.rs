@@ -263,7 +263,7 @@ const PINNED: &[(&str, u64)] = &[
     ("structured box Hex8, graded", 0xfcf26641b00a8c86),
     ("structured box Hex20", 0x1dfbbb8f2001f2e5),
     ("inp deck, four materials", 0x04ebbc82d2d632cb),
-    ("vtu and pvd", 0x1763f4ffa6a1c261),
+    ("vtu and pvd", 0x5f7000d5a34ce57b),
 ];
 
 #[test]
