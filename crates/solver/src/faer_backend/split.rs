@@ -23,12 +23,7 @@ use super::pivots::{Attempt, PivotRule, negative_pivots};
 use crate::{Factorization, SolverError, SymmetricMatrix, SymmetricPattern};
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::ldlt::factor::{LdltError, LdltRegularization};
-use faer::linalg::matmul::matmul;
 use faer::linalg::matmul::triangular::BlockStructure;
-use faer::linalg::triangular_solve::{
-    solve_unit_lower_triangular_in_place, solve_unit_upper_triangular_in_place,
-};
-use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::linalg::cholesky::{
     CholeskySymbolicParams, SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering,
@@ -41,6 +36,8 @@ mod half;
 use half::Half;
 mod schur;
 pub use schur::{SchurComplement, SchurOutcome};
+mod sweep;
+use sweep::Sweep;
 mod top;
 pub(super) use top::top_split;
 
@@ -64,8 +61,10 @@ pub(super) trait Real:
     + faer::traits::Conjugate<Canonical = Self>
     + Copy
     + Into<f64>
+    + std::ops::AddAssign
     + std::ops::SubAssign
     + std::ops::DivAssign
+    + Sweep
     + Send
     + Sync
     + 'static

@@ -266,74 +266,71 @@ impl Half {
         Mat::from_fn(ns, ns, |i, j| out[(i, j)].into())
     }
 
+    /// Supernode k's values (column-major: its width plus its pattern's rows per column), its
+    /// first column, its width and the rows below its diagonal block.
+    fn supernode_values<'a, T>(
+        &'a self,
+        l: &'a [T],
+        k: usize,
+    ) -> (&'a [T], usize, usize, &'a [usize]) {
+        let sn = self.supernodal();
+        let (b, e) = (sn.supernode_begin()[k], sn.supernode_end()[k]);
+        let values = &l[sn.col_ptr_for_val()[k]..sn.col_ptr_for_val()[k + 1]];
+        (values, b, e - b, sn.supernode(k).pattern())
+    }
+
     /// z ← D⁻¹L⁻¹z over the interior columns; the separator rows of z collect −Lₛᵢ y
-    /// (= −Aₛᵢ Aᵢᵢ⁻¹ bᵢ when z's separator rows start at zero). Per supernode: a unit lower
-    /// triangular solve and a product with the rows below (faer's dense kernels, one thread);
-    /// in the supernode that straddles the interior's end, its interior columns only, their
-    /// rows below being its separator columns' rows, then its pattern.
+    /// (= −Aₛᵢ Aᵢᵢ⁻¹ bᵢ when z's separator rows start at zero). Per supernode, its interior
+    /// columns by [`Sweep::forward`] on y: the supernode's rows, its interior columns' values of
+    /// z, then zeros for its own separator columns and its pattern, added to z afterwards.
     pub(super) fn forward<T: Real>(&self, l: &[T], z: &mut [T]) {
         let ni = self.interior;
-        let sn = self.supernodal();
-        let f = supernodal::SupernodalLdltRef::new(sn, l);
-        let mut tmp = Vec::new();
-        for k in 0..sn.n_supernodes() {
-            let (b, e) = (sn.supernode_begin()[k], sn.supernode_end()[k]);
+        let mut y = Vec::new();
+        for k in 0..self.supernodal().n_supernodes() {
+            let (values, b, w, pattern) = self.supernode_values(l, k);
             if b >= ni {
                 break;
             }
-            let s = f.supernode(k);
-            let val = s.val();
-            // The supernode's interior columns b..m: all of it, or up to the separator.
-            let m = e.min(ni);
-            let top = val.submatrix(0, 0, m - b, m - b);
-            let below = val.submatrix(m - b, 0, val.nrows() - (m - b), m - b);
-            let mut x = MatMut::from_column_major_slice_mut(&mut z[b..m], m - b, 1);
-            solve_unit_lower_triangular_in_place(top, x.rb_mut(), Par::Seq);
-            tmp.clear();
-            tmp.resize(below.nrows(), T::narrow(0.0));
-            let t = MatMut::from_column_major_slice_mut(&mut tmp, below.nrows(), 1);
-            matmul(t, Accum::Replace, below, x.rb(), T::narrow(1.0), Par::Seq);
-            // The rows below: the supernode's own separator columns m..e, then its pattern.
-            let rows = (m..e).chain(s.pattern().iter().copied());
-            for (row, &v) in rows.zip(&tmp) {
-                z[row] -= v;
+            // The supernode's interior columns b..b + m: all of it, or up to the separator.
+            let m = w.min(ni - b);
+            let rows = w + pattern.len();
+            y.clear();
+            y.extend_from_slice(&z[b..b + m]);
+            y.resize(rows, T::narrow(0.0));
+            T::forward(values, rows, m, &mut y);
+            z[b..b + m].copy_from_slice(&y[..m]);
+            // The rows below: the supernode's own separator columns, then its pattern.
+            let below = (b + m..b + w).chain(pattern.iter().copied());
+            for (row, &v) in below.zip(&y[m..]) {
+                z[row] += v;
             }
-            for c in b..m {
-                z[c] /= val[(c - b, c - b)];
+            for c in 0..m {
+                z[b + c] /= values[c * rows + c];
             }
         }
     }
 
     /// z ← L⁻ᵀz over the interior columns, the separator rows of z holding xₛ (the
-    /// transposed sweep of `forward`).
+    /// transposed sweep of `forward`): per supernode, [`Sweep::backward`] on its rows' values.
     pub(super) fn backward<T: Real>(&self, l: &[T], z: &mut [T]) {
         let ni = self.interior;
-        let sn = self.supernodal();
-        let f = supernodal::SupernodalLdltRef::new(sn, l);
-        let mut tmp = Vec::new();
-        for k in (0..sn.n_supernodes()).rev() {
-            let (b, e) = (sn.supernode_begin()[k], sn.supernode_end()[k]);
+        let mut y = Vec::new();
+        for k in (0..self.supernodal().n_supernodes()).rev() {
+            let (values, b, w, pattern) = self.supernode_values(l, k);
             if b >= ni {
                 continue;
             }
-            let s = f.supernode(k);
-            let val = s.val();
-            let m = e.min(ni);
-            let top = val.submatrix(0, 0, m - b, m - b);
-            let below = val.submatrix(m - b, 0, val.nrows() - (m - b), m - b);
-            tmp.clear();
-            tmp.extend((m..e).chain(s.pattern().iter().copied()).map(|row| z[row]));
-            let t = faer::MatRef::from_column_major_slice(&tmp, below.nrows(), 1);
-            let mut x = MatMut::from_column_major_slice_mut(&mut z[b..m], m - b, 1);
-            matmul(
-                x.rb_mut(),
-                Accum::Add,
-                below.transpose(),
-                t,
-                T::narrow(-1.0),
-                Par::Seq,
+            let m = w.min(ni - b);
+            let rows = w + pattern.len();
+            y.clear();
+            y.extend_from_slice(&z[b..b + m]);
+            y.extend(
+                (b + m..b + w)
+                    .chain(pattern.iter().copied())
+                    .map(|row| z[row]),
             );
-            solve_unit_upper_triangular_in_place(top.transpose(), x, Par::Seq);
+            T::backward(values, rows, m, &mut y);
+            z[b..b + m].copy_from_slice(&y[..m]);
         }
     }
 }
