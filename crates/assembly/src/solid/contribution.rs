@@ -13,8 +13,14 @@ impl Contribution for Assembler {
         super::pattern::with_lone_nodes(self.dofs.clone(), self.n)
     }
 
-    /// Takes the system's pattern as its own (the cells' node-pair offsets recomputed).
+    /// Takes the system's pattern as its own: the cells' node-pair offsets are recomputed,
+    /// unless it holds the same entries as the solid's own (a system of the solid alone, no
+    /// ties), for which they already stand.
     fn adopt(&mut self, pattern: &Arc<SymmetricPattern>) -> Result<(), AssemblyError> {
+        if **pattern == *self.pattern {
+            self.share_pattern(pattern.clone());
+            return Ok(());
+        }
         self.set_pattern(pattern.clone())
     }
 

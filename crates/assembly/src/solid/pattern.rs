@@ -76,11 +76,18 @@ impl Assembler {
             }
             g.pairs = pairs;
         }
+        self.share_pattern(pattern);
+        Ok(())
+    }
+
+    /// Holds `pattern`, whose entries the cells' offsets are computed for, and drops what was
+    /// derived from the one before (the constraint masks, the prefetch plan, the hand-over
+    /// lists; each is made again when next needed).
+    pub(crate) fn share_pattern(&mut self, pattern: Arc<SymmetricPattern>) {
         self.pattern = pattern;
         self.masks = Masks::default();
         *self.plan.lock().unwrap_or_else(|e| e.into_inner()) = Arc::default();
         *self.hand_over.lock().unwrap_or_else(|e| e.into_inner()) = Arc::default();
-        Ok(())
     }
 
     /// Rebuilds the sparsity pattern for the ties of `constraints`: a cell that holds a slave
