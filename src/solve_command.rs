@@ -134,7 +134,7 @@ pub(crate) fn solve(
     };
     // Bad input (no step, an inverted element, …) and an output folder that cannot be written
     // are found before anything is solved; each increment lands there as it converges.
-    nonlin3d::deck::check(&model, &options).map_err(Failure::Input)?;
+    let checked = nonlin3d::deck::check(&model, &options).map_err(Failure::Input)?;
     let mut provenance =
         nonlin3d::provenance::Provenance::new(Some(input), None, options.newton.solver);
     if let Some(kept) = kept_solver {
@@ -214,13 +214,13 @@ pub(crate) fn solve(
     };
     let (outcome, written) = if rayon::current_num_threads() >= 2 {
         nonlin3d::deck::write_in_background(&mut output, |write| {
-            nonlin3d::deck::solve_deck_with(&model, &options, &mut |p| {
+            nonlin3d::deck::solve_checked_with(&model, &options, checked, &mut |p| {
                 report(p);
                 write(p)
             })
         })
     } else {
-        let outcome = nonlin3d::deck::solve_deck_with(&model, &options, &mut |p| {
+        let outcome = nonlin3d::deck::solve_checked_with(&model, &options, checked, &mut |p| {
             report(p);
             output.progress(p)
         });

@@ -367,3 +367,44 @@ fn more_increments_than_inc_is_an_error() {
     .unwrap();
     assert!(solve_deck(&model, &StepOptions::default()).is_ok());
 }
+
+/// A checked deck is solved without checking it again, to the same bits as `solve_deck`; a
+/// `Checked` of another deck (other node and element counts) is not trusted: that deck is
+/// checked itself, and an inverted element in it is still refused.
+#[test]
+fn a_checked_deck_solves_as_solve_deck_and_another_decks_check_is_not_trusted() {
+    use nonlin3d::deck::{check, solve_checked_with};
+    let options = StepOptions::default();
+    let text = std::fs::read_to_string("tests/decks/uniaxial_box.inp").unwrap();
+    let model = read_inp(&text).unwrap();
+    let plain = solve_deck(&model, &options).unwrap();
+    let checked = check(&model, &options).unwrap();
+    let solved = solve_checked_with(&model, &options, checked, &mut |_| Ok(())).unwrap();
+    let bits = |r: &[nonlin3d::deck::StepResult]| -> Vec<u64> {
+        r.iter()
+            .flat_map(|s| s.displacements.iter().flatten().map(|v| v.to_bits()))
+            .collect()
+    };
+    assert_eq!(bits(&solved), bits(&plain));
+    // Another deck's check: the cantilever's elements, one of them turned inside out.
+    let other = read_inp(&text).unwrap();
+    let other_checked = check(&other, &options).unwrap();
+    let cantilever = std::fs::read_to_string("tests/decks/cantilever_linear.inp").unwrap();
+    let model = read_inp(&cantilever).unwrap();
+    assert_ne!(model.mesh.nodes.len(), other.mesh.nodes.len());
+    let mut inverted = model.clone();
+    let cell = &mut inverted.mesh.cells[0];
+    cell.nodes.swap(0, 4);
+    cell.nodes.swap(1, 5);
+    cell.nodes.swap(2, 6);
+    cell.nodes.swap(3, 7);
+    assert!(check(&inverted, &options).is_err());
+    let e = solve_checked_with(&inverted, &options, other_checked, &mut |_| Ok(()))
+        .err()
+        .map(|e| e.to_string())
+        .unwrap_or_default();
+    assert!(
+        e.contains("inverted"),
+        "the inverted element was not found: {e}"
+    );
+}

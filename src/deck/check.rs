@@ -22,10 +22,32 @@ pub(crate) struct Prepared {
     pub rule: IntegrationRule,
 }
 
+/// A deck that passed [`check`], with what its solve needs from the checks, so that
+/// [`solve_checked_with`](super::solve_checked_with) does not repeat them.
+pub struct Checked {
+    pub(crate) prepared: Prepared,
+    /// The deck's node and element counts, to tell a `Checked` of another deck.
+    pub(crate) counts: (usize, usize),
+}
+
+impl std::fmt::Debug for Checked {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Checked")
+            .field("nodes", &self.counts.0)
+            .field("elements", &self.counts.1)
+            .field("hex20_rule", &self.prepared.rule)
+            .finish()
+    }
+}
+
 /// Checks `model` and `options` as [`solve_deck`](super::solve_deck) would before solving:
-/// Ok, or the first problem located by line (element id and line for a Jacobian).
-pub fn check(model: &InpModel, options: &StepOptions) -> Result<(), Error> {
-    prepare(model, options).map(|_| ())
+/// the checked deck, or the first problem located by line (element id and line for a
+/// Jacobian).
+pub fn check(model: &InpModel, options: &StepOptions) -> Result<Checked, Error> {
+    Ok(Checked {
+        prepared: prepare(model, options)?,
+        counts: (model.mesh.nodes.len(), model.mesh.cells.len()),
+    })
 }
 
 /// The checks of [`check`], and what the solver needs from them.

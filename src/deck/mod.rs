@@ -22,7 +22,7 @@ mod output;
 mod riks;
 
 pub use background::write_in_background;
-pub use check::check;
+pub use check::{Checked, check};
 pub use contact::IncrementContact;
 pub use files::DeckOutput;
 pub use output::{OutputTable, write_results};
@@ -375,11 +375,28 @@ pub fn solve_deck_with(
     observer: &mut dyn FnMut(Progress<'_>) -> Result<(), Error>,
 ) -> Result<Vec<StepResult>, Error> {
     crate::budget::check_deck(&model.mesh, &crate::budget::limit())?;
+    let checked = check(model, options)?;
+    solve_checked_with(model, options, checked, observer)
+}
+
+/// [`solve_deck_with`] on a deck [`check`] has passed with the same `options`: its checks are
+/// not repeated (a `Checked` of a deck with other node or element counts is checked again).
+pub fn solve_checked_with(
+    model: &InpModel,
+    options: &StepOptions,
+    checked: Checked,
+    observer: &mut dyn FnMut(Progress<'_>) -> Result<(), Error>,
+) -> Result<Vec<StepResult>, Error> {
+    crate::budget::check_deck(&model.mesh, &crate::budget::limit())?;
+    let checked = match checked.counts == (model.mesh.nodes.len(), model.mesh.cells.len()) {
+        true => checked,
+        false => check(model, options)?,
+    };
     let check::Prepared {
         mesh,
         materials,
         rule,
-    } = check::prepare(model, options)?;
+    } = checked.prepared;
     let n = 3 * mesh.nodes.len();
     let mut contact = contact::DeckContact::new(model, &mesh)?;
     let mut u = vec![0.0; n];
