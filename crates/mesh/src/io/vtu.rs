@@ -4,7 +4,7 @@
 //!
 //! Every array is inline binary, as VTK's own writers make it uncompressed (`format="binary"`):
 //! the base64 encoding of a UInt64 byte count followed by the values' little-endian bytes, in
-//! one stream. Exact (the bits of every f64), about 2.3× smaller than shortest round-trip
+//! one stream. Exact (the bits of every f64), about 1.8× smaller than shortest round-trip
 //! decimal text and several times faster to write: the VTU was a deck's largest output cost
 //! (docs/PERFORMANCE.md, "The VTU in binary"). Every cell also carries its `material` (index)
 //! and `ply_angle_deg`.
