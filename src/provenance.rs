@@ -43,11 +43,12 @@ pub fn peak_memory_bytes() -> Option<u64> {
 
 /// The solver's name and its ordering, in words.
 pub fn solver_names(kind: SolverKind) -> (String, String) {
-    // `FaerOrdering::Auto` (nonlin3d_solver::AUTO_METIS_ONLY_DOFS).
+    // `FaerOrdering::Auto` (nonlin3d_solver::AUTO_METIS_ONLY_DOFS, AUTO_WITHOUT_AMD_DOFS).
     let auto = format!(
-        "METIS from {} DOF; below, AMD, nested dissection or METIS, whichever needs the \
-         fewest flops",
-        nonlin3d_solver::AUTO_METIS_ONLY_DOFS
+        "METIS from {} DOF; below, nested dissection or METIS (and AMD below {} DOF), \
+         whichever needs the fewest flops",
+        nonlin3d_solver::AUTO_METIS_ONLY_DOFS,
+        nonlin3d_solver::AUTO_WITHOUT_AMD_DOFS
     );
     // `FaerSplit::Auto`, the solver's default (nonlin3d_solver::SPLIT_FROM_DOFS).
     let split = format!(

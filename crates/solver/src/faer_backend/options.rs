@@ -38,10 +38,10 @@ pub enum FaerOrdering {
     /// The candidates' symbolic factors compared by flops (Σ c_k² over the column counts),
     /// the fewest kept (ties: AMD, then nested dissection, then METIS). The default. Below
     /// [`AUTO_WITHOUT_AMD_DOFS`] DOFs the candidates are AMD, nested dissection and METIS;
-    /// AMD is left out from it on (AMD needed 1.6–6× the best one's flops on
-    /// every model measured from 10 k DOF up — cubes, laminates, the scene plates, the
-    /// through-width model — so its analysis was time spent for nothing, 0.1 s of each
-    /// 18 k-DOF analysis; neither nested dissection nor METIS was always the better:
+    /// AMD is left out from it on (AMD needed 1.4–2.1× the best one's flops on every
+    /// analysis measured from 5 k DOF up — the scene plates and their contact systems, the
+    /// clamped-plate decks, cubes, laminates, the through-width model — so its analysis was
+    /// time spent for nothing; neither nested dissection nor METIS was always the better:
     /// docs/PERFORMANCE.md). A METIS failure only removes it from the comparison. From
     /// [`AUTO_METIS_ONLY_DOFS`] DOFs on, METIS alone (nested dissection if METIS fails).
     #[default]
@@ -60,8 +60,12 @@ impl FaerOrdering {
     }
 }
 
-/// From this many DOFs on, [`FaerOrdering::Auto`] leaves AMD out of its comparison.
-pub const AUTO_WITHOUT_AMD_DOFS: usize = 10_000;
+/// From this many DOFs on, [`FaerOrdering::Auto`] leaves AMD out of its comparison. Measured
+/// on every analysis of the example scenes and the clamped-plate decks (docs/PERFORMANCE.md,
+/// "AMD out of the comparison from 5 000 DOF"): AMD had the fewest flops up to 3 951 DOF (by up
+/// to 13 %, the error estimate's companions and thin sublaminates) and never from 6 789 DOF on
+/// (1.4–2.1× the best), where its ordering and symbolic factor cost 13–23 ms an analysis.
+pub const AUTO_WITHOUT_AMD_DOFS: usize = 5_000;
 
 /// From this many DOFs on, [`FaerOrdering::Auto`] takes METIS's order without comparing it
 /// with our nested dissection's (which it uses only if METIS fails). Measured

@@ -105,6 +105,29 @@ fn auto_keeps_amd_on_a_chain() {
     assert_eq!(s.chosen_ordering(), Some(FaerOrdering::Amd));
 }
 
+/// From `AUTO_WITHOUT_AMD_DOFS` on, AMD is not a candidate: on a chain of that many springs,
+/// where AMD's order has no fill at all (and wins below the threshold, above), Auto takes
+/// nested dissection's or METIS's.
+#[test]
+fn auto_leaves_amd_out_from_its_threshold() {
+    let n = crate::AUTO_WITHOUT_AMD_DOFS;
+    assert!(n < crate::AUTO_METIS_ONLY_DOFS);
+    let lists: Vec<Vec<usize>> = (0..n - 1).map(|k| vec![k, k + 1]).collect();
+    let p = Arc::new(SymmetricPattern::from_dof_lists(n, &lists).unwrap());
+    let (_, amd) = analysed(&p, FaerOrdering::Amd);
+    assert_eq!(amd.lower_nonzeros, 2 * n - 1);
+    let (s, auto) = analysed(&p, FaerOrdering::Auto);
+    let chosen = s.chosen_ordering();
+    assert!(
+        matches!(
+            chosen,
+            Some(FaerOrdering::NestedDissection | FaerOrdering::Metis)
+        ),
+        "{chosen:?}"
+    );
+    assert!(auto.flops >= amd.flops);
+}
+
 /// A shifted Hex20 "Laplacian" (SPD, condition number about 10³) solved with METIS's order
 /// and with AMD's: the two differ only by rounding, ≤ 1e-10 relative.
 #[test]

@@ -46,7 +46,9 @@ impl Half {
         }
         // Mᵢ's lower triangle in compressed columns, built by counting: each entry of A's lower
         // triangle between two DOFs of the half is one entry of Mᵢ (row max, column min of
-        // their local indices), kept with its position in A's values (the gather map).
+        // their local indices), kept with its position in A's values (the gather map). The
+        // entries are bucketed by row first, then moved to their columns row by row, so each
+        // column's rows come out in increasing order without a sort (two counting sorts).
         let each = |visit: &mut dyn FnMut(usize, usize, usize)| {
             for (j, &lj) in local.iter().enumerate() {
                 if lj == usize::MAX {
@@ -61,23 +63,35 @@ impl Half {
                 }
             }
         };
+        let mut row_ptr = vec![0usize; m + 1];
         let mut col_ptr = vec![0usize; m + 1];
-        each(&mut |_, c, _| col_ptr[c + 1] += 1);
-        for c in 0..m {
-            col_ptr[c + 1] += col_ptr[c];
-        }
-        let mut entries = vec![(0usize, 0usize); col_ptr[m]];
-        let mut next = col_ptr.clone();
-        each(&mut |r, c, source| {
-            entries[next[c]] = (r, source);
-            next[c] += 1;
+        each(&mut |r, c, _| {
+            row_ptr[r + 1] += 1;
+            col_ptr[c + 1] += 1;
         });
-        drop(next);
-        for c in 0..m {
-            entries[col_ptr[c]..col_ptr[c + 1]].sort_unstable_by_key(|e| e.0);
+        for k in 0..m {
+            row_ptr[k + 1] += row_ptr[k];
+            col_ptr[k + 1] += col_ptr[k];
         }
-        let gather: Vec<usize> = entries.iter().map(|e| e.1).collect();
-        let rows: Vec<usize> = entries.into_iter().map(|e| e.0).collect();
+        let nnz = col_ptr[m];
+        // (column, source) by row.
+        let mut by_row = vec![(0usize, 0usize); nnz];
+        let mut next = row_ptr.clone();
+        each(&mut |r, c, source| {
+            by_row[next[r]] = (c, source);
+            next[r] += 1;
+        });
+        let mut rows = vec![0usize; nnz];
+        let mut gather = vec![0usize; nnz];
+        next.copy_from_slice(&col_ptr);
+        for r in 0..m {
+            for &(c, source) in &by_row[row_ptr[r]..row_ptr[r + 1]] {
+                rows[next[c]] = r;
+                gather[next[c]] = source;
+                next[c] += 1;
+            }
+        }
+        drop((by_row, next, row_ptr));
         // A's diagonal is stored, so each column starts at its own.
         let pattern = SymmetricPattern::from_sorted_lower(m, col_ptr, rows)?;
         let sym =
