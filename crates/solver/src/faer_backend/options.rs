@@ -62,9 +62,10 @@ impl FaerOrdering {
 
 /// From this many DOFs on, [`FaerOrdering::Auto`] leaves AMD out of its comparison. Measured
 /// on every analysis of the example scenes and the clamped-plate decks (docs/PERFORMANCE.md,
-/// "AMD out of the comparison from 5 000 DOF"): AMD had the fewest flops up to 3 951 DOF (by up
-/// to 13 %, the error estimate's companions and thin sublaminates) and never from 6 789 DOF on
-/// (1.4–2.1× the best), where its ordering and symbolic factor cost 13–23 ms an analysis.
+/// "Setup, ParaView, and two separator-stopping factorisations tried"): AMD had the fewest
+/// flops in 18 of 21 analyses up to 3 951 DOF (down to 0.53 of the others', the through-width
+/// strip) and in none of 14 from 4 263 DOF on (1.4–2.1× the best), where its ordering and
+/// symbolic factor cost 9–23 ms an analysis.
 pub const AUTO_WITHOUT_AMD_DOFS: usize = 5_000;
 
 /// From this many DOFs on, [`FaerOrdering::Auto`] takes METIS's order without comparing it
