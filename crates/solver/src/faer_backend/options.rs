@@ -39,10 +39,10 @@ pub enum FaerOrdering {
     /// the fewest kept (ties: AMD, then nested dissection, then METIS). The default. Below
     /// [`AUTO_WITHOUT_AMD_DOFS`] DOFs the candidates are AMD, nested dissection and METIS;
     /// AMD is left out from it on (AMD needed 1.4–2.1× the best one's flops on every
-    /// analysis measured from 5 k DOF up — the scene plates and their contact systems, the
-    /// clamped-plate decks, cubes, laminates, the through-width model — so its analysis was
-    /// time spent for nothing; neither nested dissection nor METIS was always the better:
-    /// docs/PERFORMANCE.md). A METIS failure only removes it from the comparison. From
+    /// analysis measured from 4 263 DOF up — the scene plates, their contact systems and the
+    /// clamped-plate decks — and 1.6–6× on the cubes and laminates from 10 k DOF, so its
+    /// analysis was time spent for nothing; neither nested dissection nor METIS was always
+    /// the better: docs/PERFORMANCE.md). A METIS failure only removes it from the comparison. From
     /// [`AUTO_METIS_ONLY_DOFS`] DOFs on, METIS alone (nested dissection if METIS fails).
     #[default]
     Auto,

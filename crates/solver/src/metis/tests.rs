@@ -106,8 +106,8 @@ fn auto_keeps_amd_on_a_chain() {
 }
 
 /// From `AUTO_WITHOUT_AMD_DOFS` on, AMD is not a candidate: on a chain of that many springs,
-/// where AMD's order has no fill at all (and wins below the threshold, above), Auto takes
-/// nested dissection's or METIS's.
+/// where AMD's order has no fill at all (and Auto takes it below the threshold, as the test
+/// above shows: ties go to AMD), Auto takes nested dissection's or METIS's.
 #[test]
 fn auto_leaves_amd_out_from_its_threshold() {
     let n = crate::AUTO_WITHOUT_AMD_DOFS;
