@@ -81,30 +81,40 @@ fn base64_into(s: &mut String, bytes: &[u8]) {
 }
 
 /// One `DataArray` of `vtk_type` (`Float64`, `Int64`, `Int32`, `UInt8`) in inline binary:
-/// base64 of the UInt64 byte count of `bytes` (the VTKFile's `header_type`), then `bytes`
-/// (little-endian values), encoded as one stream.
-fn binary_array(s: &mut String, vtk_type: &str, name: &str, components: usize, bytes: &[u8]) {
+/// base64 of the UInt64 byte count (the VTKFile's `header_type`) followed by the
+/// little-endian values that `values` appends, encoded as one stream (the values are written
+/// once, behind room for the count).
+fn binary_array(
+    s: &mut String,
+    vtk_type: &str,
+    name: &str,
+    components: usize,
+    values: impl FnOnce(&mut Vec<u8>),
+) {
     let _ = write!(
         s,
         "        <DataArray type=\"{vtk_type}\" Name=\"{name}\" NumberOfComponents=\"{components}\" format=\"binary\">\n          "
     );
-    let mut all = Vec::with_capacity(8 + bytes.len());
-    all.extend_from_slice(&(bytes.len() as u64).to_le_bytes());
-    all.extend_from_slice(bytes);
+    let mut all = vec![0u8; 8];
+    values(&mut all);
+    let count = (all.len() - 8) as u64;
+    all[..8].copy_from_slice(&count.to_le_bytes());
     base64_into(s, &all);
     s.push_str("\n        </DataArray>\n");
 }
 
 /// A Float64 array of `components` values per point or cell, bit for bit.
 fn data_array(s: &mut String, name: &str, components: usize, values: impl Iterator<Item = f64>) {
-    let bytes: Vec<u8> = values.flat_map(f64::to_le_bytes).collect();
-    binary_array(s, "Float64", name, components, &bytes);
+    binary_array(s, "Float64", name, components, |b| {
+        b.extend(values.flat_map(f64::to_le_bytes))
+    });
 }
 
 /// An Int64 array (connectivity, offsets), one component.
 fn int64_array(s: &mut String, name: &str, values: impl Iterator<Item = usize>) {
-    let bytes: Vec<u8> = values.flat_map(|v| (v as i64).to_le_bytes()).collect();
-    binary_array(s, "Int64", name, 1, &bytes);
+    binary_array(s, "Int64", name, 1, |b| {
+        b.extend(values.flat_map(|v| (v as i64).to_le_bytes()))
+    });
 }
 
 /// The mesh with point and cell fields as a VTU document.
@@ -133,12 +143,13 @@ pub fn vtu_string(
         data_array(&mut s, f.name, f.components, f.values.iter().copied());
     }
     s.push_str("      </PointData>\n      <CellData>\n");
-    let materials: Vec<u8> = mesh
-        .cells
-        .iter()
-        .flat_map(|c| (c.material as i32).to_le_bytes())
-        .collect();
-    binary_array(&mut s, "Int32", "material", 1, &materials);
+    binary_array(&mut s, "Int32", "material", 1, |b| {
+        b.extend(
+            mesh.cells
+                .iter()
+                .flat_map(|c| (c.material as i32).to_le_bytes()),
+        )
+    });
     data_array(
         &mut s,
         "ply_angle_deg",
@@ -164,15 +175,12 @@ pub fn vtu_string(
             Some(*offset)
         }),
     );
-    let types: Vec<u8> = mesh
-        .cells
-        .iter()
-        .map(|c| match c.kind {
-            ElementKind::Hex8 => 12,
+    binary_array(&mut s, "UInt8", "types", 1, |b| {
+        b.extend(mesh.cells.iter().map(|c| match c.kind {
+            ElementKind::Hex8 => 12u8,
             ElementKind::Hex20 => 25,
-        })
-        .collect();
-    binary_array(&mut s, "UInt8", "types", 1, &types);
+        }))
+    });
     s.push_str("      </Cells>\n    </Piece>\n  </UnstructuredGrid>\n</VTKFile>\n");
     Ok(s)
 }
@@ -220,7 +228,9 @@ pub fn lines_vtu_string(
     s.push_str("      </Points>\n      <Cells>\n");
     int64_array(&mut s, "connectivity", segments.iter().flatten().copied());
     int64_array(&mut s, "offsets", (1..=segments.len()).map(|i| 2 * i));
-    binary_array(&mut s, "UInt8", "types", 1, &vec![3u8; segments.len()]);
+    binary_array(&mut s, "UInt8", "types", 1, |b| {
+        b.resize(b.len() + segments.len(), 3)
+    });
     s.push_str("      </Cells>\n    </Piece>\n  </UnstructuredGrid>\n</VTKFile>\n");
     Ok(s)
 }
