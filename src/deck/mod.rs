@@ -225,6 +225,9 @@ pub struct MixedPrecision {
     /// Of those, conjugate-gradient steps (the f32 factor as preconditioner) where plain
     /// refinement stalled.
     pub conjugate_gradient_steps: usize,
+    /// f32 solves of Newton's directions taken without the f64 product that checks them
+    /// (the factor's checked solves had met their bounds with room to spare).
+    pub unchecked_solves: usize,
     /// The normwise backward error ‖b − A x‖∞ / (‖A‖∞‖x‖∞ + ‖b‖∞) the last refined
     /// solution reached (null if none was refined).
     pub backward_error: Option<f64>,
@@ -242,6 +245,7 @@ impl MixedPrecision {
                     && b.double_factorizations <= now.double_factorizations
                     && b.refinement_steps <= now.refinement_steps
                     && b.conjugate_gradient_steps <= now.conjugate_gradient_steps
+                    && b.unchecked_solves <= now.unchecked_solves
             })
             .unwrap_or_default();
         let f64_factorisations = now.double_factorizations - b.double_factorizations;
@@ -252,6 +256,7 @@ impl MixedPrecision {
             f64_factorisations,
             refinement_steps,
             conjugate_gradient_steps,
+            unchecked_solves: now.unchecked_solves - b.unchecked_solves,
             backward_error: (refinement_steps > 0).then_some(now.last_backward_error),
             fallback: now
                 .last_fallback
@@ -266,12 +271,16 @@ impl MixedPrecision {
         let s = |n: usize| if n == 1 { "" } else { "s" };
         let refined = match self.backward_error {
             Some(e) => format!(
-                ", {} refinement step{}{}, backward error {e:.1e}",
+                ", {} refinement step{}{}{}, backward error {e:.1e}",
                 self.refinement_steps,
                 s(self.refinement_steps),
                 match self.conjugate_gradient_steps {
                     0 => String::new(),
                     cg => format!(" ({cg} by conjugate gradients)"),
+                },
+                match self.unchecked_solves {
+                    0 => String::new(),
+                    u => format!(", {u} unchecked solve{}", s(u)),
                 }
             ),
             None => String::new(),

@@ -19,6 +19,9 @@ pub struct MixedSummary {
     /// Of those, conjugate-gradient steps (the f32 factor as preconditioner) where plain
     /// refinement stalled.
     pub conjugate_gradient_steps: usize,
+    /// f32 solves of Newton's directions taken without the f64 product that checks them
+    /// (the factor's checked solves had met their bounds with room to spare).
+    pub unchecked_solves: usize,
     /// Why the last f64 factorisation was made, if one was.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub last_fallback: Option<String>,
@@ -35,12 +38,14 @@ impl MixedSummary {
                 f64_factorisations: 0,
                 refinement_steps: 0,
                 conjugate_gradient_steps: 0,
+                unchecked_solves: 0,
                 last_fallback: None,
             });
             s.f32_factorisations += m.single_factorizations;
             s.f64_factorisations += m.double_factorizations;
             s.refinement_steps += m.refinement_steps;
             s.conjugate_gradient_steps += m.conjugate_gradient_steps;
+            s.unchecked_solves += m.unchecked_solves;
             if let Some(r) = m.last_fallback {
                 s.last_fallback = Some(r.to_string());
             }

@@ -28,7 +28,10 @@ mod pivots;
 use pivots::{factor_diagonal, pivot_position};
 mod split;
 pub use directions::FaerDirections;
-pub use mixed::{FaerPrecision, MAX_CONJUGATE_GRADIENT_STEPS, MAX_REFINEMENT_STEPS, MixedStats};
+pub use mixed::{
+    FaerPrecision, MAX_CONJUGATE_GRADIENT_STEPS, MAX_REFINEMENT_STEPS, MixedStats, TRUSTED_SHARE,
+    UNCHECKED_IN_A_ROW,
+};
 pub use options::{
     AUTO_METIS_ONLY_DOFS, AUTO_WITHOUT_AMD_DOFS, FaerMode, FaerOrdering, FaerSplit, FaerStructure,
     KEPT_MIXED_FROM_DOFS, KEPT_RETRY_F32_AFTER, KERNEL_THREADS_FROM_DOFS, MIXED_FROM_DOFS,

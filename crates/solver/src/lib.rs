@@ -51,7 +51,7 @@ pub use faer_backend::{
     FaerPrecision, FaerSolver, FaerSplit, FaerStructure, KEPT_MIXED_FROM_DOFS,
     KEPT_RETRY_F32_AFTER, KERNEL_THREADS_FROM_DOFS, MAX_CONJUGATE_GRADIENT_STEPS,
     MAX_REFINEMENT_STEPS, MIXED_FROM_DOFS, MixedStats, SPLIT_FROM_DOFS, SchurComplement,
-    SchurOutcome,
+    SchurOutcome, TRUSTED_SHARE, UNCHECKED_IN_A_ROW,
 };
 pub use matrix::SymmetricMatrix;
 pub use metis::{METIS_SEED, metis_nested_dissection};

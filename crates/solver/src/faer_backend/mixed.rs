@@ -30,8 +30,10 @@ use faer::sparse::linalg::cholesky::{LdltRef, SymbolicCholesky};
 use faer::{Conj, MatMut, Par};
 
 mod refine;
-pub use refine::{MAX_CONJUGATE_GRADIENT_STEPS, MAX_REFINEMENT_STEPS};
-use refine::{System, Target, refine_column};
+pub use refine::{
+    MAX_CONJUGATE_GRADIENT_STEPS, MAX_REFINEMENT_STEPS, TRUSTED_SHARE, UNCHECKED_IN_A_ROW,
+};
+use refine::{System, Target, Trust, solve_column};
 
 /// f32 pivots smaller than this fraction of their diagonal entry send the factorisation to
 /// f64 (about 800 ε₃₂: the sign of such a pivot could be rounding's).
@@ -103,7 +105,11 @@ pub struct MixedStats {
     pub refinement_steps: usize,
     /// Of those, the steps of conjugate gradients where refinement stalled.
     pub conjugate_gradient_steps: usize,
-    /// The backward error the last refined solution reached.
+    /// f32 solves to a residual bound taken without the f64 product that checks them: the
+    /// factor's checked solves met such bounds with room to spare ([`TRUSTED_SHARE`],
+    /// [`UNCHECKED_IN_A_ROW`]).
+    pub unchecked_solves: usize,
+    /// The backward error the last checked solution reached.
     pub last_backward_error: f64,
     /// Why the last f64 factorisation was made, if one was.
     pub last_fallback: Option<&'static str>,
@@ -120,6 +126,7 @@ impl MixedStats {
             refinement_steps: self.refinement_steps + later.refinement_steps,
             conjugate_gradient_steps: self.conjugate_gradient_steps
                 + later.conjugate_gradient_steps,
+            unchecked_solves: self.unchecked_solves + later.unchecked_solves,
             last_backward_error: later.last_backward_error,
             last_fallback: later.last_fallback.or(self.last_fallback),
         }
@@ -153,6 +160,8 @@ pub(super) struct MixedState {
     given_up_for: usize,
     /// f64 factorisations to wait before the next retry (0: [`RETRY_F32_AFTER`]).
     wait: usize,
+    /// How far the active f32 factor's solves may go unchecked (reset with each factor).
+    trust: Trust,
     stats: MixedStats,
 }
 
@@ -367,6 +376,7 @@ impl FaerSolver {
         // The f64 factor, if a fallback made one, is not needed now.
         self.l_values = Vec::new();
         self.mixed.single = true;
+        self.mixed.trust = Trust::default();
         self.mixed.last_negative = Some(f.negative_pivots);
         self.mixed.stats.single_factorizations += 1;
         self.factored = true;
@@ -477,11 +487,11 @@ impl FaerSolver {
             target,
             definite: self.mixed.last_negative == Some(0),
         };
-        let (par, stats) = (self.par, &mut self.mixed.stats);
+        let (par, stats, trust) = (self.par, &mut self.mixed.stats, &mut self.mixed.trust);
         if let Some(split) = self.split_state.as_mut().filter(|s| s.is_factored()) {
             // The split's solve reads its f32 halves into f64 sums: no scaling needed.
             let correct = |r: &mut [f64]| split.solve_column(r, par);
-            return refine_column(col, system, stats, correct);
+            return solve_column(col, system, stats, trust, correct);
         }
         let (Some(symbolic), Some(buffer)) = (&self.symbolic, &mut self.buffer) else {
             return Err(SolverError::NotReady("solve called before factorize"));
@@ -505,7 +515,7 @@ impl FaerSolver {
                 *ri = f64::from(*ci) * scale;
             }
         };
-        refine_column(col, system, stats, correct)
+        solve_column(col, system, stats, trust, correct)
     }
 }
 

@@ -80,6 +80,57 @@ fn a_residual_bound_stops_refinement_early() {
     assert!(early_residual <= bound, "{early_residual}");
 }
 
+/// A factor whose checked first solve met a loose bound (‖b − A x‖∞ ≤ 1 for ‖b‖∞ = 3; the
+/// first f32 solve leaves about cond·ε₃₂·‖b‖∞ ≲ 1e-2) at a quarter of it or better serves the
+/// next `UNCHECKED_IN_A_ROW` solves to such bounds unchecked, then the next is checked again.
+/// An unchecked solve gives the bits a checked one gives where its first step meets the bound.
+/// A new factorisation, a tight bound (a tenth of what the first solve leaves) and a solve
+/// without a bound are always checked.
+#[test]
+fn a_factor_that_met_its_bounds_with_room_serves_unchecked_solves() {
+    let a = chain(300, 1.0, 0.0);
+    let b: Vec<f64> = (0..a.n()).map(|i| 1.0 + (i % 3) as f64).collect();
+    let mut s = solver(FaerPrecision::mixed());
+    s.analyze(a.pattern()).unwrap();
+    s.factorize(&a).unwrap();
+    let counts = |s: &FaerSolver| {
+        let m = s.mixed_stats();
+        (m.refinement_steps, m.unchecked_solves)
+    };
+    let solve_with = |s: &mut FaerSolver, bound: f64| {
+        let mut x = b.clone();
+        s.solve_to_residual(&mut x, bound).unwrap();
+        x
+    };
+    let first = solve_with(&mut s, 1.0);
+    assert_eq!(counts(&s), (1, 0));
+    for k in 1..=UNCHECKED_IN_A_ROW {
+        let x = solve_with(&mut s, 1.0);
+        assert_eq!(counts(&s), (1, k));
+        assert!(x.iter().zip(&first).all(|(p, q)| p.to_bits() == q.to_bits()));
+    }
+    solve_with(&mut s, 1.0);
+    assert_eq!(counts(&s), (2, UNCHECKED_IN_A_ROW));
+    // The residual the first solve leaves, then a bound a tenth of it: refined, every time.
+    let mut ax = vec![0.0; a.n()];
+    a.matvec(&first, &mut ax).unwrap();
+    let left = b.iter().zip(&ax).fold(0.0f64, |m, (p, q)| m.max((p - q).abs()));
+    assert!(left > 0.0 && left < 0.25, "{left}");
+    let before = counts(&s);
+    solve_with(&mut s, 0.1 * left);
+    solve_with(&mut s, 0.1 * left);
+    let after = counts(&s);
+    assert!(after.0 >= before.0 + 4 && after.1 == before.1, "{before:?} → {after:?}");
+    // A new factor is checked first; a solve without a bound is always checked.
+    s.factorize(&a).unwrap();
+    let before = counts(&s);
+    solve_with(&mut s, 1.0);
+    assert_eq!(counts(&s), (before.0 + 1, before.1));
+    let mut x = b.clone();
+    s.solve_in_place(&mut x, 1).unwrap();
+    assert!(counts(&s).0 > before.0 + 1 && counts(&s).1 == before.1);
+}
+
 /// n = 300: cond ≈ 3.7e4, so each refinement step gains a factor cond·ε₃₂ ≈ 4e-3: the
 /// f32 factor is kept and refinement reaches 1e-14 in a few steps. Both solutions then have
 /// backward error ≤ 1e-14, so they differ by at most 2·cond·1e-14 ≈ 1e-9 relative.
