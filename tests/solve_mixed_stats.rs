@@ -132,7 +132,10 @@ fn the_default_solver_factorises_a_kept_tangent_in_f32_for_the_same_answer() {
         "{steps} steps and {unchecked} unchecked solves in {iterations} iterations"
     );
     // Each increment's first direction is on a new factor, so it is checked; most are not.
-    assert!(steps >= 10 && unchecked > steps, "{steps} checked, {unchecked} unchecked");
+    assert!(
+        steps >= 10 && unchecked > steps,
+        "{steps} checked, {unchecked} unchecked"
+    );
     for (x, y) in a.iter().zip(&f) {
         assert_eq!(x["converged"], true, "{x}");
         assert_eq!(x["negative_pivots"], 0, "{x}");

@@ -107,20 +107,30 @@ fn a_factor_that_met_its_bounds_with_room_serves_unchecked_solves() {
     for k in 1..=UNCHECKED_IN_A_ROW {
         let x = solve_with(&mut s, 1.0);
         assert_eq!(counts(&s), (1, k));
-        assert!(x.iter().zip(&first).all(|(p, q)| p.to_bits() == q.to_bits()));
+        assert!(
+            x.iter()
+                .zip(&first)
+                .all(|(p, q)| p.to_bits() == q.to_bits())
+        );
     }
     solve_with(&mut s, 1.0);
     assert_eq!(counts(&s), (2, UNCHECKED_IN_A_ROW));
     // The residual the first solve leaves, then a bound a tenth of it: refined, every time.
     let mut ax = vec![0.0; a.n()];
     a.matvec(&first, &mut ax).unwrap();
-    let left = b.iter().zip(&ax).fold(0.0f64, |m, (p, q)| m.max((p - q).abs()));
+    let left = b
+        .iter()
+        .zip(&ax)
+        .fold(0.0f64, |m, (p, q)| m.max((p - q).abs()));
     assert!(left > 0.0 && left < 0.25, "{left}");
     let before = counts(&s);
     solve_with(&mut s, 0.1 * left);
     solve_with(&mut s, 0.1 * left);
     let after = counts(&s);
-    assert!(after.0 >= before.0 + 4 && after.1 == before.1, "{before:?} → {after:?}");
+    assert!(
+        after.0 >= before.0 + 4 && after.1 == before.1,
+        "{before:?} → {after:?}"
+    );
     // A new factor is checked first; a solve without a bound is always checked.
     s.factorize(&a).unwrap();
     let before = counts(&s);
