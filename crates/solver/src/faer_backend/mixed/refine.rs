@@ -17,12 +17,15 @@ pub const MAX_REFINEMENT_STEPS: usize = 20;
 /// oscillates (the thin plate deck at rest: 2 steps).
 pub const MAX_CONJUGATE_GRADIENT_STEPS: usize = 20;
 
-/// A checked first solve whose residual ratio ρ₁ = ‖b − A C b‖∞ / ‖b‖∞ was at most this share
-/// of its bound's ratio τ = bound / ‖b‖∞ lets the next solves on the same factor skip the
-/// check while ρ₁ ≤ TRUSTED_SHARE·τ for their own τ ([`Trust`]).
+/// In a solve to a residual bound ([`LinearSolver::solve_to_residual`](crate::LinearSolver::solve_to_residual)) with an f32 factor:
+/// a checked first solve whose residual ratio ρ₁ = ‖b − A x₁‖∞ / ‖b‖∞ was at most this share
+/// of its bound's ratio τ = bound / ‖b‖∞ lets the next solves on the same factor skip the f64
+/// product that checks them, while ρ₁ ≤ TRUSTED_SHARE·τ′ for their own bound ratio τ′ (the
+/// reasons are in `mixed/refine.rs`, `Trust`; docs/PERFORMANCE.md has the measurements).
 pub const TRUSTED_SHARE: f64 = 0.25;
 
-/// Solves taken unchecked after a check before the next one is checked again ([`Trust`]).
+/// Solves taken unchecked on one f32 factor after a check ([`TRUSTED_SHARE`]) before the
+/// next one is checked again.
 pub const UNCHECKED_IN_A_ROW: usize = 4;
 
 /// Whether a solve to a residual bound may take the f32 solve x = C b without the f64 product
