@@ -269,6 +269,10 @@ impl MixedPrecision {
     /// backward error 2.1e-15)" or "f64 fall-back: … (…)".
     pub fn line(&self) -> String {
         let s = |n: usize| if n == 1 { "" } else { "s" };
+        let unchecked = match self.unchecked_solves {
+            0 => String::new(),
+            u => format!(", {u} unchecked solve{}", s(u)),
+        };
         let refined = match self.backward_error {
             Some(e) => format!(
                 ", {} refinement step{}{}{}, backward error {e:.1e}",
@@ -278,12 +282,10 @@ impl MixedPrecision {
                     0 => String::new(),
                     cg => format!(" ({cg} by conjugate gradients)"),
                 },
-                match self.unchecked_solves {
-                    0 => String::new(),
-                    u => format!(", {u} unchecked solve{}", s(u)),
-                }
+                unchecked,
             ),
-            None => String::new(),
+            // An attempt on a factor an earlier one checked may have no checked solve.
+            None => unchecked,
         };
         let (single, double) = (self.f32_factorisations, self.f64_factorisations);
         match &self.fallback {
@@ -542,4 +544,37 @@ pub fn solve_checked_with(
 /// Displacements by node.
 fn nodal(u: &[f64]) -> Vec<[f64; 3]> {
     u.chunks(3).map(|c| [c[0], c[1], c[2]]).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The terminal line names the unchecked solves, also in an attempt whose solves were all
+    /// unchecked (a factor an earlier attempt checked: no backward error to give).
+    #[test]
+    fn the_mixed_precision_line_names_unchecked_solves() {
+        let now = MixedStats {
+            single_factorizations: 1,
+            refinement_steps: 2,
+            unchecked_solves: 5,
+            last_backward_error: 4.0e-8,
+            ..MixedStats::default()
+        };
+        let line = MixedPrecision::between(None, now).line();
+        assert_eq!(
+            line,
+            "f32 factor held (1 factorisation, 2 refinement steps, 5 unchecked solves, \
+             backward error 4.0e-8)"
+        );
+        let later = MixedStats {
+            unchecked_solves: 9,
+            ..now
+        };
+        let line = MixedPrecision::between(Some(now), later).line();
+        assert_eq!(
+            line,
+            "f32 factor held (0 factorisations, 4 unchecked solves)"
+        );
+    }
 }

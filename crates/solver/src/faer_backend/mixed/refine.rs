@@ -29,8 +29,8 @@ pub const TRUSTED_SHARE: f64 = 0.25;
 pub const UNCHECKED_IN_A_ROW: usize = 4;
 
 /// Whether a solve to a residual bound may take the f32 solve x = C b without the f64 product
-/// that checks ‖b − A x‖∞ ≤ bound (one pass over A, about a sixth of a direction's time on
-/// the plate decks). The check measures the factor as much as b: on one factor, the first
+/// that checks ‖b − A x‖∞ ≤ bound (one pass over A, about an eighth of a direction's time
+/// on the plate decks). The check measures the factor as much as b: on one factor, the first
 /// solves of Newton's directions on the 24 k-DOF plate deck left ρ₁ = 0.5e-3 to 4e-3 of ‖b‖∞,
 /// within 3× of each other, against bounds of 1e-2 to 5e-2 (KEPT_FORCING). So after a checked
 /// solve whose first step met its bound with ρ₁ ≤ [`TRUSTED_SHARE`]·τ, up to
