@@ -228,8 +228,8 @@ pub struct MixedPrecision {
     /// f32 solves of Newton's directions taken without the f64 product that checks them
     /// (the factor's checked solves had met their bounds with room to spare).
     pub unchecked_solves: usize,
-    /// The normwise backward error ‖b − A x‖∞ / (‖A‖∞‖x‖∞ + ‖b‖∞) the last refined
-    /// solution reached (null if none was refined).
+    /// The normwise backward error ‖b − A x‖∞ / (‖A‖∞‖x‖∞ + ‖b‖∞) the last checked
+    /// solution reached (null if none was checked: unchecked solves have no residual).
     pub backward_error: Option<f64>,
     /// Why the last f64 factorisation of the attempt was made, if one was.
     pub fallback: Option<String>,
