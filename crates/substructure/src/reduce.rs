@@ -4,7 +4,7 @@
 //! - [`by_schur`]: one partial LDLᵀ of [K_ii K_ib; K_bi K_bb] with the interface last, K_red
 //!   its trailing block ([`SchurComplement`]);
 //! - [`by_blocks`]: K_ii factorised alone and K_ii⁻¹K_ib formed in blocks of right-hand sides
-//!   (the fallback where K_red is near singular, and `CondenseSettings::schur = false`).
+//!   (`CondenseSettings::schur = false`).
 //!
 //! Both keep what solves K_ii x = b for the recovery ([`Interior`]).
 
@@ -50,20 +50,18 @@ pub(crate) struct Reduced {
 }
 
 /// K_red from one partial LDLᵀ of K's free DOFs, interior `s.interior` ordered by
-/// `ordering`, interface `s.boundary` last; `None` when K_red is near singular (the rebuild
-/// would be inexact). Errors: a zero pivot of K_ii (its DOF of the linear sub-mesh), negative
-/// pivots.
+/// `ordering`, interface `s.boundary` last (K_red read from the interface's block, so exact
+/// also where K_red is singular). Errors: a zero pivot of K_ii (its DOF of the linear
+/// sub-mesh), negative pivots.
 pub(crate) fn by_schur(
     k: &SymmetricMatrix,
     s: &Split,
     ordering: FaerOrdering,
     rhs: &[Vec<f64>; 3],
-) -> Result<Option<Reduced>, SubstructureError> {
+) -> Result<Reduced, SubstructureError> {
     let clock = Instant::now();
     let mut schur = SchurComplement::analyze(k.pattern(), &s.interior, &s.boundary, ordering)?;
-    let Some(out) = schur.factorize(k)? else {
-        return Ok(None);
-    };
+    let out = schur.factorize(k)?;
     if out.negative_pivots > 0 {
         return Err(SubstructureError::IndefiniteInterior {
             count: out.negative_pivots,
@@ -75,7 +73,7 @@ pub(crate) fn by_schur(
         schur.reduce(&rhs[1])?,
         schur.reduce(&rhs[2])?,
     ];
-    Ok(Some(Reduced {
+    Ok(Reduced {
         kred: out.schur,
         loads,
         factor_entries: schur.factor_entries(),
@@ -83,7 +81,7 @@ pub(crate) fn by_schur(
         block: 0,
         asymmetry: 0.0,
         factored_s,
-    }))
+    })
 }
 
 /// K_red by K_ii's factor (on `threads`, ordered by `ordering`) and blocks of `block` right-hand

@@ -4,11 +4,12 @@
 //!
 //! A = [A₁₁ 0 A₁ₛ; 0 A₂₂ A₂ₛ; Aₛ₁ Aₛ₂ Aₛₛ],
 //!
-//! and each half is factored by faer on one thread with the separator appended:
-//! Mᵢ = [Aᵢᵢ Aᵢₛ; Aₛᵢ Aₛₛ] = Lᵢ Dᵢ Lᵢᵀ, whose trailing block gives back
-//! Lₛₛ Dₛ Lₛₛᵀ = S′ᵢ = Aₛₛ − Aₛᵢ Aᵢᵢ⁻¹ Aᵢₛ (a Schur complement of a principal submatrix of A:
-//! positive definite when A is). The separator's Schur complement S = S′₁ + S′₂ − Aₛₛ is then
-//! factored densely (f64). The pivots are those of the unsplit LDLᵀ in the same order (A₁₁'s,
+//! and each half is factored on one thread with the separator appended, Mᵢ = [Aᵢᵢ Aᵢₛ; Aₛᵢ Aₛₛ],
+//! by faer's supernodal loop stopped before the separator (`partial.rs`): its interior columns
+//! are factored, its separator block is updated by them and read as
+//! S′ᵢ = Aₛₛ − Aₛᵢ Aᵢᵢ⁻¹ Aᵢₛ (a Schur complement of a principal submatrix of A: positive
+//! definite when A is). The separator's Schur complement S = S′₁ + S′₂ − Aₛₛ is then factored
+//! densely (f64). The pivots are those of the unsplit LDLᵀ in the same order (A₁₁'s,
 //! A₂₂'s, then S's), so the inertia is their sum (Haynsworth). Solves: forward through each
 //! half (its rows of the separator collect −Aₛᵢ Aᵢᵢ⁻¹ bᵢ), S xₛ = bₛ − Σ Aₛᵢ Aᵢᵢ⁻¹ bᵢ, back
 //! through each half. Each half is one sequential faer call (or loop) and the halves meet in
@@ -23,28 +24,23 @@ use super::pivots::{Attempt, PivotRule, negative_pivots};
 use crate::{Factorization, SolverError, SymmetricMatrix, SymmetricPattern};
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::ldlt::factor::{LdltError, LdltRegularization};
-use faer::linalg::matmul::triangular::BlockStructure;
+use faer::sparse::SymbolicSparseColMatRef;
 use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::linalg::cholesky::{
     CholeskySymbolicParams, SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering,
     factorize_symbolic_cholesky, supernodal,
 };
-use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
-use faer::{Accum, Conj, Mat, MatMut, Par, Side};
+use faer::{Conj, Mat, MatMut, Par, Side};
 
 mod half;
 use half::Half;
 mod schur;
 pub use schur::{SchurComplement, SchurOutcome};
+mod partial;
 mod sweep;
 use sweep::Sweep;
 mod top;
 pub(super) use top::top_split;
-
-/// Pivots of S′ᵢ (a half's separator block) below this fraction of their diagonal entry
-/// (f64 halves; f32 ones use the mixed pivot floor) make the rebuild of S′ᵢ inexact: the
-/// split gives way to the unsplit factor.
-const SEPARATOR_PIVOT_FLOOR: f64 = 1e-8;
 
 /// A half's factor values, in the precision last used.
 #[derive(Default)]
@@ -64,6 +60,8 @@ pub(super) trait Real:
     + std::ops::AddAssign
     + std::ops::SubAssign
     + std::ops::DivAssign
+    + std::ops::MulAssign
+    + std::ops::Div<Output = Self>
     + Sweep
     + Send
     + Sync
@@ -237,13 +235,19 @@ impl Split {
         )
     }
 
-    /// Σc² over the column counts of each half's factor (its interior and its copy of the
-    /// separator) and ns³/3 for S: the work of the two threads and of the join.
+    /// Σc² over the column counts of each half's interior columns (the separator's are updated,
+    /// not eliminated) and ns³/3 for S: the work of the two threads and of the join.
     pub(super) fn work(&self) -> [f64; 3] {
         let ns = self.sep.len() as f64;
+        let interior = |h: &Half| -> f64 {
+            super::column_counts(&h.symbolic)[..h.interior]
+                .iter()
+                .map(|&c| (c * c) as f64)
+                .sum()
+        };
         [
-            super::factor_flops(&self.halves[0].symbolic),
-            super::factor_flops(&self.halves[1].symbolic),
+            interior(&self.halves[0]),
+            interior(&self.halves[1]),
             ns.powi(3) / 3.0,
         ]
     }
@@ -269,8 +273,7 @@ impl Split {
     /// Factors `a`: the halves in precision `T` on `par`'s threads (one each, their dense
     /// kernels on `kernel`'s, so that a thread the shorter half leaves free takes tiles of the
     /// longer one's), S in f64 on `kernel`'s, pivots judged by `rule`. `Ok(Err(reason))` when
-    /// a half's trailing block (which the unsplit factor never forms) meets a pivot too small
-    /// to trust, or an f32 pivot is in doubt: the caller takes another path.
+    /// an f32 pivot is in doubt: the caller takes another path.
     pub(super) fn factorize<T: Real>(
         &mut self,
         a: &SymmetricMatrix,
@@ -333,6 +336,9 @@ impl Split {
         };
         self.factored = true;
         self.times = [t0, t1, join.elapsed().as_secs_f64()];
+        if std::env::var("N3D_TIMES").is_ok() {
+            eprintln!("HALVES {:.4} {:.4} {:.4}", t0, t1, self.times[2]);
+        }
         Ok(Ok(Factorization {
             negative_pivots: negative,
             factor_entries: self.factor_entries(),

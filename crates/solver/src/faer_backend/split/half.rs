@@ -1,7 +1,9 @@
 //! One half of the split (`split.rs`): Mᵢ = [Aᵢᵢ Aᵢₛ; Aₛᵢ Aₛₛ] in its own numbering, its
-//! faer factor (f64 or f32, one thread), the rebuild of S′ᵢ = Lₛₛ Dₛ Lₛₛᵀ = Aₛₛ − Aₛᵢ Aᵢᵢ⁻¹ Aᵢₛ
-//! and the sweeps over its interior columns that the split solve needs.
+//! factor up to the separator (f64 or f32, one thread, `partial.rs`), which leaves
+//! S′ᵢ = Aₛₛ − Aₛᵢ Aᵢᵢ⁻¹ Aᵢₛ in the separator's columns, and the sweeps over its interior
+//! columns that the split solve needs.
 
+use super::partial;
 use super::*;
 
 /// One half with the separator appended, in its own numbering: interior DOFs (in the
@@ -19,6 +21,8 @@ pub(super) struct Half {
     pub(super) symbolic: SymbolicCholesky<usize>,
     pub(super) l: Stored,
     pub(super) buffer: MemBuffer,
+    /// Each supernode's descendants, for [`partial::factorize`].
+    descendants: partial::Descendants,
 }
 
 /// What a half's factorisation found.
@@ -123,6 +127,10 @@ impl Half {
             what: "a split half's workspace",
             bytes: req.size_bytes(),
         })?;
+        let descendants = match symbolic.raw() {
+            SymbolicCholeskyRaw::Supernodal(sn) => partial::Descendants::new(sn),
+            SymbolicCholeskyRaw::Simplicial(_) => unreachable!("checked above"),
+        };
         Ok(Self {
             dofs,
             interior,
@@ -132,6 +140,7 @@ impl Half {
             symbolic,
             l: Stored::Empty,
             buffer,
+            descendants,
         })
     }
 
@@ -142,9 +151,10 @@ impl Half {
         }
     }
 
-    /// Factors Mᵢ in precision `T` with faer's dense kernels on `par` (their tiles may be taken
-    /// by a thread the other half has left free; the bits do not depend on it), judges the
-    /// interior pivots by `rule` against A's diagonal and returns S′ᵢ = Lₛₛ Dₛ Lₛₛᵀ.
+    /// Factors Mᵢ's interior columns in precision `T` with faer's dense kernels on `par` (their
+    /// tiles may be taken by a thread the other half has left free; the bits do not depend on
+    /// it), judges the interior pivots by `rule` against A's diagonal and returns
+    /// S′ᵢ = Aₛₛ − Aₛᵢ Aᵢᵢ⁻¹ Aᵢₛ, read from the separator's updated columns.
     pub(super) fn factorize<T: Real>(
         &mut self,
         a: &[f64],
@@ -157,49 +167,41 @@ impl Half {
             .iter()
             .map(|&g| T::narrow(if g == usize::MAX { 0.0 } else { a[g] }))
             .collect();
-        let m = self.dofs.len();
-        let sym = SymbolicSparseColMatRef::new_checked(
-            m,
-            m,
-            self.pattern.col_ptr(),
-            None,
-            self.pattern.row_idx(),
-        );
-        let mat = SparseColMatRef::new(sym, &values);
         let l = T::slot(&mut self.l, self.symbolic.len_val())?;
         // The half's own numbering is its elimination order (identity permutation) and its
-        // pattern is the lower triangle faer's supernodal kernel reads, so the kernel is
-        // called directly: `factorize_numeric_ldlt` would first copy Mᵢ through the
-        // permutation (a transpose-and-scatter of every entry, each factorisation).
+        // pattern is the lower triangle, so the loop reads Mᵢ as it is stored.
         let SymbolicCholeskyRaw::Supernodal(sn) = self.symbolic.raw() else {
             unreachable!("split halves are supernodal")
         };
-        let done = supernodal::factorize_supernodal_numeric_ldlt(
-            l,
-            mat,
-            LdltRegularization::default(),
+        let lower = partial::Lower {
+            col_ptr: self.pattern.col_ptr(),
+            rows: self.pattern.row_idx(),
+            values: &values,
+        };
+        let ni = self.interior;
+        let done = partial::factorize(
             sn,
+            &self.descendants,
+            lower,
+            ni,
+            l,
             par,
             MemStack::new(&mut self.buffer),
-            Default::default(),
         );
         drop(values);
-        let ni = self.interior;
-        if let Err(LdltError::ZeroPivot { index }) = done {
-            if index >= ni {
-                return Ok(Err("a split half's separator block met a zero pivot"));
+        let schur = match done {
+            Ok(schur) => schur,
+            Err(_) if rule.single() => return Ok(Err("f32 elimination met a zero pivot")),
+            Err(index) => {
+                let dof = self.dofs[index];
+                return Err(SolverError::ZeroPivot {
+                    equation: self.first + index,
+                    dof,
+                    pivot: 0.0,
+                    diagonal: diag[dof].abs(),
+                });
             }
-            if rule.single() {
-                return Ok(Err("f32 elimination met a zero pivot"));
-            }
-            let dof = self.dofs[index];
-            return Err(SolverError::ZeroPivot {
-                equation: self.first + index,
-                dof,
-                pivot: 0.0,
-                diagonal: diag[dof].abs(),
-            });
-        }
+        };
         let l = T::view(&self.l);
         let d = factor_diagonal(&self.symbolic, l);
         let negative = match negative_pivots(
@@ -212,72 +214,7 @@ impl Half {
             Ok(count) => count,
             Err(reason) => return Ok(Err(reason)),
         };
-        // S′ᵢ's own pivots are not A's; a small one only makes the rebuild inexact.
-        let floor = match rule {
-            PivotRule::Double { .. } => SEPARATOR_PIVOT_FLOOR,
-            PivotRule::Single { floor, .. } => floor.max(SEPARATOR_PIVOT_FLOOR),
-        };
-        for (k, &dk) in d.iter().enumerate().skip(ni) {
-            if crate::profile::is_zero_pivot(dk, floor, diag[self.dofs[k]].abs()) {
-                return Ok(Err("a split half's separator pivot is too small"));
-            }
-        }
-        Ok(Ok(HalfOutcome {
-            negative,
-            schur: self.trailing_schur(l, &d),
-        }))
-    }
-
-    /// S′ᵢ = Lₛₛ Dₛ Lₛₛᵀ (lower triangle, f64) from the factor's separator columns, the
-    /// product in the factor's precision.
-    fn trailing_schur<T: Real>(&self, l: &[T], d: &[f64]) -> Mat<f64> {
-        let ni = self.interior;
-        let ns = self.dofs.len() - ni;
-        let sn = self.supernodal();
-        let f = supernodal::SupernodalLdltRef::new(sn, l);
-        let zero = T::narrow(0.0);
-        // W = Lₛₛ Dₛ (lower), L = Lₛₛ.
-        let mut lss = Mat::<T>::full(ns, ns, zero);
-        for k in 0..sn.n_supernodes() {
-            let (b, e) = (sn.supernode_begin()[k], sn.supernode_end()[k]);
-            if e <= ni {
-                continue;
-            }
-            let s = f.supernode(k);
-            let val = s.val();
-            let w = e - b;
-            for c in b.max(ni)..e {
-                let col = c - b;
-                let lc = c - ni;
-                lss[(lc, lc)] = T::narrow(1.0);
-                for r in col + 1..w {
-                    lss[(b + r - ni, lc)] = val[(r, col)];
-                }
-                for (t, &row) in s.pattern().iter().enumerate() {
-                    lss[(row - ni, lc)] = val[(w + t, col)];
-                }
-            }
-        }
-        let mut wd = lss.clone();
-        for j in 0..ns {
-            let dj = d[ni + j];
-            for i in j..ns {
-                wd[(i, j)] = T::narrow(wd[(i, j)].into() * dj);
-            }
-        }
-        let mut out = Mat::<T>::full(ns, ns, zero);
-        faer::linalg::matmul::triangular::matmul(
-            out.as_mut(),
-            BlockStructure::TriangularLower,
-            Accum::Replace,
-            wd.as_ref(),
-            BlockStructure::TriangularLower,
-            lss.as_ref().transpose(),
-            BlockStructure::UnitTriangularUpper,
-            T::narrow(1.0),
-            Par::Seq,
-        );
-        Mat::from_fn(ns, ns, |i, j| out[(i, j)].into())
+        Ok(Ok(HalfOutcome { negative, schur }))
     }
 
     /// Supernode k's values (column-major: its width plus its pattern's rows per column), its

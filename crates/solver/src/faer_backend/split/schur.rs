@@ -4,9 +4,10 @@
 //! A = [A_ii A_ib; A_bi A_bb] ⇒ S = A_bb − A_bi A_ii⁻¹ A_ib.
 //!
 //! M = [A_ii A_ib; A_bi A_bb] is factored with the interior in a fill-reducing order and the
-//! boundary last (a split [`Half`] whose separator is the boundary): its trailing block gives
-//! L_bb D_b L_bbᵀ = S, so S costs one sparse factorisation and a dense product instead of
-//! one solve with A_ii per boundary column. The same factor solves A_ii x = b (the forward
+//! boundary last (a split [`Half`] whose separator is the boundary), stopped before the
+//! boundary: its trailing block, updated by the interior's columns and left unfactored, is S
+//! (`partial.rs`), so S costs one partial sparse factorisation instead of one solve with A_ii
+//! per boundary column, and it is formed whether or not it is singular. The same factor solves A_ii x = b (the forward
 //! sweep over the interior, then the backward one with the boundary held at zero) and gives
 //! −A_bi A_ii⁻¹ b (the boundary rows of the forward sweep).
 
@@ -135,11 +136,10 @@ impl SchurComplement {
     }
 
     /// Factors A (`a` on the pattern given to [`analyze`](Self::analyze)) in f64 on one
-    /// thread and forms S. `Ok(None)` when S itself is singular or nearly so (a pivot of its
-    /// LDLᵀ at or below 1e-8 of its diagonal entry: a boundary that leaves the interior free
-    /// to move as a rigid body, say): the rebuild would be inexact, the caller takes another
-    /// way. Errors: a zero pivot of A_ii (naming its DOF of A).
-    pub fn factorize(&mut self, a: &SymmetricMatrix) -> Result<Option<SchurOutcome>, SolverError> {
+    /// thread and forms S, singular or not (a boundary that leaves the interior free to move
+    /// as a rigid body gives a singular S, exactly). Errors: a zero pivot of A_ii (naming its
+    /// DOF of A).
+    pub fn factorize(&mut self, a: &SymmetricMatrix) -> Result<SchurOutcome, SolverError> {
         self.factored = false;
         let diag = a.diagonal();
         let rule = PivotRule::Double {
@@ -147,14 +147,15 @@ impl SchurComplement {
         };
         let Some(half) = self.half.as_mut() else {
             self.factored = true;
-            return Ok(Some(SchurOutcome {
+            return Ok(SchurOutcome {
                 schur: Vec::new(),
                 negative_pivots: 0,
-            }));
+            });
         };
         let outcome = match half.factorize::<f64>(a.values(), &diag, rule, faer::Par::Seq)? {
             Ok(o) => o,
-            Err(_) => return Ok(None),
+            // An f64 elimination judges its pivots by errors, never by a reason to retry.
+            Err(reason) => return Err(SolverError::Faer(reason.into())),
         };
         self.factored = true;
         let nb = self.boundary;
@@ -166,10 +167,10 @@ impl SchurComplement {
                 schur[j * nb + i] = v;
             }
         }
-        Ok(Some(SchurOutcome {
+        Ok(SchurOutcome {
             schur,
             negative_pivots: outcome.negative,
-        }))
+        })
     }
 
     /// The local vector of interior values `x` (in the order of `interior` given to
@@ -324,7 +325,7 @@ mod tests {
         ] {
             let mut s =
                 SchurComplement::analyze(a.pattern(), &interior, &boundary, ordering).unwrap();
-            let out = s.factorize(&a).unwrap().unwrap();
+            let out = s.factorize(&a).unwrap();
             assert_eq!(out.negative_pivots, 0);
             for (bi, &i) in boundary.iter().enumerate() {
                 for (bj, &j) in boundary.iter().enumerate() {
@@ -362,7 +363,7 @@ mod tests {
         let interior: Vec<usize> = (0..6).collect();
         let mut s =
             SchurComplement::analyze(a.pattern(), &interior, &[], FaerOrdering::Auto).unwrap();
-        let out = s.factorize(&a).unwrap().unwrap();
+        let out = s.factorize(&a).unwrap();
         assert!(out.schur.is_empty());
         let mut x = vec![1.0; 6];
         s.solve_interior(&mut x).unwrap();
@@ -372,13 +373,13 @@ mod tests {
         assert!(s.reduce(&x).unwrap().is_empty());
         // Nothing in either list (every DOF left out): nothing to factor.
         let mut s = SchurComplement::analyze(a.pattern(), &[], &[], FaerOrdering::Auto).unwrap();
-        assert_eq!(s.factorize(&a).unwrap().unwrap().schur, Vec::<f64>::new());
+        assert_eq!(s.factorize(&a).unwrap().schur, Vec::<f64>::new());
         s.solve_interior(&mut []).unwrap();
         assert!(s.reduce(&[]).unwrap().is_empty());
         // No interior: S is A itself.
         let mut s =
             SchurComplement::analyze(a.pattern(), &[], &interior, FaerOrdering::Auto).unwrap();
-        let out = s.factorize(&a).unwrap().unwrap();
+        let out = s.factorize(&a).unwrap();
         let full = dense(&a);
         for i in 0..6 {
             for j in 0..6 {
@@ -391,9 +392,10 @@ mod tests {
     }
 
     /// An interior that the boundary does not hold (a chain cut off from it) is singular:
-    /// the zero pivot is an error naming a DOF of A; a singular S gives `None`.
+    /// the zero pivot is an error naming a DOF of A. A singular S is formed exactly: it is
+    /// read from the boundary's block, never rebuilt from a factor of it.
     #[test]
-    fn a_singular_interior_is_an_error_and_a_singular_schur_complement_is_none() {
+    fn a_singular_interior_is_an_error_and_a_singular_schur_complement_is_exact() {
         let p = Arc::new(
             SymmetricPattern::from_lower_columns(3, &[vec![0, 1], vec![1], vec![2]]).unwrap(),
         );
@@ -408,14 +410,16 @@ mod tests {
             s.factorize(&a),
             Err(SolverError::ZeroPivot { dof: 0 | 1, .. })
         ));
-        // Interior {0}, boundary {1, 2}: S = [0 0; 0 1] is singular.
+        // Interior {0}, boundary {1, 2}: S = [1 − 1·1⁻¹·1, 0; 0, 1] = [0 0; 0 1], singular.
         let mut s =
             SchurComplement::analyze(a.pattern(), &[0], &[1, 2], FaerOrdering::Amd).unwrap();
-        assert_eq!(s.factorize(&a).unwrap(), None);
-        assert!(matches!(
-            s.solve_interior(&mut [1.0]),
-            Err(SolverError::NotReady(_))
-        ));
+        let out = s.factorize(&a).unwrap();
+        assert_eq!(out.schur, vec![0.0, 0.0, 0.0, 1.0]);
+        // A_ii = [1]: A_ii⁻¹·2 = 2; −A_bi A_ii⁻¹·2 = (2, 0).
+        let mut x = [2.0];
+        s.solve_interior(&mut x).unwrap();
+        assert_eq!(x, [2.0]);
+        assert_eq!(s.reduce(&[2.0]).unwrap(), vec![2.0, 0.0]);
     }
 
     proptest::proptest! {
@@ -465,7 +469,7 @@ mod tests {
             };
             let mut s = SchurComplement::analyze(a.pattern(), &interior, &boundary, FaerOrdering::Auto)
                 .unwrap();
-            let out = s.factorize(&a).unwrap().unwrap();
+            let out = s.factorize(&a).unwrap();
             proptest::prop_assert_eq!(out.negative_pivots, 0);
             let nb = boundary.len();
             let aii = sub(&interior, &interior);
