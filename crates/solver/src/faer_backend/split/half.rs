@@ -162,11 +162,6 @@ impl Half {
         rule: PivotRule,
         par: Par,
     ) -> Attempt<HalfOutcome> {
-        let values: Vec<T> = self
-            .gather
-            .iter()
-            .map(|&g| T::narrow(if g == usize::MAX { 0.0 } else { a[g] }))
-            .collect();
         let l = T::slot(&mut self.l, self.symbolic.len_val())?;
         // The half's own numbering is its elimination order (identity permutation) and its
         // pattern is the lower triangle, so the loop reads Mᵢ as it is stored.
@@ -176,7 +171,8 @@ impl Half {
         let lower = partial::Lower {
             col_ptr: self.pattern.col_ptr(),
             rows: self.pattern.row_idx(),
-            values: &values,
+            gather: &self.gather,
+            a,
         };
         let ni = self.interior;
         let done = partial::factorize(
@@ -188,7 +184,6 @@ impl Half {
             par,
             MemStack::new(&mut self.buffer),
         );
-        drop(values);
         let schur = match done {
             Ok(schur) => schur,
             Err(_) if rule.single() => return Ok(Err("f32 elimination met a zero pivot")),

@@ -75,11 +75,13 @@ impl Descendants {
     }
 }
 
-/// Mᵢ's lower triangle in the half's numbering: column pointers, rows, values.
-pub(super) struct Lower<'a, T> {
+/// Mᵢ's lower triangle in the half's numbering: column pointers and rows, and for each entry
+/// its position in A's values (`usize::MAX`: a structural zero), read straight from A.
+pub(super) struct Lower<'a> {
     pub(super) col_ptr: &'a [usize],
     pub(super) rows: &'a [usize],
-    pub(super) values: &'a [T],
+    pub(super) gather: &'a [usize],
+    pub(super) a: &'a [f64],
 }
 
 /// Factors the first `interior` columns of `m` on faer's supernodal structure `sn` into `l`
@@ -88,7 +90,7 @@ pub(super) struct Lower<'a, T> {
 pub(super) fn factorize<T: Real>(
     sn: &SymbolicSupernodalCholesky<usize>,
     descendants: &Descendants,
-    m: Lower<'_, T>,
+    m: Lower<'_>,
     interior: usize,
     l: &mut [T],
     par: Par,
@@ -115,7 +117,8 @@ pub(super) fn factorize<T: Real>(
             for k in m.col_ptr[j]..m.col_ptr[j + 1] {
                 let i = m.rows[k];
                 let at = if i >= e { global_to_local[i] } else { i - b };
-                column[at] += m.values[k];
+                let g = m.gather[k];
+                column[at] += T::narrow(if g == usize::MAX { 0.0 } else { m.a[g] });
             }
         }
         let mut front = MatMut::from_column_major_slice_mut(&mut *panel, rows, w);
