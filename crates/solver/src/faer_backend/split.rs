@@ -298,17 +298,19 @@ impl Split {
             (Ok(o0), Ok(o1)) => (o0, o1),
             (Err(w), _) | (_, Err(w)) => return Ok(Err(w)),
         };
-        // S = (S′₁ + S′₂) − Aₛₛ on the lower triangle, in this order.
+        // S = (S′₁ + S′₂) − Aₛₛ on the lower triangle, in this order, read from the halves'
+        // separator columns.
         let ns = self.sep.len();
         for j in 0..ns {
             for i in j..ns {
-                self.s[(i, j)] = o0.schur[(i, j)] + o1.schur[(i, j)];
+                self.s[(i, j)] = 0.0;
             }
         }
+        h0.add_separator_block::<T>(self.s.as_mut());
+        h1.add_separator_block::<T>(self.s.as_mut());
         for &(p, i, j) in &self.sep_entries {
             self.s[(i, j)] -= values[p];
         }
-        drop((o0.schur, o1.schur));
         let info = faer::linalg::cholesky::ldlt::factor::cholesky_in_place(
             self.s.as_mut(),
             LdltRegularization::default(),

@@ -29,8 +29,6 @@ pub(super) struct Half {
 pub(super) struct HalfOutcome {
     /// Negative interior pivots.
     pub(super) negative: usize,
-    /// S′ᵢ, lower triangle (ns × ns), in f64.
-    pub(super) schur: Mat<f64>,
 }
 
 impl Half {
@@ -153,8 +151,8 @@ impl Half {
 
     /// Factors Mᵢ's interior columns in precision `T` with faer's dense kernels on `par` (their
     /// tiles may be taken by a thread the other half has left free; the bits do not depend on
-    /// it), judges the interior pivots by `rule` against A's diagonal and returns
-    /// S′ᵢ = Aₛₛ − Aₛᵢ Aᵢᵢ⁻¹ Aᵢₛ, read from the separator's updated columns.
+    /// it) and judges the interior pivots by `rule` against A's diagonal. The separator's
+    /// columns are left holding S′ᵢ ([`add_separator_block`](Self::add_separator_block)).
     pub(super) fn factorize<T: Real>(
         &mut self,
         a: &[f64],
@@ -184,8 +182,8 @@ impl Half {
             par,
             MemStack::new(&mut self.buffer),
         );
-        let schur = match done {
-            Ok(schur) => schur,
+        match done {
+            Ok(()) => {}
             Err(_) if rule.single() => return Ok(Err("f32 elimination met a zero pivot")),
             Err(index) => {
                 let dof = self.dofs[index];
@@ -209,7 +207,13 @@ impl Half {
             Ok(count) => count,
             Err(reason) => return Ok(Err(reason)),
         };
-        Ok(Ok(HalfOutcome { negative, schur }))
+        Ok(Ok(HalfOutcome { negative }))
+    }
+
+    /// out += S′ᵢ = Aₛₛ − Aₛᵢ Aᵢᵢ⁻¹ Aᵢₛ on the lower triangle (nₛ × nₛ), read from the separator's
+    /// columns that the last factorisation (in precision `T`) updated and left unfactored.
+    pub(super) fn add_separator_block<T: Real>(&self, out: MatMut<'_, f64>) {
+        partial::add_separator_block(self.supernodal(), T::view(&self.l), self.interior, out);
     }
 
     /// Supernode k's values (column-major: its width plus its pattern's rows per column), its

@@ -85,8 +85,8 @@ pub(super) struct Lower<'a> {
 }
 
 /// Factors the first `interior` columns of `m` on faer's supernodal structure `sn` into `l`
-/// (faer's layout; the separator's columns are left holding S′ᵢ) and returns S′ᵢ's lower
-/// triangle (ns × ns, f64). `Err(index)`: the pivot of interior column `index` was zero.
+/// (faer's layout; the separator's columns are left holding S′ᵢ, which
+/// [`add_separator_block`] reads). `Err(index)`: the pivot of interior column `index` was zero.
 pub(super) fn factorize<T: Real>(
     sn: &SymbolicSupernodalCholesky<usize>,
     descendants: &Descendants,
@@ -95,7 +95,7 @@ pub(super) fn factorize<T: Real>(
     l: &mut [T],
     par: Par,
     stack: &mut MemStack,
-) -> Result<Mat<f64>, usize> {
+) -> Result<(), usize> {
     let zero = T::narrow(0.0);
     let col_ptr_val = sn.col_ptr_for_val();
     // A row below a supernode's columns → its position in the supernode's rows.
@@ -169,7 +169,7 @@ pub(super) fn factorize<T: Real>(
             global_to_local[r] = usize::MAX;
         }
     }
-    Ok(separator_block(sn, l, interior))
+    Ok(())
 }
 
 /// Factors the first `elim` columns of a supernode's assembled and updated panel `front` (its
@@ -353,15 +353,15 @@ fn subtract_update_dense<T: Real>(
     }
 }
 
-/// S′ᵢ's lower triangle from the separator's unfactored columns (dense, ns × ns, f64; an entry
-/// outside every supernode's rows is a structural zero).
-fn separator_block<T: Real>(
+/// out += S′ᵢ on the lower triangle (ns × ns, f64), S′ᵢ read from the separator's unfactored
+/// columns after [`factorize`] (an entry outside every supernode's rows is a structural zero
+/// and adds nothing).
+pub(super) fn add_separator_block<T: Real>(
     sn: &SymbolicSupernodalCholesky<usize>,
     l: &[T],
     interior: usize,
-) -> Mat<f64> {
-    let ns = sn.nrows() - interior;
-    let mut out = Mat::<f64>::zeros(ns, ns);
+    mut out: MatMut<'_, f64>,
+) {
     for s in 0..sn.n_supernodes() {
         let (b, e) = (sn.supernode_begin()[s], sn.supernode_end()[s]);
         if e <= interior {
@@ -375,11 +375,10 @@ fn separator_block<T: Real>(
             let column = &panel[(c - b) * rows..(c - b + 1) * rows];
             let row_of = (b..e).chain(pattern.iter().copied());
             for (r, &v) in row_of.zip(column).skip(c - b) {
-                out[(r - interior, c - interior)] = v.into();
+                out[(r - interior, c - interior)] += v.into();
             }
         }
     }
-    out
 }
 
 #[cfg(test)]

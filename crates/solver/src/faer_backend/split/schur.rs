@@ -159,10 +159,12 @@ impl SchurComplement {
         };
         self.factored = true;
         let nb = self.boundary;
+        let mut block = faer::Mat::<f64>::zeros(nb, nb);
+        half.add_separator_block::<f64>(block.as_mut());
         let mut schur = vec![0.0; nb * nb];
         for j in 0..nb {
             for i in j..nb {
-                let v = outcome.schur[(i, j)];
+                let v = block[(i, j)];
                 schur[i * nb + j] = v;
                 schur[j * nb + i] = v;
             }
