@@ -338,9 +338,6 @@ impl Split {
         };
         self.factored = true;
         self.times = [t0, t1, join.elapsed().as_secs_f64()];
-        if std::env::var("N3D_TIMES").is_ok() {
-            eprintln!("HALVES {:.4} {:.4} {:.4}", t0, t1, self.times[2]);
-        }
         Ok(Ok(Factorization {
             negative_pivots: negative,
             factor_entries: self.factor_entries(),
