@@ -333,7 +333,7 @@ impl Split {
         }
         let pivots = (0..ns).map(|k| self.s[(k, k)]);
         let negative = match negative_pivots(pivots, first, |k| self.sep[k], &diag, rule)? {
-            Ok(count) => count + o0.negative + o1.negative,
+            Ok(count) => count + o0 + o1,
             Err(reason) => return Ok(Err(reason)),
         };
         self.factored = true;

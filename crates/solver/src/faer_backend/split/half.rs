@@ -25,12 +25,6 @@ pub(super) struct Half {
     descendants: partial::Descendants,
 }
 
-/// What a half's factorisation found.
-pub(super) struct HalfOutcome {
-    /// Negative interior pivots.
-    pub(super) negative: usize,
-}
-
 impl Half {
     /// The pattern of A on `dofs` (renumbered), its gather map and faer's supernodal symbolic
     /// factor in that order.
@@ -151,15 +145,16 @@ impl Half {
 
     /// Factors Mᵢ's interior columns in precision `T` with faer's dense kernels on `par` (their
     /// tiles may be taken by a thread the other half has left free; the bits do not depend on
-    /// it) and judges the interior pivots by `rule` against A's diagonal. The separator's
-    /// columns are left holding S′ᵢ ([`add_separator_block`](Self::add_separator_block)).
+    /// it), judges the interior pivots by `rule` against A's diagonal and returns how many are
+    /// negative. The separator's columns are left holding S′ᵢ
+    /// ([`add_separator_block`](Self::add_separator_block)).
     pub(super) fn factorize<T: Real>(
         &mut self,
         a: &[f64],
         diag: &[f64],
         rule: PivotRule,
         par: Par,
-    ) -> Attempt<HalfOutcome> {
+    ) -> Attempt<usize> {
         let l = T::slot(&mut self.l, self.symbolic.len_val())?;
         // The half's own numbering is its elimination order (identity permutation) and its
         // pattern is the lower triangle, so the loop reads Mᵢ as it is stored.
@@ -207,7 +202,7 @@ impl Half {
             Ok(count) => count,
             Err(reason) => return Ok(Err(reason)),
         };
-        Ok(Ok(HalfOutcome { negative }))
+        Ok(Ok(negative))
     }
 
     /// out += S′ᵢ = Aₛₛ − Aₛᵢ Aᵢᵢ⁻¹ Aᵢₛ on the lower triangle (nₛ × nₛ), read from the separator's

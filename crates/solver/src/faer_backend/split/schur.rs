@@ -152,26 +152,28 @@ impl SchurComplement {
                 negative_pivots: 0,
             });
         };
-        let outcome = match half.factorize::<f64>(a.values(), &diag, rule, faer::Par::Seq)? {
-            Ok(o) => o,
-            // An f64 elimination judges its pivots by errors, never by a reason to retry.
-            Err(reason) => return Err(SolverError::Faer(reason.into())),
-        };
+        let negative_pivots =
+            match half.factorize::<f64>(a.values(), &diag, rule, faer::Par::Seq)? {
+                Ok(count) => count,
+                // An f64 elimination judges its pivots by errors, never by a reason to retry.
+                Err(reason) => return Err(SolverError::Faer(reason.into())),
+            };
         self.factored = true;
         let nb = self.boundary;
-        let mut block = faer::Mat::<f64>::zeros(nb, nb);
-        half.add_separator_block::<f64>(block.as_mut());
+        // S's lower triangle added straight into the row-major result (a column-major view of
+        // it, transposed, is the matrix itself), then mirrored up.
         let mut schur = vec![0.0; nb * nb];
-        for j in 0..nb {
-            for i in j..nb {
-                let v = block[(i, j)];
-                schur[i * nb + j] = v;
-                schur[j * nb + i] = v;
+        half.add_separator_block::<f64>(
+            faer::MatMut::from_column_major_slice_mut(&mut schur, nb, nb).transpose_mut(),
+        );
+        for i in 0..nb {
+            for j in 0..i {
+                schur[j * nb + i] = schur[i * nb + j];
             }
         }
         Ok(SchurOutcome {
             schur,
-            negative_pivots: outcome.negative,
+            negative_pivots,
         })
     }
 
